@@ -1,0 +1,181 @@
+//! The bonded particle model as an interaction model of the engine.
+//!
+//! Terms that a scene cannot use are removed at load: no volume pass when
+//! `a_B` is 0, no velocity terms when `Gamma` is 0, no pair list when there
+//! is no pair style or it has no stiffness.
+
+use super::neighbor::NeighbourList;
+use super::parallel::{as_rows, as_vec3, chunk_range, Scratch, Vec3};
+use super::simbox::SimBox;
+use super::timers::{Stage, Timers};
+use super::topology::BondTopology;
+use crate::kernels::{
+    accumulate_reference_volumes, accumulate_volumes, bond_forces, pair_forces, BondCoeffs,
+    BondInputs, Ownership, PairCoeffs, PairInputs, Tally,
+};
+
+/// Which terms of the model are live for this scene.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct BpmTerms {
+    /// The multibody volume term (`a_B != 0`).
+    pub multibody: bool,
+    /// Bond damping (`Gamma_B != 0`).
+    pub bond_damping: bool,
+    /// Pair contacts (a pair style with non-zero stiffness).
+    pub pairs: bool,
+    /// Pair damping (`Gamma_P != 0`).
+    pub pair_damping: bool,
+}
+
+/// Bond and pair coefficients plus the per-atom volume scratch.
+#[derive(Debug)]
+pub struct BpmModel {
+    /// Bond coefficients (one bond type).
+    pub bond: BondCoeffs,
+    /// Pair coefficients (one atom type), if contacts are modelled.
+    pub pair: Option<PairCoeffs>,
+    terms: BpmTerms,
+    volume: Vec<f64>,
+    reference_volume: Vec<f64>,
+    force_scratch: Scratch<Vec3>,
+    volume_scratch: Scratch<f64>,
+}
+
+/// Energies and virials of one force evaluation.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct InteractionTally {
+    /// Bonds: spring-proxy energy and virial.
+    pub bonds: Tally,
+    /// Pairs: contact energy and virial.
+    pub pairs: Tally,
+}
+
+impl BpmModel {
+    /// A model for `bonds` on `n` atoms; `V0` is computed here once.
+    pub fn new(bond: BondCoeffs, pair: Option<PairCoeffs>, n: usize, bonds: &BondTopology) -> Self {
+        let pairs = pair.is_some_and(|p| p.k != 0.0 || p.a != 0.0);
+        let terms = BpmTerms {
+            multibody: bond.a != 0.0 && !bonds.is_empty(),
+            bond_damping: bond.gamma != 0.0,
+            pairs,
+            pair_damping: pairs && pair.is_some_and(|p| p.gamma != 0.0),
+        };
+        let mut model = Self {
+            bond,
+            pair,
+            terms,
+            volume: Vec::new(),
+            reference_volume: Vec::new(),
+            force_scratch: Scratch::default(),
+            volume_scratch: Scratch::default(),
+        };
+        model.set_reference(n, bonds);
+        model
+    }
+
+    /// The live terms.
+    pub fn terms(&self) -> BpmTerms {
+        self.terms
+    }
+
+    /// Recomputes `V0` after the reference lengths changed.
+    pub fn set_reference(&mut self, n: usize, bonds: &BondTopology) {
+        if self.terms.multibody {
+            self.volume = vec![0.0; n];
+            self.reference_volume = vec![0.0; n];
+            accumulate_reference_volumes(
+                &bonds.entries,
+                &bonds.r0,
+                Ownership::all(n),
+                &mut self.reference_volume,
+            );
+        }
+    }
+
+    /// The range of interaction beyond which no pair force acts.
+    pub fn pair_cutoff(&self) -> Option<f64> {
+        self.terms.pairs.then(|| self.pair.map_or(0.0, |p| p.d))
+    }
+
+    /// Current volume proxies `V_i` (empty when the multibody term is off).
+    pub fn volumes(&self) -> (&[f64], &[f64]) {
+        (&self.volume, &self.reference_volume)
+    }
+
+    /// Adds all bond and pair forces to `f`.
+    #[allow(clippy::too_many_arguments)]
+    pub fn compute(
+        &mut self,
+        simbox: &SimBox,
+        x: &[[f64; 3]],
+        v: &[[f64; 3]],
+        bonds: &BondTopology,
+        neighbours: &NeighbourList,
+        threads: usize,
+        tally: bool,
+        timers: &mut Timers,
+        f: &mut [[f64; 3]],
+    ) -> InteractionTally {
+        let n = x.len();
+        let own = Ownership::all(n);
+        let nb = bonds.len();
+        let chunks = threads.max(1);
+        let sep = simbox.minimum_image();
+        if self.terms.multibody {
+            let _t = timers.start(Stage::Volumes);
+            self.volume.fill(0.0);
+            self.volume_scratch
+                .scatter(chunks, &mut self.volume, |c, out| {
+                    let range = chunk_range(nb, chunks, c);
+                    accumulate_volumes(&sep, x, &bonds.entries[range], own, out);
+                    Tally::default()
+                });
+        }
+        let bond_tally = {
+            let _t = timers.start(Stage::Bonds);
+            let volumes = self
+                .terms
+                .multibody
+                .then_some((&self.volume[..], &self.reference_volume[..]));
+            let v_opt = self.terms.bond_damping.then_some(v);
+            let coeffs = [self.bond];
+            self.force_scratch.scatter(chunks, as_vec3(f), |c, out| {
+                let range = chunk_range(nb, chunks, c);
+                let inputs = BondInputs {
+                    x,
+                    v: v_opt,
+                    bonds: &bonds.entries[range.clone()],
+                    r0: &bonds.r0[range],
+                    coeffs: &coeffs,
+                    volumes,
+                    tally,
+                };
+                bond_forces(&sep, &inputs, own, as_rows(out))
+            })
+        };
+        let pair_tally = match (self.terms.pairs, self.pair) {
+            (true, Some(p)) => {
+                let _t = timers.start(Stage::Pairs);
+                let coeffs = [p];
+                let inputs = PairInputs {
+                    x,
+                    v: self.terms.pair_damping.then_some(v),
+                    types: None,
+                    ntypes: 1,
+                    coeffs: &coeffs,
+                    special: [1.0; 4],
+                    tally,
+                };
+                self.force_scratch.scatter(chunks, as_vec3(f), |c, out| {
+                    let rows = neighbours.rows(chunk_range(n, chunks, c));
+                    pair_forces(&sep, &inputs, rows, own, as_rows(out))
+                })
+            }
+            _ => Tally::default(),
+        };
+        InteractionTally {
+            bonds: bond_tally,
+            pairs: pair_tally,
+        }
+    }
+}

@@ -1,0 +1,238 @@
+//! External forces: flat and spherical harmonic walls, a centre-of-mass
+//! tether, viscous damping.
+
+use super::simbox::SimBox;
+use serde::{Deserialize, Serialize};
+
+/// Which side of a flat wall the particles are on.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum WallSide {
+    /// Particles above the wall (wall pushes towards +axis).
+    Lo,
+    /// Particles below the wall (wall pushes towards -axis).
+    Hi,
+}
+
+/// A flat harmonic wall normal to one axis, moving at constant speed.
+///
+/// A particle at distance `s < cutoff` from the wall feels
+/// `k (cutoff - s)` away from it (LAMMPS `fix wall/harmonic` with
+/// `epsilon = k / 2`).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct FlatWall {
+    /// Axis normal to the wall: 0, 1 or 2.
+    pub axis: usize,
+    /// Which side the particles are on.
+    pub side: WallSide,
+    /// Position along the axis at the start of the stage (d units).
+    pub position: f64,
+    /// Speed along the axis (d / tau); negative moves towards -axis.
+    #[serde(default)]
+    pub velocity: f64,
+    /// Stiffness `k` (k units).
+    pub stiffness: f64,
+    /// Range of the wall force (d units).
+    pub cutoff: f64,
+}
+
+impl FlatWall {
+    /// Wall position after `elapsed` time.
+    pub fn position_at(&self, elapsed: f64) -> f64 {
+        self.position + self.velocity * elapsed
+    }
+
+    /// Adds wall forces; returns (normal force on the wall, energy).
+    pub fn apply(&self, elapsed: f64, x: &[[f64; 3]], f: &mut [[f64; 3]]) -> (f64, f64) {
+        let wall = self.position_at(elapsed);
+        let sign = match self.side {
+            WallSide::Lo => 1.0,
+            WallSide::Hi => -1.0,
+        };
+        let (mut total, mut energy) = (0.0, 0.0);
+        for (xi, fi) in x.iter().zip(f.iter_mut()) {
+            let s = sign * (xi[self.axis] - wall);
+            if s < self.cutoff {
+                let overlap = self.cutoff - s;
+                let force = self.stiffness * overlap;
+                fi[self.axis] += sign * force;
+                total += force;
+                energy += 0.5 * self.stiffness * overlap * overlap;
+            }
+        }
+        (total, energy)
+    }
+}
+
+/// A harmonic spherical wall that confines particles inside a sphere whose
+/// radius oscillates with an exponentially decaying amplitude:
+/// `R(t) = R0 + A exp(-t / t_decay) sin(2 pi t / T)`.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SphereWall {
+    /// Centre (d units).
+    pub centre: [f64; 3],
+    /// Mean radius `R0` (d units).
+    pub radius: f64,
+    /// Oscillation amplitude `A` (d units); 0 for a fixed sphere.
+    #[serde(default)]
+    pub amplitude: f64,
+    /// Oscillation period `T` (tau).
+    #[serde(default = "default_period")]
+    pub period: f64,
+    /// Decay time of the amplitude (tau).
+    #[serde(default = "default_period")]
+    pub decay_time: f64,
+    /// Stiffness `k` (k units).
+    pub stiffness: f64,
+    /// Range of the wall force (d units).
+    pub cutoff: f64,
+}
+
+fn default_period() -> f64 {
+    1.0
+}
+
+impl SphereWall {
+    /// Radius after `elapsed` time.
+    pub fn radius_at(&self, elapsed: f64) -> f64 {
+        let phase = 2.0 * std::f64::consts::PI * elapsed / self.period;
+        self.radius + self.amplitude * (-elapsed / self.decay_time).exp() * phase.sin()
+    }
+
+    /// Adds the inward wall force; returns (summed force magnitude, energy).
+    pub fn apply(&self, elapsed: f64, x: &[[f64; 3]], f: &mut [[f64; 3]]) -> (f64, f64) {
+        let radius = self.radius_at(elapsed);
+        let (mut total, mut energy) = (0.0, 0.0);
+        for (xi, fi) in x.iter().zip(f.iter_mut()) {
+            let d = [
+                xi[0] - self.centre[0],
+                xi[1] - self.centre[1],
+                xi[2] - self.centre[2],
+            ];
+            let s = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
+            let gap = radius - s;
+            if gap < self.cutoff && s > 0.0 {
+                let overlap = self.cutoff - gap;
+                let force = self.stiffness * overlap;
+                for k in 0..3 {
+                    fi[k] -= force * d[k] / s;
+                }
+                total += force;
+                energy += 0.5 * self.stiffness * overlap * overlap;
+            }
+        }
+        (total, energy)
+    }
+}
+
+/// A soft spring from a group's centre of mass to an anchor, per selected
+/// dimension (LAMMPS `fix spring tether` with `NULL` for unselected ones).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Tether {
+    /// Grain id of the group; `None` tethers every particle.
+    #[serde(default)]
+    pub grain: Option<u32>,
+    /// Anchor point; `None` anchors at the centre of mass at stage start.
+    #[serde(default)]
+    pub anchor: Option<[f64; 3]>,
+    /// Dimensions the spring acts in.
+    pub dims: [bool; 3],
+    /// Spring constant (k units), on the whole group.
+    pub stiffness: f64,
+}
+
+/// A tether resolved against the particles of one stage.
+#[derive(Clone, Debug)]
+pub struct ActiveTether {
+    members: Vec<usize>,
+    anchor: [f64; 3],
+    dims: [bool; 3],
+    stiffness: f64,
+}
+
+impl ActiveTether {
+    /// Resolves the group and the anchor from unwrapped positions.
+    pub fn new(spec: &Tether, grain: &[u32], unwrapped: &[[f64; 3]]) -> Self {
+        let members: Vec<usize> = (0..grain.len())
+            .filter(|&i| spec.grain.is_none_or(|g| grain[i] == g))
+            .collect();
+        let anchor = spec
+            .anchor
+            .unwrap_or_else(|| centre_of(&members, unwrapped));
+        Self {
+            members,
+            anchor,
+            dims: spec.dims,
+            stiffness: spec.stiffness,
+        }
+    }
+
+    /// Number of particles in the group.
+    pub fn len(&self) -> usize {
+        self.members.len()
+    }
+
+    /// Whether the group is empty.
+    pub fn is_empty(&self) -> bool {
+        self.members.is_empty()
+    }
+
+    /// Adds the tether force (uniform masses: shared equally); returns energy.
+    /// Positions are unwrapped with `image` so a group may straddle the box.
+    pub fn apply(
+        &self,
+        simbox: &SimBox,
+        x: &[[f64; 3]],
+        image: &[[i32; 3]],
+        f: &mut [[f64; 3]],
+    ) -> f64 {
+        if self.members.is_empty() {
+            return 0.0;
+        }
+        let mut com = [0.0; 3];
+        for &i in &self.members {
+            let w = simbox.image_vector(&image[i]);
+            for d in 0..3 {
+                com[d] += x[i][d] + w[d];
+            }
+        }
+        let com = com.map(|c| c / self.members.len() as f64);
+        let share = 1.0 / self.members.len() as f64;
+        let mut energy = 0.0;
+        for d in 0..3 {
+            if !self.dims[d] {
+                continue;
+            }
+            let stretch = com[d] - self.anchor[d];
+            energy += 0.5 * self.stiffness * stretch * stretch;
+            let per_atom = -self.stiffness * stretch * share;
+            for &i in &self.members {
+                f[i][d] += per_atom;
+            }
+        }
+        energy
+    }
+}
+
+fn centre_of(members: &[usize], x: &[[f64; 3]]) -> [f64; 3] {
+    let mut c = [0.0; 3];
+    for &i in members {
+        for d in 0..3 {
+            c[d] += x[i][d];
+        }
+    }
+    let inv = 1.0 / members.len().max(1) as f64;
+    c.map(|v| v * inv)
+}
+
+/// Adds `-gamma v` to every particle (LAMMPS `fix viscous`).
+pub fn apply_viscous(gamma: f64, v: &[[f64; 3]], f: &mut [[f64; 3]]) {
+    for (vi, fi) in v.iter().zip(f.iter_mut()) {
+        for d in 0..3 {
+            fi[d] -= gamma * vi[d];
+        }
+    }
+}

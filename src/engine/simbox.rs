@@ -1,0 +1,282 @@
+//! The simulation box: orthogonal or triclinic, periodic per dimension.
+//!
+//! Box vectors follow LAMMPS: `a = (lx, 0, 0)`, `b = (xy, ly, 0)`,
+//! `c = (xz, yz, lz)`, with the lower corner at `lo`.
+
+use crate::kernels::Separation;
+
+/// A parallelepiped box with LAMMPS's restricted-triclinic convention.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SimBox {
+    /// Lower corner (d units).
+    pub lo: [f64; 3],
+    /// Edge lengths `lx, ly, lz` (d units).
+    pub lengths: [f64; 3],
+    /// Tilt factors `xy, xz, yz` (d units).
+    pub tilt: [f64; 3],
+    /// Periodicity per dimension.
+    pub periodic: [bool; 3],
+}
+
+impl SimBox {
+    /// Box volume.
+    pub fn volume(&self) -> f64 {
+        self.lengths[0] * self.lengths[1] * self.lengths[2]
+    }
+
+    /// Whether any tilt factor is non-zero.
+    pub fn is_triclinic(&self) -> bool {
+        self.tilt.iter().any(|&t| t != 0.0)
+    }
+
+    /// Fractional coordinates of `x` (0..1 inside the primary cell).
+    #[inline]
+    pub fn to_fractional(&self, x: &[f64; 3]) -> [f64; 3] {
+        let [lx, ly, lz] = self.lengths;
+        let [xy, xz, yz] = self.tilt;
+        let sz = (x[2] - self.lo[2]) / lz;
+        let sy = (x[1] - self.lo[1] - yz * sz) / ly;
+        let sx = (x[0] - self.lo[0] - xy * sy - xz * sz) / lx;
+        [sx, sy, sz]
+    }
+
+    /// Cartesian position of fractional coordinates `s`.
+    #[inline]
+    pub fn to_cartesian(&self, s: &[f64; 3]) -> [f64; 3] {
+        let [lx, ly, lz] = self.lengths;
+        let [xy, xz, yz] = self.tilt;
+        [
+            self.lo[0] + lx * s[0] + xy * s[1] + xz * s[2],
+            self.lo[1] + ly * s[1] + yz * s[2],
+            self.lo[2] + lz * s[2],
+        ]
+    }
+
+    /// The lattice vector `h . n` of integer image `n`.
+    #[inline]
+    pub fn image_vector(&self, n: &[i32; 3]) -> [f64; 3] {
+        let [lx, ly, lz] = self.lengths;
+        let [xy, xz, yz] = self.tilt;
+        let [a, b, c] = [n[0] as f64, n[1] as f64, n[2] as f64];
+        [lx * a + xy * b + xz * c, ly * b + yz * c, lz * c]
+    }
+
+    /// Moves `x` into the primary cell along periodic dimensions and records
+    /// the shift in `image` so unwrapped positions stay available.
+    pub fn wrap(&self, x: &mut [f64; 3], image: &mut [i32; 3]) {
+        let s = self.to_fractional(x);
+        let mut shift = [0i32; 3];
+        for d in 0..3 {
+            if self.periodic[d] {
+                shift[d] = s[d].floor() as i32;
+            }
+        }
+        if shift != [0, 0, 0] {
+            let w = self.image_vector(&shift);
+            for d in 0..3 {
+                x[d] -= w[d];
+                image[d] += shift[d];
+            }
+        }
+    }
+
+    /// Distance between opposite faces, per dimension.
+    pub fn face_distances(&self) -> [f64; 3] {
+        let [_, ly, lz] = self.lengths;
+        let [xy, xz, yz] = self.tilt;
+        let bxc = [ly * lz, -xy * lz, xy * yz - ly * xz];
+        let norm_bxc = (bxc[0] * bxc[0] + bxc[1] * bxc[1] + bxc[2] * bxc[2]).sqrt();
+        [
+            self.volume() / norm_bxc,
+            ly * lz / (lz * lz + yz * yz).sqrt(),
+            lz,
+        ]
+    }
+
+    /// Sum of the lengths of the periodic box vectors: a bound on how far an
+    /// image of a neighbour can move when the box changes by `other - self`.
+    pub fn periodic_drift(&self, other: &SimBox) -> f64 {
+        let mut drift = 0.0;
+        for (d, unit) in [[1, 0, 0], [0, 1, 0], [0, 0, 1]].iter().enumerate() {
+            if self.periodic[d] {
+                let a = self.image_vector(unit);
+                let b = other.image_vector(unit);
+                drift +=
+                    ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt();
+            }
+        }
+        drift
+    }
+
+    /// Maps `x` affinely from the box `from` into this box.
+    #[inline]
+    pub fn remap_from(&self, from: &SimBox, x: &mut [f64; 3]) {
+        *x = self.to_cartesian(&from.to_fractional(x));
+    }
+
+    /// The centre of the box.
+    pub fn centre(&self) -> [f64; 3] {
+        self.to_cartesian(&[0.5, 0.5, 0.5])
+    }
+
+    /// Sets new lengths and tilts keeping the centre fixed.
+    pub fn resize_about_centre(&mut self, lengths: [f64; 3], tilt: [f64; 3]) {
+        let centre = self.centre();
+        self.lengths = lengths;
+        self.tilt = tilt;
+        let half = self.to_cartesian(&[0.5, 0.5, 0.5]);
+        for d in 0..3 {
+            self.lo[d] += centre[d] - half[d];
+        }
+    }
+}
+
+/// Rounds to the nearest integer (ties to even) with two additions, valid
+/// for |x| < 2^51: SSE2 has no rounding instruction and a libm call per
+/// bond would dominate the bond loop.
+#[inline(always)]
+fn round_nearest(x: f64) -> f64 {
+    const MAGIC: f64 = 6_755_399_441_055_744.0; // 2^52 + 2^51
+    (x + MAGIC) - MAGIC
+}
+
+/// The minimum-image convention of a box, prepared for hot loops: inverse
+/// lengths are precomputed and non-periodic dimensions have inverse 0, so
+/// the separation is computed without branches.
+#[derive(Clone, Copy, Debug)]
+pub struct MinimumImage {
+    lengths: [f64; 3],
+    tilt: [f64; 3],
+    inv: [f64; 3],
+}
+
+impl SimBox {
+    /// The minimum-image separation of this box, valid while interaction
+    /// ranges stay below half of each face distance and tilts within half a
+    /// box length (both checked at scene load).
+    pub fn minimum_image(&self) -> MinimumImage {
+        let mut inv = [0.0; 3];
+        for d in 0..3 {
+            if self.periodic[d] {
+                inv[d] = 1.0 / self.lengths[d];
+            }
+        }
+        MinimumImage {
+            lengths: self.lengths,
+            tilt: self.tilt,
+            inv,
+        }
+    }
+}
+
+impl Separation for MinimumImage {
+    /// Minimum image in LAMMPS's order: z, then y, then x.
+    #[inline(always)]
+    fn delta(&self, xi: &[f64; 3], xj: &[f64; 3]) -> [f64; 3] {
+        let [lx, ly, lz] = self.lengths;
+        let [xy, xz, yz] = self.tilt;
+        let mut dx = xi[0] - xj[0];
+        let mut dy = xi[1] - xj[1];
+        let mut dz = xi[2] - xj[2];
+        let kz = round_nearest(dz * self.inv[2]);
+        dz -= kz * lz;
+        dy -= kz * yz;
+        dx -= kz * xz;
+        let ky = round_nearest(dy * self.inv[1]);
+        dy -= ky * ly;
+        dx -= ky * xy;
+        let kx = round_nearest(dx * self.inv[0]);
+        dx -= kx * lx;
+        [dx, dy, dz]
+    }
+}
+
+impl Separation for SimBox {
+    #[inline]
+    fn delta(&self, xi: &[f64; 3], xj: &[f64; 3]) -> [f64; 3] {
+        self.minimum_image().delta(xi, xj)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn tilted() -> SimBox {
+        SimBox {
+            lo: [-1.0, 0.5, 2.0],
+            lengths: [5.0, 6.0, 7.0],
+            tilt: [0.4, -0.3, 0.2],
+            periodic: [true; 3],
+        }
+    }
+
+    #[test]
+    fn fractional_round_trip() {
+        let b = tilted();
+        let x = [1.3, -2.2, 8.1];
+        let back = b.to_cartesian(&b.to_fractional(&x));
+        for d in 0..3 {
+            assert!((back[d] - x[d]).abs() < 1e-12);
+        }
+    }
+
+    #[test]
+    fn minimum_image_is_invariant_under_lattice_shifts() {
+        let b = tilted();
+        let xi = [0.2, 1.0, 3.0];
+        let xj = [0.9, 1.7, 2.5];
+        let base = b.delta(&xi, &xj);
+        for n in [[1, 0, 0], [0, -1, 0], [0, 0, 1], [1, 1, -1]] {
+            let w = b.image_vector(&n);
+            let shifted = [xj[0] + w[0], xj[1] + w[1], xj[2] + w[2]];
+            let d = b.delta(&xi, &shifted);
+            for k in 0..3 {
+                assert!((d[k] - base[k]).abs() < 1e-12, "image {n:?}");
+            }
+        }
+    }
+
+    #[test]
+    fn branchless_rounding_matches_round_half_even() {
+        for x in [
+            -2.5,
+            -1.5,
+            -0.5000001,
+            -0.49,
+            0.0,
+            0.49,
+            0.5,
+            1.5,
+            2.5,
+            3.7,
+            -1e6 - 0.2,
+        ] {
+            assert_eq!(round_nearest(x), x.round_ties_even(), "{x}");
+        }
+    }
+
+    #[test]
+    fn open_dimensions_are_not_imaged() {
+        let mut b = tilted();
+        b.tilt = [0.0; 3];
+        b.periodic = [false, true, false];
+        let d = b.delta(&[0.0, 0.0, 0.0], &[4.9, 5.9, 6.9]);
+        assert_eq!(d, [-4.9, 0.1 - 0.0 + (-5.9 + 6.0) - 0.1, -6.9]);
+    }
+
+    #[test]
+    fn wrap_keeps_unwrapped_position() {
+        let b = tilted();
+        let mut x = [12.0, -9.0, 30.0];
+        let orig = x;
+        let mut image = [0; 3];
+        b.wrap(&mut x, &mut image);
+        let s = b.to_fractional(&x);
+        assert!(s.iter().all(|&c| (0.0..1.0).contains(&c)));
+        let w = b.image_vector(&image);
+        for d in 0..3 {
+            assert!((x[d] + w[d] - orig[d]).abs() < 1e-12);
+        }
+    }
+}

@@ -1,0 +1,111 @@
+//! Bonds in CSR order, with their reference lengths.
+
+use crate::kernels::{BondEntry, Separation};
+
+/// The bond network: each bond stored once with `i < j`, sorted by `i`
+/// then `j` (CSR order), so a pass over bonds walks positions forward.
+#[derive(Clone, Debug, Default)]
+pub struct BondTopology {
+    /// Bonds, type 1, in CSR order.
+    pub entries: Vec<BondEntry>,
+    /// Reference length `r0` of each bond (d units).
+    pub r0: Vec<f64>,
+    /// `offsets[i]..offsets[i + 1]` are the bonds whose first atom is `i`.
+    pub offsets: Vec<usize>,
+    /// Both-direction adjacency (sorted partners per atom), for exclusions.
+    partner_offsets: Vec<usize>,
+    partners: Vec<u32>,
+}
+
+impl BondTopology {
+    /// Builds the topology from `(i, j, r0)` triples on `n` atoms.
+    ///
+    /// Indices must be valid and distinct (the scene checks this first).
+    pub fn new(n: usize, bonds: &[(usize, usize, f64)]) -> Self {
+        let mut sorted: Vec<(usize, usize, f64)> = bonds
+            .iter()
+            .map(|&(i, j, r0)| (i.min(j), i.max(j), r0))
+            .collect();
+        sorted.sort_by(|a, b| (a.0, a.1).cmp(&(b.0, b.1)));
+        let mut offsets = vec![0usize; n + 1];
+        for &(i, _, _) in &sorted {
+            offsets[i + 1] += 1;
+        }
+        for i in 0..n {
+            offsets[i + 1] += offsets[i];
+        }
+        let mut degree = vec![0usize; n + 1];
+        for &(i, j, _) in &sorted {
+            degree[i + 1] += 1;
+            degree[j + 1] += 1;
+        }
+        for i in 0..n {
+            degree[i + 1] += degree[i];
+        }
+        let partner_offsets = degree.clone();
+        let mut cursor = degree;
+        let mut partners = vec![0u32; 2 * sorted.len()];
+        for &(i, j, _) in &sorted {
+            partners[cursor[i]] = j as u32;
+            cursor[i] += 1;
+            partners[cursor[j]] = i as u32;
+            cursor[j] += 1;
+        }
+        for i in 0..n {
+            partners[partner_offsets[i]..partner_offsets[i + 1]].sort_unstable();
+        }
+        Self {
+            entries: sorted
+                .iter()
+                .map(|&(i, j, _)| BondEntry {
+                    i: i as i32,
+                    j: j as i32,
+                    ty: 1,
+                })
+                .collect(),
+            r0: sorted.iter().map(|b| b.2).collect(),
+            offsets,
+            partner_offsets,
+            partners,
+        }
+    }
+
+    /// Number of bonds.
+    pub fn len(&self) -> usize {
+        self.entries.len()
+    }
+
+    /// Whether there are no bonds.
+    pub fn is_empty(&self) -> bool {
+        self.entries.is_empty()
+    }
+
+    /// Sorted bonded partners of atom `i`.
+    pub fn partners(&self, i: usize) -> &[u32] {
+        &self.partners[self.partner_offsets[i]..self.partner_offsets[i + 1]]
+    }
+
+    /// Whether `i` and `j` are bonded.
+    pub fn bonded(&self, i: usize, j: usize) -> bool {
+        self.partners(i).binary_search(&(j as u32)).is_ok()
+    }
+
+    /// Number of bonds of each atom.
+    pub fn degree(&self, i: usize) -> usize {
+        self.partner_offsets[i + 1] - self.partner_offsets[i]
+    }
+
+    /// Sets every reference length to the current distance (the stress-free
+    /// reset of the compaction protocol).
+    pub fn reset_reference<S: Separation>(&mut self, sep: &S, x: &[[f64; 3]]) {
+        for (bond, r0) in self.entries.iter().zip(self.r0.iter_mut()) {
+            let d = sep.delta(&x[bond.i as usize], &x[bond.j as usize]);
+            *r0 = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
+        }
+    }
+
+    /// The longest reference length, or 0 without bonds.
+    pub fn max_r0(&self) -> f64 {
+        self.r0.iter().cloned().fold(0.0, f64::max)
+    }
+}

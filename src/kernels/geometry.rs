@@ -1,0 +1,23 @@
+//! How the separation vector between two particles is formed.
+
+/// Forms `r_ij = x_i - x_j` for two stored positions.
+///
+/// The kernels are generic over this so that the minimum-image convention of
+/// the native engine and LAMMPS's ghost atoms (already the right image) share
+/// one compiled loop each, with no branch on the convention per interaction.
+pub trait Separation: Sync {
+    /// The separation vector `x_i - x_j` under this convention.
+    fn delta(&self, xi: &[f64; 3], xj: &[f64; 3]) -> [f64; 3];
+}
+
+/// Positions are already the interacting images (LAMMPS ghost atoms, or an
+/// open box): the separation is the plain difference.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Unwrapped;
+
+impl Separation for Unwrapped {
+    #[inline(always)]
+    fn delta(&self, xi: &[f64; 3], xj: &[f64; 3]) -> [f64; 3] {
+        super::sub(xi, xj)
+    }
+}

@@ -1,0 +1,39 @@
+//! Interaction kernels shared by the native engine and the LAMMPS plugin.
+//!
+//! Everything here is a pure function over flat arrays: no allocation, no
+//! global state, no knowledge of who owns the memory. The same functions are
+//! called by [`crate::engine`] and, through [`crate::ffi`], by the C++ shim in
+//! `lammps-plugin/`, so a fix here reaches both engines.
+//!
+//! Conventions (MODEL.md section 1): for a pair `i, j`, `r_ij = x_i - x_j`,
+//! `n = r_ij / r`, `dv = v_i - v_j`; a force magnitude `F` acts on `i` along
+//! `+n` (positive is repulsive) and on `j` along `-n`.
+
+mod bond;
+mod geometry;
+mod pair;
+mod tally;
+mod volume;
+
+pub use bond::{
+    bond_force_magnitude, bond_forces, cube_root, dilation, BondCoeffs, BondEntry, BondInputs,
+};
+pub use geometry::{Separation, Unwrapped};
+pub use pair::{pair_energy, pair_force_magnitude, pair_forces, PairCoeffs, PairInputs};
+pub use tally::{Ownership, Tally};
+pub use volume::{accumulate_reference_volumes, accumulate_volumes};
+
+/// Bits of a LAMMPS neighbour index that carry the special-bond class.
+pub const SPECIAL_SHIFT: u32 = 30;
+/// Mask that strips the special-bond bits from a LAMMPS neighbour index.
+pub const NEIGHMASK: i32 = 0x1FFF_FFFF;
+
+#[inline(always)]
+pub(crate) fn sub(a: &[f64; 3], b: &[f64; 3]) -> [f64; 3] {
+    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
+}
+
+#[inline(always)]
+pub(crate) fn dot(a: &[f64; 3], b: &[f64; 3]) -> f64 {
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+}

@@ -1,0 +1,3 @@
+//! Builders that make scenes from a few parameters and a seed.
+
+pub mod bulk;

@@ -1,0 +1,212 @@
+//! The scene document: one JSON file fully describes a run.
+//!
+//! It names no engine: the native engine runs it directly and the LAMMPS
+//! harness turns it into a data file and an input script.
+
+use crate::engine::{Barostat, Deformation, FlatWall, SphereWall, Tether};
+use crate::kernels::{BondCoeffs, PairCoeffs};
+use serde::{Deserialize, Serialize};
+
+/// A complete run: particles, bonds, box, force field, protocol, seed.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Scene {
+    /// Free text.
+    #[serde(default)]
+    pub description: String,
+    /// Seed of every random draw in the run (velocity initialisation).
+    pub seed: u64,
+    /// The simulation box.
+    #[serde(rename = "box")]
+    pub simbox: BoxSpec,
+    /// The particles.
+    pub particles: Particles,
+    /// The bonds.
+    #[serde(default)]
+    pub bonds: Bonds,
+    /// Bond and pair parameters.
+    pub force_field: ForceField,
+    /// The protocol, run in order.
+    pub stages: Vec<StageSpec>,
+    /// How the scene was made (builder, its parameters and seed).
+    #[serde(default, skip_serializing_if = "serde_json::Value::is_null")]
+    pub provenance: serde_json::Value,
+}
+
+/// Box geometry (LAMMPS restricted triclinic).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct BoxSpec {
+    /// Lower corner (d units).
+    pub lo: [f64; 3],
+    /// Edge lengths (d units), > 0.
+    pub lengths: [f64; 3],
+    /// Tilt factors `xy, xz, yz` (d units); default 0.
+    #[serde(default)]
+    pub tilt: [f64; 3],
+    /// Periodicity per dimension.
+    pub periodic: [bool; 3],
+}
+
+/// Particle arrays (structure of arrays).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Particles {
+    /// Positions (d units).
+    pub positions: Vec<[f64; 3]>,
+    /// Velocities (d / tau); default all zero.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub velocities: Option<Vec<[f64; 3]>>,
+    /// Grain id per particle; default all 0.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub grain: Option<Vec<u32>>,
+    /// Mass of every particle (m units); default 1.
+    #[serde(default = "one")]
+    pub mass: f64,
+}
+
+fn one() -> f64 {
+    1.0
+}
+
+/// Bonds as index pairs with optional reference lengths.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Bonds {
+    /// Pairs of particle indices (0-based).
+    pub pairs: Vec<[usize; 2]>,
+    /// Reference length per bond; default the distance at load.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub r0: Option<Vec<f64>>,
+}
+
+/// Interaction parameters.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ForceField {
+    /// Bond coefficients `k`, `a` (a_B), `gamma`.
+    pub bond: BondCoeffs,
+    /// Pair coefficients `k`, `d`, `a` (a_P), `gamma`; absent for no contacts.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub pair: Option<PairCoeffs>,
+    /// Neighbour-list skin (d units); default 0.3.
+    #[serde(default = "default_skin")]
+    pub skin: f64,
+}
+
+fn default_skin() -> f64 {
+    0.3
+}
+
+impl ForceField {
+    /// The paper's parameters: `k = 1`, `Gamma = 1`, `a_P = 50`, `d = 1`.
+    pub fn paper(a_b: f64) -> Self {
+        Self {
+            bond: BondCoeffs {
+                k: 1.0,
+                a: a_b,
+                gamma: 1.0,
+            },
+            pair: Some(PairCoeffs {
+                k: 1.0,
+                d: 1.0,
+                a: 50.0,
+                gamma: 1.0,
+            }),
+            skin: default_skin(),
+        }
+    }
+}
+
+/// One stage of a protocol.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct StageSpec {
+    /// Name, for reports.
+    pub name: String,
+    /// Number of steps.
+    pub steps: u64,
+    /// Time step (tau); default 0.1.
+    #[serde(default = "default_dt")]
+    pub dt: f64,
+    /// Replaces the force field from this stage on.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub force_field: Option<ForceField>,
+    /// Sets random velocities at the stage start.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub set_velocities: Option<VelocityInit>,
+    /// Zeroes velocities at the stage start.
+    #[serde(default)]
+    pub zero_velocities: bool,
+    /// Makes the current bond lengths the reference lengths at the stage start.
+    #[serde(default)]
+    pub reset_reference: bool,
+    /// Viscous damping `-gamma v` (m / tau); default 0.
+    #[serde(default)]
+    pub viscous: f64,
+    /// Flat harmonic walls.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub walls: Vec<FlatWall>,
+    /// A spherical harmonic wall.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub sphere_wall: Option<SphereWall>,
+    /// A centre-of-mass tether.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub tether: Option<Tether>,
+    /// Box deformation with affine remap.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub deformation: Option<Deformation>,
+    /// Berendsen barostat.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub barostat: Option<Barostat>,
+    /// What to record.
+    #[serde(default)]
+    pub record: Record,
+}
+
+fn default_dt() -> f64 {
+    0.1
+}
+
+/// Seeded random velocities: uniform components, zero net momentum,
+/// rescaled to the given root-mean-square speed.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct VelocityInit {
+    /// Root-mean-square speed (d / tau).
+    pub rms_speed: f64,
+}
+
+/// Recording intervals (0 = never).
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Record {
+    /// Steps between thermo rows (stress, energies, walls); also records step 0.
+    #[serde(default)]
+    pub every: u64,
+    /// Steps between position checkpoints.
+    #[serde(default)]
+    pub positions_every: u64,
+}
+
+impl StageSpec {
+    /// A stage that only integrates.
+    pub fn hold(name: &str, steps: u64, dt: f64) -> Self {
+        Self {
+            name: name.to_string(),
+            steps,
+            dt,
+            force_field: None,
+            set_velocities: None,
+            zero_velocities: false,
+            reset_reference: false,
+            viscous: 0.0,
+            walls: Vec::new(),
+            sphere_wall: None,
+            tether: None,
+            deformation: None,
+            barostat: None,
+            record: Record::default(),
+        }
+    }
+}

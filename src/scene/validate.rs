@@ -1,0 +1,299 @@
+//! Checks a scene once, at load, with errors that name the field.
+
+use super::model::{ForceField, Scene, StageSpec};
+use crate::engine::SimBox;
+use crate::kernels::Separation;
+
+/// Why a scene could not be used.
+#[derive(Debug, thiserror::Error)]
+pub enum SceneError {
+    /// The file could not be read or written.
+    #[error("{path}: {source}")]
+    Io {
+        /// The file.
+        path: String,
+        /// The cause.
+        source: std::io::Error,
+    },
+    /// The JSON did not match the scene format (names the field and line).
+    #[error("scene is not valid JSON for the scene format: {0}")]
+    Parse(#[from] serde_json::Error),
+    /// A value is out of range or inconsistent.
+    #[error("field `{field}`: {reason}")]
+    Invalid {
+        /// Dotted path of the offending field.
+        field: String,
+        /// What is wrong with it.
+        reason: String,
+    },
+}
+
+fn invalid(field: impl Into<String>, reason: impl Into<String>) -> SceneError {
+    SceneError::Invalid {
+        field: field.into(),
+        reason: reason.into(),
+    }
+}
+
+fn finite(field: &str, v: f64) -> Result<f64, SceneError> {
+    if v.is_finite() {
+        Ok(v)
+    } else {
+        Err(invalid(field, format!("must be a finite number (got {v})")))
+    }
+}
+
+fn non_negative(field: &str, v: f64) -> Result<f64, SceneError> {
+    if finite(field, v)? < 0.0 {
+        return Err(invalid(field, format!("must be >= 0 (got {v})")));
+    }
+    Ok(v)
+}
+
+fn positive(field: &str, v: f64) -> Result<f64, SceneError> {
+    if finite(field, v)? <= 0.0 {
+        return Err(invalid(field, format!("must be > 0 (got {v})")));
+    }
+    Ok(v)
+}
+
+fn finite_rows(field: &str, rows: &[[f64; 3]]) -> Result<(), SceneError> {
+    if let Some(i) = rows.iter().position(|r| !r.iter().all(|c| c.is_finite())) {
+        return Err(invalid(format!("{field}[{i}]"), "must be finite"));
+    }
+    Ok(())
+}
+
+/// The engine's box for a scene's box spec.
+pub fn simbox_of(scene: &Scene) -> SimBox {
+    SimBox {
+        lo: scene.simbox.lo,
+        lengths: scene.simbox.lengths,
+        tilt: scene.simbox.tilt,
+        periodic: scene.simbox.periodic,
+    }
+}
+
+fn check_force_field(prefix: &str, ff: &ForceField) -> Result<(), SceneError> {
+    non_negative(&format!("{prefix}.bond.k"), ff.bond.k)?;
+    finite(&format!("{prefix}.bond.a"), ff.bond.a)?;
+    non_negative(&format!("{prefix}.bond.gamma"), ff.bond.gamma)?;
+    if let Some(p) = &ff.pair {
+        non_negative(&format!("{prefix}.pair.k"), p.k)?;
+        positive(&format!("{prefix}.pair.d"), p.d)?;
+        non_negative(&format!("{prefix}.pair.a"), p.a)?;
+        non_negative(&format!("{prefix}.pair.gamma"), p.gamma)?;
+    }
+    non_negative(&format!("{prefix}.skin"), ff.skin)?;
+    Ok(())
+}
+
+/// The largest pair interaction range plus skin over the scene's force fields.
+fn max_list_cutoff(scene: &Scene) -> (f64, &'static str) {
+    let of = |ff: &ForceField| ff.pair.map_or(0.0, |p| p.d + ff.skin);
+    let mut cut = of(&scene.force_field);
+    for s in &scene.stages {
+        if let Some(ff) = &s.force_field {
+            cut = cut.max(of(ff));
+        }
+    }
+    (cut, "force_field.pair.d + skin")
+}
+
+fn check_stage(i: usize, stage: &StageSpec, simbox: &SimBox, n: usize) -> Result<(), SceneError> {
+    let p = format!("stages[{i}]");
+    positive(&format!("{p}.dt"), stage.dt)?;
+    non_negative(&format!("{p}.viscous"), stage.viscous)?;
+    if let Some(ff) = &stage.force_field {
+        check_force_field(&format!("{p}.force_field"), ff)?;
+    }
+    if let Some(vi) = &stage.set_velocities {
+        non_negative(&format!("{p}.set_velocities.rms_speed"), vi.rms_speed)?;
+        if n < 2 && vi.rms_speed > 0.0 {
+            return Err(invalid(
+                format!("{p}.set_velocities"),
+                "needs at least 2 particles",
+            ));
+        }
+    }
+    for (w, wall) in stage.walls.iter().enumerate() {
+        let q = format!("{p}.walls[{w}]");
+        if wall.axis > 2 {
+            return Err(invalid(
+                format!("{q}.axis"),
+                format!("must be 0, 1 or 2 (got {})", wall.axis),
+            ));
+        }
+        if simbox.periodic[wall.axis] {
+            return Err(invalid(
+                format!("{q}.axis"),
+                "a wall needs a non-periodic dimension",
+            ));
+        }
+        finite(&format!("{q}.position"), wall.position)?;
+        finite(&format!("{q}.velocity"), wall.velocity)?;
+        non_negative(&format!("{q}.stiffness"), wall.stiffness)?;
+        positive(&format!("{q}.cutoff"), wall.cutoff)?;
+    }
+    if let Some(s) = &stage.sphere_wall {
+        let q = format!("{p}.sphere_wall");
+        finite_rows(&format!("{q}.centre"), &[s.centre])?;
+        positive(&format!("{q}.radius"), s.radius)?;
+        non_negative(&format!("{q}.amplitude"), s.amplitude)?;
+        positive(&format!("{q}.period"), s.period)?;
+        positive(&format!("{q}.decay_time"), s.decay_time)?;
+        non_negative(&format!("{q}.stiffness"), s.stiffness)?;
+        positive(&format!("{q}.cutoff"), s.cutoff)?;
+    }
+    if let Some(t) = &stage.tether {
+        non_negative(&format!("{p}.tether.stiffness"), t.stiffness)?;
+        if let Some(a) = t.anchor {
+            finite_rows(&format!("{p}.tether.anchor"), &[a])?;
+        }
+    }
+    if let Some(d) = &stage.deformation {
+        use crate::engine::Deformation;
+        match d {
+            Deformation::Isotropic { true_strain_rate } => {
+                finite(
+                    &format!("{p}.deformation.isotropic.true_strain_rate"),
+                    *true_strain_rate,
+                )?;
+            }
+            Deformation::SimpleShear { tilt, rate } => {
+                finite(&format!("{p}.deformation.simple_shear.rate"), *rate)?;
+                if tilt.needs_periodic().iter().any(|&d| !simbox.periodic[d]) {
+                    return Err(invalid(
+                        format!("{p}.deformation.simple_shear.tilt"),
+                        "shear by tilt needs both of its dimensions periodic",
+                    ));
+                }
+            }
+        }
+    }
+    if let Some(b) = &stage.barostat {
+        finite(&format!("{p}.barostat.target_pressure"), b.target_pressure)?;
+        positive(&format!("{p}.barostat.gain"), b.gain)?;
+        if !simbox.periodic.iter().any(|&p| p) {
+            return Err(invalid(
+                format!("{p}.barostat"),
+                "needs at least one periodic dimension",
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// Checks every field of `scene`; returns the first problem found.
+pub fn validate(scene: &Scene) -> Result<(), SceneError> {
+    let b = &scene.simbox;
+    finite_rows("box.lo", &[b.lo])?;
+    for d in 0..3 {
+        positive(&format!("box.lengths[{d}]"), b.lengths[d])?;
+        finite(&format!("box.tilt[{d}]"), b.tilt[d])?;
+    }
+    // LAMMPS's restricted triclinic limits; they also keep the minimum image exact.
+    for (k, (name, base)) in [("xy", 0usize), ("xz", 0), ("yz", 1)].iter().enumerate() {
+        if b.tilt[k].abs() > 0.5 * b.lengths[*base] * (1.0 + 1e-12) {
+            return Err(invalid(
+                format!("box.tilt[{k}]"),
+                format!(
+                    "tilt {name} = {} exceeds half the box length {}",
+                    b.tilt[k], b.lengths[*base]
+                ),
+            ));
+        }
+    }
+    let simbox = simbox_of(scene);
+    let pa = &scene.particles;
+    let n = pa.positions.len();
+    if n == 0 {
+        return Err(invalid("particles.positions", "is empty"));
+    }
+    finite_rows("particles.positions", &pa.positions)?;
+    positive("particles.mass", pa.mass)?;
+    if let Some(v) = &pa.velocities {
+        if v.len() != n {
+            return Err(invalid(
+                "particles.velocities",
+                format!("has {} rows for {n} particles", v.len()),
+            ));
+        }
+        finite_rows("particles.velocities", v)?;
+    }
+    if let Some(g) = &pa.grain {
+        if g.len() != n {
+            return Err(invalid(
+                "particles.grain",
+                format!("has {} entries for {n} particles", g.len()),
+            ));
+        }
+    }
+    check_force_field("force_field", &scene.force_field)?;
+
+    let faces = simbox.face_distances();
+    let half_face = (0..3)
+        .filter(|&d| simbox.periodic[d])
+        .map(|d| 0.5 * faces[d])
+        .fold(f64::INFINITY, f64::min);
+    let (cut, what) = max_list_cutoff(scene);
+    if cut >= half_face {
+        return Err(invalid(
+            "box.lengths",
+            format!("{what} = {cut} must be below half the smallest periodic face distance ({half_face})"),
+        ));
+    }
+
+    let bonds = &scene.bonds;
+    if let Some(r0) = &bonds.r0 {
+        if r0.len() != bonds.pairs.len() {
+            return Err(invalid(
+                "bonds.r0",
+                format!("has {} entries for {} bonds", r0.len(), bonds.pairs.len()),
+            ));
+        }
+        for (k, &r) in r0.iter().enumerate() {
+            positive(&format!("bonds.r0[{k}]"), r)?;
+        }
+    }
+    let mut seen = std::collections::HashSet::with_capacity(bonds.pairs.len());
+    for (k, &[i, j]) in bonds.pairs.iter().enumerate() {
+        let field = format!("bonds.pairs[{k}]");
+        if i >= n || j >= n {
+            return Err(invalid(
+                field,
+                format!("bond ({i}, {j}) refers to a missing particle (there are {n})"),
+            ));
+        }
+        if i == j {
+            return Err(invalid(
+                field,
+                format!("bond ({i}, {j}) joins a particle to itself"),
+            ));
+        }
+        if !seen.insert((i.min(j), i.max(j))) {
+            return Err(invalid(field, format!("bond ({i}, {j}) is listed twice")));
+        }
+        let del = simbox.delta(&pa.positions[i], &pa.positions[j]);
+        let r = (del[0] * del[0] + del[1] * del[1] + del[2] * del[2]).sqrt();
+        if r == 0.0 {
+            return Err(invalid(
+                field,
+                format!("bond ({i}, {j}) joins two particles at the same position"),
+            ));
+        }
+        if r >= half_face {
+            return Err(invalid(
+                field,
+                format!("bond ({i}, {j}) is {r} long, not below half the box ({half_face})"),
+            ));
+        }
+    }
+    if scene.stages.is_empty() {
+        return Err(invalid("stages", "is empty: nothing to run"));
+    }
+    for (i, stage) in scene.stages.iter().enumerate() {
+        check_stage(i, stage, &simbox, n)?;
+    }
+    Ok(())
+}
