@@ -1,0 +1,98 @@
+//! The `bpm` command line: it builds, runs, and fails cleanly on bad input.
+
+use std::process::Command;
+
+fn bpm() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_bpm"))
+}
+
+fn tmp(name: &str) -> std::path::PathBuf {
+    let dir = std::env::temp_dir().join(format!("bpm-cli-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    dir.join(name)
+}
+
+#[test]
+fn build_then_run_writes_a_report_with_seed_and_parameters() {
+    let scene = tmp("bulk.json");
+    let out = tmp("out.json");
+    let st = bpm()
+        .args([
+            "build",
+            "bulk",
+            "--size",
+            "4",
+            "--seed",
+            "3",
+            "--time-scale",
+            "0.01",
+            "--steps",
+            "50",
+            "-o",
+        ])
+        .arg(&scene)
+        .output()
+        .unwrap();
+    assert!(
+        st.status.success(),
+        "{}",
+        String::from_utf8_lossy(&st.stderr)
+    );
+    assert!(String::from_utf8_lossy(&st.stdout).contains("bonds per particle"));
+    let st = bpm()
+        .arg("run")
+        .arg(&scene)
+        .arg("-o")
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert!(
+        st.status.success(),
+        "{}",
+        String::from_utf8_lossy(&st.stderr)
+    );
+    let report: serde_json::Value = serde_json::from_slice(&std::fs::read(&out).unwrap()).unwrap();
+    assert_eq!(report["seed"], 3);
+    assert_eq!(report["provenance"]["parameters"]["seed"], 3);
+    assert!(report["force_field"]["bond"]["k"].is_number());
+    assert_eq!(report["stages"][0]["rows"].as_array().unwrap().len(), 51);
+}
+
+#[test]
+fn a_bad_scene_fails_with_a_message_naming_the_field_and_no_panic() {
+    let scene = tmp("bad.json");
+    std::fs::write(
+        &scene,
+        r#"{"seed":1,"box":{"lo":[0,0,0],"lengths":[6,6,6],"periodic":[true,true,true]},
+            "particles":{"positions":[[1,1,1],[2,1,1]]},"bonds":{"pairs":[[0,1]]},
+            "force_field":{"bond":{"k":-1,"a":0,"gamma":1}},"stages":[{"name":"x","steps":1}]}"#,
+    )
+    .unwrap();
+    let st = bpm()
+        .arg("run")
+        .arg(&scene)
+        .arg("-o")
+        .arg(tmp("never.json"))
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&st.stderr);
+    assert_eq!(st.status.code(), Some(1));
+    assert!(err.contains("force_field.bond.k"), "{err}");
+    assert!(!err.contains("panicked"), "{err}");
+}
+
+#[test]
+fn a_missing_file_and_bad_options_fail_cleanly() {
+    let st = bpm()
+        .args(["run", "/nonexistent/scene.json", "-o", "/tmp/x.json"])
+        .output()
+        .unwrap();
+    assert_eq!(st.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&st.stderr).contains("/nonexistent/scene.json"));
+    let st = bpm()
+        .args(["build", "bulk", "--size", "-3", "-o", "/tmp/x.json"])
+        .output()
+        .unwrap();
+    assert!(!st.status.success());
+    assert!(!String::from_utf8_lossy(&st.stderr).contains("panicked"));
+}

@@ -1,0 +1,282 @@
+//! The native engine: conservation, determinism, drivers, the bulk builder.
+
+mod common;
+
+use bpm::engine::{Barostat, FlatWall, StageDrivers, Tether, WallSide};
+use bpm::scene::builders::bulk::{build_bulk, BulkParams};
+use bpm::scene::{build_system, run_scene, ForceField, RunOptions, Scene, StageSpec};
+use std::sync::OnceLock;
+
+/// A small bulk solid (L = 5 d, shortened build), built once per test binary.
+fn small_solid() -> &'static Scene {
+    static SOLID: OnceLock<Scene> = OnceLock::new();
+    SOLID.get_or_init(|| {
+        let mut p = BulkParams::paper(5.0, 4, 0.0);
+        p.relax_time = 20.0;
+        p.thermal_time = 50.0;
+        p.quench_time = 100.0;
+        build_bulk(&p, 1, false).expect("bulk build").0
+    })
+}
+
+fn solid_with(ff: ForceField, stages: Vec<StageSpec>) -> Scene {
+    let mut s = small_solid().clone();
+    s.force_field = ff;
+    s.stages = stages;
+    s
+}
+
+fn opts(threads: usize) -> RunOptions {
+    RunOptions {
+        threads,
+        progress: false,
+    }
+}
+
+#[test]
+fn bulk_builder_reaches_about_fifteen_bonds_per_particle() {
+    let s = small_solid();
+    let n = s.particles.positions.len();
+    let expected = (0.64f64 * 125.0 / (std::f64::consts::PI / 6.0)).round() as usize;
+    assert_eq!(n, expected);
+    let per = 2.0 * s.bonds.pairs.len() as f64 / n as f64;
+    assert!((12.0..17.0).contains(&per), "bonds per particle {per}");
+    assert!(s.particles.velocities.is_none(), "velocities are zeroed");
+}
+
+#[test]
+fn bulk_builder_is_repeatable_and_seed_dependent() {
+    let mut p = BulkParams::paper(4.0, 9, 0.0);
+    p.relax_time = 5.0;
+    p.thermal_time = 5.0;
+    p.quench_time = 5.0;
+    let a = build_bulk(&p, 1, false).unwrap().0;
+    let b = build_bulk(&p, 1, false).unwrap().0;
+    assert_eq!(a.particles.positions, b.particles.positions);
+    p.seed = 10;
+    let c = build_bulk(&p, 1, false).unwrap().0;
+    assert_ne!(a.particles.positions, c.particles.positions);
+}
+
+#[test]
+fn undamped_spring_network_conserves_energy() {
+    let mut ff = ForceField::paper(0.0);
+    ff.bond.gamma = 0.0;
+    ff.pair = ff
+        .pair
+        .map(|p| bpm::kernels::PairCoeffs { gamma: 0.0, ..p });
+    let mut hold = StageSpec::hold("nve", 2000, 0.05);
+    hold.set_velocities = Some(bpm::scene::VelocityInit { rms_speed: 0.02 });
+    hold.record.every = 100;
+    let scene = solid_with(ff, vec![hold]);
+    let mut sys = build_system(&scene, 1);
+    let (out, err) = run_scene(&mut sys, &scene, &opts(1));
+    assert!(err.is_none());
+    let st = &out[0];
+    let total: Vec<f64> = ["e_bond", "e_pair", "e_kinetic"]
+        .iter()
+        .map(|c| st.column(c).unwrap())
+        .fold(vec![0.0; st.rows.len()], |acc, c| {
+            acc.iter().zip(&c).map(|(a, b)| a + b).collect()
+        });
+    let e0 = total[0];
+    let drift = total.iter().map(|e| (e - e0).abs()).fold(0.0, f64::max);
+    assert!(e0 > 0.0);
+    assert!(drift < 2e-3 * e0, "energy drift {drift} of {e0}");
+}
+
+#[test]
+fn damped_multibody_dynamics_conserve_momentum() {
+    let mut hold = StageSpec::hold("md", 50, 0.1);
+    hold.set_velocities = Some(bpm::scene::VelocityInit { rms_speed: 0.05 });
+    let scene = solid_with(ForceField::paper(-0.5), vec![hold]);
+    let mut sys = build_system(&scene, 1);
+    let (_, err) = run_scene(&mut sys, &scene, &opts(1));
+    assert!(err.is_none());
+    let mut p = [0.0f64; 3];
+    for v in &sys.v {
+        for d in 0..3 {
+            p[d] += v[d];
+        }
+    }
+    assert!(sys.kinetic_energy() > 1e-6, "the system must still move");
+    assert!(p.iter().all(|c| c.abs() < 1e-12), "net momentum {p:?}");
+}
+
+#[test]
+fn runs_are_bit_for_bit_repeatable_and_thread_counts_agree() {
+    let mut hold = StageSpec::hold("md", 200, 0.1);
+    hold.set_velocities = Some(bpm::scene::VelocityInit { rms_speed: 0.05 });
+    let scene = solid_with(ForceField::paper(0.8), vec![hold]);
+    let run = |threads| {
+        let mut sys = build_system(&scene, threads);
+        let (_, err) = run_scene(&mut sys, &scene, &opts(threads));
+        assert!(err.is_none());
+        sys.x
+    };
+    let a = run(2);
+    assert_eq!(a, run(2), "same thread count must be bit-identical");
+    let serial = run(1);
+    let dev = a
+        .iter()
+        .zip(&serial)
+        .flat_map(|(p, q)| (0..3).map(move |d| (p[d] - q[d]).abs()))
+        .fold(0.0, f64::max);
+    assert!(dev < 1e-9, "1 vs 2 threads differ by {dev} after 200 steps");
+}
+
+#[test]
+fn affine_isotropic_compression_loads_springs_but_not_the_multibody_term() {
+    let scene = solid_with(ForceField::paper(0.0), vec![StageSpec::hold("h", 1, 0.1)]);
+    let pressure_after_squeeze = |a_b: f64| {
+        let mut s = scene.clone();
+        s.force_field = ForceField::paper(a_b);
+        let mut sys = build_system(&s, 1);
+        let mut b = sys.simbox.clone();
+        b.resize_about_centre(b.lengths.map(|l| l * 0.995), [0.0; 3]);
+        sys.remap_into(b);
+        sys.setup(&StageDrivers {
+            dt: 0.1,
+            ..Default::default()
+        });
+        sys.pressure()
+    };
+    let p0 = pressure_after_squeeze(0.0);
+    let p1 = pressure_after_squeeze(1.5);
+    assert!(p0 > 1e-3, "compression gives positive pressure: {p0}");
+    assert!((p0 - p1).abs() < 1e-12 * p0, "{p0} vs {p1}");
+}
+
+#[test]
+fn simple_shear_by_tilt_gives_shear_stress_of_the_right_sign() {
+    let mut shear = bpm::scene::protocols::simple_shear(0.002, 1e-4, 0.1, 4);
+    shear.record.every = shear.steps;
+    let scene = solid_with(ForceField::paper(0.0), vec![shear]);
+    let mut sys = build_system(&scene, 1);
+    let (out, err) = run_scene(&mut sys, &scene, &opts(1));
+    assert!(err.is_none());
+    let pxy = out[0].column("pxy").unwrap();
+    let xy = out[0].column("xy").unwrap();
+    assert!(
+        (xy.last().unwrap() - 0.002 * 5.0).abs() < 1e-9,
+        "tilt reached {:?}",
+        xy.last()
+    );
+    assert!(
+        *pxy.last().unwrap() < 0.0,
+        "positive shear strain gives negative P_xy: {pxy:?}"
+    );
+}
+
+fn single_particle(z: f64) -> Scene {
+    let mut s = small_solid().clone();
+    s.simbox.periodic = [true, true, false];
+    s.particles.positions = vec![[1.0, 1.0, z]];
+    s.particles.velocities = None;
+    s.bonds = Default::default();
+    s
+}
+
+#[test]
+fn flat_wall_pushes_with_k_times_overlap_and_reports_it() {
+    let mut stage = StageSpec::hold("wall", 1, 0.1);
+    stage.walls.push(FlatWall {
+        axis: 2,
+        side: WallSide::Lo,
+        position: 0.0,
+        velocity: 0.0,
+        stiffness: 2.0,
+        cutoff: 1.0,
+    });
+    stage.walls.push(FlatWall {
+        axis: 2,
+        side: WallSide::Hi,
+        position: 1.5,
+        velocity: 0.0,
+        stiffness: 2.0,
+        cutoff: 1.0,
+    });
+    let mut scene = single_particle(0.75);
+    scene.stages = vec![stage.clone()];
+    let mut sys = build_system(&scene, 1);
+    let drivers = StageDrivers {
+        dt: 0.1,
+        walls: stage.walls.clone(),
+        ..Default::default()
+    };
+    sys.setup(&drivers);
+    assert_eq!(sys.report.wall_forces, vec![2.0 * 0.25, 2.0 * 0.25]);
+    assert!(sys.f[0][2].abs() < 1e-15, "symmetric walls cancel");
+    // Moving the lower wall up by 0.1 raises its force by k * 0.1.
+    sys.compute_forces(
+        &StageDrivers {
+            walls: vec![FlatWall {
+                velocity: 1.0,
+                ..stage.walls[0].clone()
+            }],
+            ..drivers
+        },
+        0.1,
+        true,
+    );
+    assert!((sys.report.wall_forces[0] - 2.0 * 0.35).abs() < 1e-14);
+    assert!((sys.f[0][2] - 2.0 * 0.35).abs() < 1e-14);
+}
+
+#[test]
+fn tether_pulls_the_centre_of_mass_back_to_its_anchor() {
+    let mut scene = single_particle(2.0);
+    let mut stage = StageSpec::hold("tether", 1, 0.1);
+    stage.tether = Some(Tether {
+        grain: None,
+        anchor: Some([0.5, 1.0, 2.0]),
+        dims: [true, true, false],
+        stiffness: 0.1,
+    });
+    scene.stages = vec![stage];
+    let mut sys = build_system(&scene, 1);
+    let (_, err) = run_scene(&mut sys, &scene, &opts(1));
+    assert!(err.is_none());
+    // One step of dt 0.1 from rest under F = -0.1 (x - 0.5) = -0.05 (half kicks).
+    assert!((sys.f[0][0] + 0.1 * (sys.x[0][0] - 0.5)).abs() < 1e-12);
+    assert!(sys.v[0][0] < 0.0 && sys.f[0][2] == 0.0);
+}
+
+#[test]
+fn berendsen_barostat_relaxes_a_compressed_solid_towards_the_target() {
+    let mut b = StageSpec::hold("baro", 600, 0.1);
+    b.barostat = Some(Barostat {
+        target_pressure: 0.0,
+        gain: 0.05,
+    });
+    b.record.every = 600;
+    let mut scene = solid_with(ForceField::paper(0.0), vec![b]);
+    let squeeze = 0.99;
+    for p in &mut scene.particles.positions {
+        *p = p.map(|c| c * squeeze);
+    }
+    scene.simbox.lengths = scene.simbox.lengths.map(|l| l * squeeze);
+    let mut sys = build_system(&scene, 1);
+    let (out, err) = run_scene(&mut sys, &scene, &opts(1));
+    assert!(err.is_none());
+    let p = out[0].column("pressure").unwrap();
+    assert!(p[0] > 1e-3, "starts compressed: {p:?}");
+    assert!(p[1].abs() < 0.1 * p[0], "relaxes towards 0: {p:?}");
+    assert!(sys.simbox.lengths[0] > 5.0 * squeeze);
+}
+
+#[test]
+fn an_unstable_run_stops_with_an_error_and_keeps_finished_stages() {
+    let mut ok = StageSpec::hold("fine", 10, 0.1);
+    ok.record.every = 5;
+    let mut bad = StageSpec::hold("explode", 2000, 50.0);
+    bad.set_velocities = Some(bpm::scene::VelocityInit { rms_speed: 1.0 });
+    let mut ff = ForceField::paper(0.0);
+    ff.bond.gamma = 0.0;
+    let scene = solid_with(ff, vec![ok, bad]);
+    let mut sys = build_system(&scene, 1);
+    let (out, err) = run_scene(&mut sys, &scene, &opts(1));
+    assert_eq!(out.len(), 1, "the finished stage is kept");
+    let msg = err.expect("dt = 50 must blow up").to_string();
+    assert!(msg.contains("unstable"), "{msg}");
+}

@@ -1,0 +1,444 @@
+//! The kernels against hand-computed values, analytic cases, finite
+//! differences and conservation laws.
+
+mod common;
+
+use approx::assert_relative_eq;
+use bpm::kernels::*;
+use common::*;
+
+const SPRING: BondCoeffs = BondCoeffs {
+    k: 2.0,
+    a: 0.0,
+    gamma: 0.0,
+};
+
+fn forces(
+    x: &[[f64; 3]],
+    v: Option<&[[f64; 3]]>,
+    bonds: &[BondEntry],
+    r0: &[f64],
+    c: BondCoeffs,
+    own: Ownership,
+) -> (Vec<[f64; 3]>, Tally) {
+    let n = x.len();
+    let mut vol = vec![0.0; n];
+    let mut vol0 = vec![0.0; n];
+    let all = Ownership::all(n);
+    accumulate_volumes(&Unwrapped, x, bonds, all, &mut vol);
+    accumulate_reference_volumes(bonds, r0, all, &mut vol0);
+    let coeffs = [c];
+    let inputs = BondInputs {
+        x,
+        v,
+        bonds,
+        r0,
+        coeffs: &coeffs,
+        volumes: (c.a != 0.0).then_some((&vol[..], &vol0[..])),
+        tally: true,
+    };
+    let mut f = vec![[0.0; 3]; n];
+    let t = bond_forces(&Unwrapped, &inputs, own, &mut f);
+    (f, t)
+}
+
+fn one_bond() -> Vec<BondEntry> {
+    vec![BondEntry { i: 0, j: 1, ty: 1 }]
+}
+
+#[test]
+fn stretched_spring_pulls_the_atoms_together_with_k_times_stretch() {
+    let x = [[0.0, 0.0, 0.0], [1.2, 0.0, 0.0]];
+    let (f, t) = forces(&x, None, &one_bond(), &[1.0], SPRING, Ownership::all(2));
+    // F = k (r0 - r) = -0.4 (attractive): atom 0 is pulled towards +x.
+    assert_relative_eq!(f[0][0], 0.4, epsilon = 1e-15);
+    assert_relative_eq!(f[1][0], -0.4, epsilon = 1e-15);
+    assert_relative_eq!(t.energy, 0.5 * 2.0 * 0.2 * 0.2, epsilon = 1e-15);
+    // Tension gives a negative virial: W_xx = r_x F_x = (-1.2)(0.4).
+    assert_relative_eq!(t.virial[0], -0.48, epsilon = 1e-15);
+    assert_eq!(&t.virial[1..], &[0.0; 5]);
+}
+
+#[test]
+fn damping_resists_approach_along_the_bond_only() {
+    let x = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0]];
+    // Atom 0 approaches atom 1 at 0.1 and slides sideways at 0.3.
+    let v = [[0.1, 0.3, 0.0], [0.0, 0.0, 0.0]];
+    let c = BondCoeffs {
+        k: 1.0,
+        a: 0.0,
+        gamma: 0.5,
+    };
+    let (f, _) = forces(&x, Some(&v), &one_bond(), &[1.0], c, Ownership::all(2));
+    // n = (-1, 0, 0), n.dv = -0.1, F = -gamma n.dv = +0.05 (repulsive).
+    assert_relative_eq!(f[0][0], -0.05, epsilon = 1e-15);
+    assert_eq!(f[0][1], 0.0);
+    assert_relative_eq!(f[1][0], 0.05, epsilon = 1e-15);
+}
+
+#[test]
+fn multibody_force_matches_a_hand_computed_triangle() {
+    // A chain 0-1-2 plus bond 0-2; compress bond 0-1 only.
+    let x0 = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.1, 0.0]];
+    let bonds = vec![
+        BondEntry { i: 0, j: 1, ty: 1 },
+        BondEntry { i: 1, j: 2, ty: 1 },
+        BondEntry { i: 0, j: 2, ty: 1 },
+    ];
+    let r0: Vec<f64> = bonds
+        .iter()
+        .map(|b| dist(&x0[b.i as usize], &x0[b.j as usize]))
+        .collect();
+    let x = [[0.0, 0.0, 0.0], [0.9, 0.0, 0.0], [0.0, 1.1, 0.0]];
+    let c = BondCoeffs {
+        k: 1.0,
+        a: 0.7,
+        gamma: 0.0,
+    };
+    let (f, _) = forces(&x, None, &bonds, &r0, c, Ownership::all(3));
+    // By hand: V_i = sum of cubed bond lengths at atom i.
+    let r01 = 0.9f64;
+    let r12 = (0.81f64 + 1.21).sqrt();
+    let r02 = 1.1f64;
+    let (v0, v1, v2) = (
+        r01.powi(3) + r02.powi(3),
+        r01.powi(3) + r12.powi(3),
+        r12.powi(3) + r02.powi(3),
+    );
+    let (w0, w1, w2) = (
+        r0[0].powi(3) + r0[2].powi(3),
+        r0[0].powi(3) + r0[1].powi(3),
+        r0[1].powi(3) + r0[2].powi(3),
+    );
+    let mag = |r: f64, r0: f64, va: f64, vb: f64, wa: f64, wb: f64| {
+        c.k * (r0 - r) + c.a * (((va + vb) / (wa + wb)).powf(1.0 / 3.0) - r / r0)
+    };
+    let f01 = mag(r01, r0[0], v0, v1, w0, w1);
+    let f12 = mag(r12, r0[1], v1, v2, w1, w2);
+    let f02 = mag(r02, r0[2], v0, v2, w0, w2);
+    // Force on atom 0 along +n of each of its bonds (n points from the partner to 0).
+    let n01 = [-1.0, 0.0, 0.0];
+    let n02 = [0.0, -1.0, 0.0];
+    let expected0 = [
+        f01 * n01[0] + f02 * n02[0],
+        f01 * n01[1] + f02 * n02[1],
+        0.0,
+    ];
+    let n12 = [(0.9 - 0.0) / r12, (0.0 - 1.1) / r12, 0.0];
+    let expected1 = [
+        -f01 * n01[0] + f12 * n12[0],
+        -f01 * n01[1] + f12 * n12[1],
+        0.0,
+    ];
+    for d in 0..3 {
+        assert_relative_eq!(f[0][d], expected0[d], epsilon = 1e-14);
+        assert_relative_eq!(f[1][d], expected1[d], epsilon = 1e-14);
+    }
+    // The multibody part is non-zero here, so this pins its sign and factor.
+    assert!((f02 - c.k * (r0[2] - r02)).abs() > 1e-3);
+}
+
+#[test]
+fn uniform_dilation_cancels_the_multibody_term() {
+    let (x0, bonds, r0) = random_network(120, 4.0, 1.5, 3);
+    for scale in [0.97, 1.02] {
+        let x: Vec<[f64; 3]> = x0.iter().map(|p| p.map(|c| c * scale)).collect();
+        let with = BondCoeffs {
+            k: 1.0,
+            a: 1.3,
+            gamma: 0.0,
+        };
+        let without = BondCoeffs { a: 0.0, ..with };
+        let (fa, _) = forces(&x, None, &bonds, &r0, with, Ownership::all(x.len()));
+        let (f0, _) = forces(&x, None, &bonds, &r0, without, Ownership::all(x.len()));
+        let scale_of_forces = max_abs(&f0);
+        assert!(scale_of_forces > 1e-3, "the dilation must load the network");
+        for (a, b) in fa.iter().zip(&f0) {
+            for d in 0..3 {
+                assert!(
+                    (a[d] - b[d]).abs() < 1e-12 * scale_of_forces,
+                    "{a:?} vs {b:?}"
+                );
+            }
+        }
+    }
+}
+
+#[test]
+fn positive_a_b_stiffens_shear_and_negative_softens_it() {
+    // Paper 1, Fig. 1: under simple shear the multibody term raises the
+    // shear stress for a_B > 0 and lowers it for a_B < 0.
+    let (x0, bonds, r0) = random_network(300, 5.0, 1.5, 11);
+    let gamma = 1e-3;
+    let x: Vec<[f64; 3]> = x0
+        .iter()
+        .map(|p| [p[0] + gamma * p[1], p[1], p[2]])
+        .collect();
+    let shear_virial = |a: f64| {
+        let c = BondCoeffs {
+            k: 1.0,
+            a,
+            gamma: 0.0,
+        };
+        forces(&x, None, &bonds, &r0, c, Ownership::all(x.len()))
+            .1
+            .virial[3]
+    };
+    let (soft, plain, stiff) = (shear_virial(-0.5), shear_virial(0.0), shear_virial(1.0));
+    // Positive shear strain gives positive shear stress, i.e. negative W_xy.
+    assert!(plain < 0.0, "plain spring network resists shear: {plain}");
+    assert!(
+        stiff < plain,
+        "a_B > 0 must raise shear stress: {stiff} vs {plain}"
+    );
+    assert!(
+        soft > plain && soft < 0.0,
+        "a_B < 0 must lower it: {soft} vs {plain}"
+    );
+}
+
+#[test]
+fn spring_force_is_minus_the_gradient_of_its_energy() {
+    let (x0, bonds, _) = random_network(60, 3.0, 1.5, 5);
+    let r0: Vec<f64> = (0..bonds.len())
+        .map(|k| 0.8 + 0.01 * (k % 17) as f64)
+        .collect();
+    let c = BondCoeffs {
+        k: 1.7,
+        a: 0.0,
+        gamma: 0.0,
+    };
+    let n = x0.len();
+    let (f, _) = forces(&x0, None, &bonds, &r0, c, Ownership::all(n));
+    let energy = |x: &[[f64; 3]]| forces(x, None, &bonds, &r0, c, Ownership::all(n)).1.energy;
+    let h = 1e-6;
+    for i in (0..n).step_by(7) {
+        for d in 0..3 {
+            let mut xp = x0.clone();
+            let mut xm = x0.clone();
+            xp[i][d] += h;
+            xm[i][d] -= h;
+            let fd = -(energy(&xp) - energy(&xm)) / (2.0 * h);
+            assert!(
+                (fd - f[i][d]).abs() < 1e-7 * (1.0 + f[i][d].abs()),
+                "atom {i} dim {d}: {fd} vs {}",
+                f[i][d]
+            );
+        }
+    }
+}
+
+#[test]
+fn pair_force_is_minus_the_gradient_of_its_energy() {
+    let (x0, _, _) = random_network(80, 3.0, 0.0, 9);
+    let c = PairCoeffs {
+        k: 1.0,
+        d: 1.0,
+        a: 50.0,
+        gamma: 0.0,
+    };
+    let n = x0.len();
+    let compute = |x: &[[f64; 3]]| {
+        let rows: Vec<Vec<i32>> = (0..n)
+            .map(|i| ((i + 1) as i32..n as i32).collect())
+            .collect();
+        let coeffs = [c];
+        let inputs = PairInputs {
+            x,
+            v: None,
+            types: None,
+            ntypes: 1,
+            coeffs: &coeffs,
+            special: [1.0; 4],
+            tally: true,
+        };
+        let mut f = vec![[0.0; 3]; n];
+        let t = pair_forces(
+            &Unwrapped,
+            &inputs,
+            rows.iter().enumerate().map(|(i, r)| (i, &r[..])),
+            Ownership::all(n),
+            &mut f,
+        );
+        (f, t)
+    };
+    let (f, t) = compute(&x0);
+    assert!(t.energy > 0.0, "the random cloud must have overlaps");
+    let h = 1e-6;
+    for i in (0..n).step_by(5) {
+        for d in 0..3 {
+            let mut xp = x0.clone();
+            let mut xm = x0.clone();
+            xp[i][d] += h;
+            xm[i][d] -= h;
+            let fd = -(compute(&xp).1.energy - compute(&xm).1.energy) / (2.0 * h);
+            assert!(
+                (fd - f[i][d]).abs() < 1e-6 * (1.0 + f[i][d].abs()),
+                "atom {i} dim {d}: {fd} vs {}",
+                f[i][d]
+            );
+        }
+    }
+}
+
+#[test]
+fn pair_force_has_the_cubic_term_and_stops_at_d() {
+    let c = PairCoeffs {
+        k: 1.0,
+        d: 1.0,
+        a: 50.0,
+        gamma: 0.0,
+    };
+    assert_relative_eq!(
+        pair_force_magnitude(0.9, 0.0, &c),
+        0.1 + 50.0 * 0.001,
+        epsilon = 1e-15
+    );
+    let x = [[0.0, 0.0, 0.0], [1.0 + 1e-12, 0.0, 0.0]];
+    let coeffs = [c];
+    let inputs = PairInputs {
+        x: &x,
+        v: None,
+        types: None,
+        ntypes: 1,
+        coeffs: &coeffs,
+        special: [1.0; 4],
+        tally: true,
+    };
+    let mut f = vec![[0.0; 3]; 2];
+    let js = [1i32];
+    pair_forces(
+        &Unwrapped,
+        &inputs,
+        std::iter::once((0, &js[..])),
+        Ownership::all(2),
+        &mut f,
+    );
+    assert_eq!(f, vec![[0.0; 3]; 2]);
+}
+
+#[test]
+fn special_bits_select_the_weight_and_zero_weight_skips() {
+    let c = PairCoeffs {
+        k: 1.0,
+        d: 1.0,
+        a: 0.0,
+        gamma: 0.0,
+    };
+    let x = [[0.0, 0.0, 0.0], [0.5, 0.0, 0.0], [0.0, 0.5, 0.0]];
+    let coeffs = [c];
+    let inputs = PairInputs {
+        x: &x,
+        v: None,
+        types: None,
+        ntypes: 1,
+        coeffs: &coeffs,
+        special: [1.0, 0.0, 0.25, 1.0],
+        tally: true,
+    };
+    let mut f = vec![[0.0; 3]; 3];
+    // Atom 1 listed as a 1-2 special (weight 0), atom 2 as 1-3 (weight 0.25).
+    let js = [1i32 | (1 << 30), 2i32 | (2 << 30)];
+    pair_forces(
+        &Unwrapped,
+        &inputs,
+        std::iter::once((0, &js[..])),
+        Ownership::all(3),
+        &mut f,
+    );
+    assert_eq!(f[1], [0.0; 3]);
+    assert_relative_eq!(f[2][1], 0.25 * 0.5, epsilon = 1e-15);
+}
+
+#[test]
+fn net_force_and_torque_vanish_for_any_network() {
+    let (x0, bonds, r0) = random_network(200, 4.0, 1.5, 21);
+    let x: Vec<[f64; 3]> = x0
+        .iter()
+        .zip(random_rows(x0.len(), 0.05, 22))
+        .map(|(p, d)| [p[0] + d[0], p[1] + d[1], p[2] + d[2]])
+        .collect();
+    let v = random_rows(x.len(), 0.3, 23);
+    let c = BondCoeffs {
+        k: 1.0,
+        a: -0.6,
+        gamma: 1.0,
+    };
+    let (f, _) = forces(&x, Some(&v), &bonds, &r0, c, Ownership::all(x.len()));
+    let mut net = [0.0; 3];
+    let mut torque = [0.0; 3];
+    for (p, fi) in x.iter().zip(&f) {
+        for d in 0..3 {
+            net[d] += fi[d];
+        }
+        torque[0] += p[1] * fi[2] - p[2] * fi[1];
+        torque[1] += p[2] * fi[0] - p[0] * fi[2];
+        torque[2] += p[0] * fi[1] - p[1] * fi[0];
+    }
+    let scale = max_abs(&f) * x.len() as f64;
+    assert!(max_abs(&f) > 1e-2);
+    assert!(
+        net.iter().all(|c| c.abs() < 1e-14 * scale),
+        "net force {net:?}"
+    );
+    assert!(
+        torque.iter().all(|c| c.abs() < 1e-13 * scale),
+        "net torque {torque:?}"
+    );
+}
+
+#[test]
+fn newton_off_gives_owners_the_same_forces_and_half_of_shared_tallies() {
+    let (x0, bonds, r0) = random_network(100, 3.5, 1.5, 31);
+    let x: Vec<[f64; 3]> = x0.iter().map(|p| p.map(|c| c * 1.01)).collect();
+    let c = BondCoeffs {
+        k: 1.0,
+        a: 0.5,
+        gamma: 0.0,
+    };
+    let n = x.len();
+    let (full, tfull) = forces(&x, None, &bonds, &r0, c, Ownership::all(n));
+    let owned = n / 2;
+    let own = Ownership {
+        n_owned: owned,
+        newton: false,
+    };
+    let (part, tpart) = forces(&x, None, &bonds, &r0, c, own);
+    for i in 0..n {
+        let expect = if i < owned { full[i] } else { [0.0; 3] };
+        assert_eq!(part[i], expect, "atom {i}");
+    }
+    // Each bond's energy counts 1, 1/2 or 0 by how many of its atoms are owned.
+    let frac: f64 = bonds
+        .iter()
+        .zip(&r0)
+        .map(|(b, &r0)| {
+            let r = dist(&x[b.i as usize], &x[b.j as usize]);
+            let w = 0.5 * (((b.i as usize) < owned) as u8 + ((b.j as usize) < owned) as u8) as f64;
+            w * 0.5 * (r - r0) * (r - r0)
+        })
+        .sum();
+    assert_relative_eq!(tpart.energy, frac, max_relative = 1e-12);
+    assert!(tpart.energy < tfull.energy);
+}
+
+#[test]
+fn cube_root_is_within_two_ulp_of_the_library() {
+    let mut q = 1e-200;
+    while q < 1e200 {
+        for m in [1.0, 1.37, 2.9, 0.51] {
+            let v = q * m;
+            let ours = cube_root(v);
+            let lib = v.cbrt();
+            assert!(
+                (ours - lib).abs() <= 2.0 * f64::EPSILON * lib,
+                "{v}: {ours} vs {lib}"
+            );
+        }
+        q *= 7.3;
+    }
+    for v in [0.5, 0.9, 0.999, 1.0, 1.001, 1.1, 2.0] {
+        assert!((cube_root(v) - v.cbrt()).abs() <= 2.0 * f64::EPSILON);
+    }
+    assert!(cube_root(-8.0) == -2.0 && cube_root(0.0) == 0.0);
+}
