@@ -100,7 +100,7 @@ impl Barostat {
     /// `None` when the gain is so large that the box would invert.
     pub fn step(&self, current: &SimBox, pressure: f64) -> Option<SimBox> {
         let arg = 1.0 - self.gain * (self.target_pressure - pressure);
-        if !(arg > 0.0) {
+        if arg.is_nan() || arg <= 0.0 {
             return None;
         }
         let mu = arg.cbrt();

@@ -155,12 +155,13 @@ impl SimBox {
     /// ranges stay below half of each face distance and tilts within half a
     /// box length (both checked at scene load).
     pub fn minimum_image(&self) -> MinimumImage {
-        let mut inv = [0.0; 3];
-        for d in 0..3 {
+        let inv = std::array::from_fn(|d| {
             if self.periodic[d] {
-                inv[d] = 1.0 / self.lengths[d];
+                1.0 / self.lengths[d]
+            } else {
+                0.0
             }
-        }
+        });
         MinimumImage {
             lengths: self.lengths,
             tilt: self.tilt,

@@ -26,7 +26,7 @@ impl BondTopology {
             .iter()
             .map(|&(i, j, r0)| (i.min(j), i.max(j), r0))
             .collect();
-        sorted.sort_by(|a, b| (a.0, a.1).cmp(&(b.0, b.1)));
+        sorted.sort_by_key(|b| (b.0, b.1));
         let mut offsets = vec![0usize; n + 1];
         for &(i, _, _) in &sorted {
             offsets[i + 1] += 1;

@@ -1,0 +1,60 @@
+/* C ABI of the Rust kernels (src/ffi.rs). The only interface between the
+ * LAMMPS shim and the physics: the shim passes whole lists, never one
+ * interaction at a time. Every function returns a BPM_* status. */
+#ifndef BPM_KERNELS_H
+#define BPM_KERNELS_H
+
+#include <stdint.h>
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+enum {
+  BPM_OK = 0,        /* success */
+  BPM_ERR_NULL = 1,  /* a required pointer was null or a count negative */
+  BPM_ERR_INDEX = 2, /* an atom index outside 0..nall */
+  BPM_ERR_TYPE = 3,  /* a bond or atom type without coefficients */
+  BPM_ERR_PANIC = 4  /* internal error in the kernels (a bug) */
+};
+
+/* One bond: the layout of a row of LAMMPS's neighbor->bondlist (int[3]). */
+typedef struct { int32_t i, j, type; } bpm_bond_entry;
+
+/* Bond coefficients of one bond type: spring k_B, multibody a_B, damping. */
+typedef struct { double k, a, gamma; } bpm_bond_coeffs;
+
+/* Pair coefficients of one type pair: k_P, contact distance d, cubic a_P, damping. */
+typedef struct { double k, d, a, gamma; } bpm_pair_coeffs;
+
+/* Energy and virial [xx, yy, zz, xy, xz, yz] of a list. */
+typedef struct { double energy; double virial[6]; } bpm_tally;
+
+/* Adds r^3 of each bond to vol and r0^3 to vol0 (vol0 may be NULL).
+ * newton != 0: both atoms get the contribution (ghosts summed by the caller);
+ * newton == 0: only atoms below n_owned. */
+int bpm_bond_volumes(const double *x, int64_t nall, const bpm_bond_entry *bonds, int64_t nbonds,
+                     const double *r0, int64_t n_owned, int32_t newton, double *vol, double *vol0);
+
+/* Adds bond forces to f (3 nall doubles) and writes energy and virial to tally.
+ * v == NULL drops damping; vol == NULL drops the multibody term.
+ * coeffs[type - 1] holds the coefficients of bond type `type`. */
+int bpm_bond_forces(const double *x, const double *v, int64_t nall, const bpm_bond_entry *bonds,
+                    int64_t nbonds, const double *r0, const bpm_bond_coeffs *coeffs, int64_t ncoeffs,
+                    const double *vol, const double *vol0, int64_t n_owned, int32_t newton, double *f,
+                    bpm_tally *tally);
+
+/* Adds contact forces over a LAMMPS half neighbour list (ilist, numneigh,
+ * firstneigh; special bits in the top two bits of each neighbour index).
+ * types == NULL: every atom is type 1. coeffs is ntypes x ntypes, row-major,
+ * 0-based ((ti-1) * ntypes + (tj-1)). special holds LAMMPS's special_lj[4]. */
+int bpm_pair_forces(const double *x, const double *v, const int32_t *types, int64_t nall,
+                    int64_t ntypes, const bpm_pair_coeffs *coeffs, int64_t inum, const int32_t *ilist,
+                    const int32_t *numneigh, const int32_t *const *firstneigh, const double *special,
+                    int64_t n_owned, int32_t newton, double *f, bpm_tally *tally);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif

@@ -1,0 +1,22 @@
+#!/usr/bin/env bash
+# Installs what the project needs and is missing on a Debian machine.
+# Idempotent: a second run installs nothing. Needs root (or sudo) only when
+# a package is actually missing.
+set -euo pipefail
+
+packages=(build-essential pkg-config)
+missing=()
+for p in "${packages[@]}"; do
+  dpkg -s "$p" >/dev/null 2>&1 || missing+=("$p")
+done
+if ((${#missing[@]})); then
+  echo "installing Debian packages: ${missing[*]}"
+  sudo_cmd=""
+  [ "$(id -u)" -ne 0 ] && sudo_cmd="sudo"
+  $sudo_cmd apt-get update -qq
+  DEBIAN_FRONTEND=noninteractive $sudo_cmd apt-get install -y -qq "${missing[@]}"
+fi
+if ! command -v cargo >/dev/null 2>&1; then
+  echo "error: cargo not found: install a Rust toolchain (1.85 or newer) first" >&2
+  exit 1
+fi
