@@ -53,6 +53,11 @@ int bpm_pair_forces(const double *x, const double *v, const int32_t *types, int6
                     const int32_t *numneigh, const int32_t *const *firstneigh, const double *special,
                     int64_t n_owned, int32_t newton, double *f, bpm_tally *tally);
 
+/* Force over distance (written to fforce) and spring-proxy energy of one
+ * bond without damping, for LAMMPS's Bond::single. */
+double bpm_bond_single(double r, double r0, double dilation, const bpm_bond_coeffs *coeffs,
+                       double *fforce);
+
 #ifdef __cplusplus
 }
 #endif

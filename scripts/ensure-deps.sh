@@ -4,7 +4,9 @@
 # a package is actually missing.
 set -euo pipefail
 
-packages=(build-essential pkg-config)
+# LAMMPS 20220106 and its headers (the plugin builds against them), fmt for
+# those headers, Open MPI (Debian's LAMMPS is built with it).
+packages=(build-essential pkg-config lammps liblammps-dev libfmt-dev openmpi-bin libopenmpi-dev)
 missing=()
 for p in "${packages[@]}"; do
   dpkg -s "$p" >/dev/null 2>&1 || missing+=("$p")

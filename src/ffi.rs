@@ -270,3 +270,24 @@ pub unsafe extern "C" fn bpm_pair_forces(
         BPM_OK
     })
 }
+
+/// Force over distance (`fforce`, LAMMPS's convention) and spring-proxy
+/// energy of one bond, for LAMMPS's `Bond::single`.
+///
+/// # Safety
+/// `coeffs` and `fforce` must be valid pointers.
+#[no_mangle]
+pub unsafe extern "C" fn bpm_bond_single(
+    r: f64,
+    r0: f64,
+    dilation: f64,
+    coeffs: *const BondCoeffs,
+    fforce: *mut f64,
+) -> f64 {
+    if coeffs.is_null() || fforce.is_null() || r <= 0.0 || r0 <= 0.0 {
+        return 0.0;
+    }
+    let c = &*coeffs;
+    *fforce = crate::kernels::bond_force_magnitude(r, r0, dilation, 0.0, c) / r;
+    0.5 * c.k * (r - r0) * (r - r0)
+}

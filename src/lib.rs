@@ -14,6 +14,7 @@ pub mod bench;
 pub mod engine;
 pub mod ffi;
 pub mod kernels;
+pub mod lammps;
 pub mod scene;
 
 /// The crate version, recorded in every output file.

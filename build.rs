@@ -1,0 +1,60 @@
+//! Compiles the LAMMPS shim (`lammps-plugin/*.cpp`) with the `cc` crate
+//! against LAMMPS's headers and links LAMMPS and MPI.
+//!
+//! Defaults are Debian's `liblammps-dev` and Open MPI; `BPM_LAMMPS_INCLUDE`,
+//! `BPM_LAMMPS_LIB` and `BPM_MPI_INCLUDE` point at another installation.
+
+use std::env;
+use std::path::Path;
+
+fn main() {
+    let include = env::var("BPM_LAMMPS_INCLUDE").unwrap_or_else(|_| "/usr/include/lammps".into());
+    let mpi_include = env::var("BPM_MPI_INCLUDE")
+        .unwrap_or_else(|_| "/usr/lib/x86_64-linux-gnu/openmpi/include".into());
+    for var in ["BPM_LAMMPS_INCLUDE", "BPM_LAMMPS_LIB", "BPM_MPI_INCLUDE"] {
+        println!("cargo:rerun-if-env-changed={var}");
+    }
+    if !Path::new(&include).join("lammps.h").exists() {
+        panic!(
+            "LAMMPS headers not found in {include}: run scripts/ensure-deps.sh (Debian's liblammps-dev), \
+             or set BPM_LAMMPS_INCLUDE"
+        );
+    }
+    let sources = [
+        "bond_bpm_multibody.cpp",
+        "pair_bpm_contact.cpp",
+        "fix_bpm_reference.cpp",
+        "bpm_plugin.cpp",
+    ];
+    let mut build = cc::Build::new();
+    build
+        .cpp(true)
+        .std("c++17")
+        .include("lammps-plugin")
+        .include(&include)
+        .include(&mpi_include)
+        .include(format!("{mpi_include}/openmpi"))
+        .warnings(false)
+        .flag_if_supported("-Wno-unused-parameter");
+    for s in sources {
+        let path = format!("lammps-plugin/{s}");
+        println!("cargo:rerun-if-changed={path}");
+        build.file(path);
+    }
+    for h in [
+        "bpm_kernels.h",
+        "fmt_compat.h",
+        "bond_bpm_multibody.h",
+        "pair_bpm_contact.h",
+        "fix_bpm_reference.h",
+    ] {
+        println!("cargo:rerun-if-changed=lammps-plugin/{h}");
+    }
+    build.compile("bpm_lammps_shim");
+    if let Ok(lib) = env::var("BPM_LAMMPS_LIB") {
+        println!("cargo:rustc-link-search=native={lib}");
+    }
+    println!("cargo:rustc-link-search=native=/usr/lib/x86_64-linux-gnu/openmpi/lib");
+    println!("cargo:rustc-link-lib=dylib=lammps");
+    println!("cargo:rustc-link-lib=dylib=mpi");
+}

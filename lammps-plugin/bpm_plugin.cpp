@@ -1,0 +1,88 @@
+/* Registration of the styles: with Debian's LAMMPS (no PLUGIN package) by
+ * inserting creators into the style maps through the library handle, and,
+ * where lammpsplugin.h exists, through the standard plugin entry point. */
+#include "fmt_compat.h"
+
+#include "bond_bpm_multibody.h"
+#include "fix_bpm_reference.h"
+#include "pair_bpm_contact.h"
+
+#include "force.h"
+#include "input.h"
+#include "lammps.h"
+#include "modify.h"
+
+#include <mpi.h>
+
+using namespace LAMMPS_NS;
+
+static Bond *bond_creator(LAMMPS *lmp)
+{
+  return new BondBPMMultibody(lmp);
+}
+
+static Pair *pair_creator(LAMMPS *lmp)
+{
+  return new PairBPMContact(lmp);
+}
+
+static Fix *fix_creator(LAMMPS *lmp, int narg, char **arg)
+{
+  return new FixBPMReference(lmp, narg, arg);
+}
+
+extern "C" void bpm_register_styles(void *handle)
+{
+  auto lmp = static_cast<LAMMPS *>(handle);
+  (*lmp->force->bond_map)["bpm/multibody"] = &bond_creator;
+  (*lmp->force->pair_map)["bpm/contact"] = &pair_creator;
+  (*lmp->modify->fix_map)["BPM/REFERENCE"] = &fix_creator;
+}
+
+/* lmp-bpm: LAMMPS's own main with our styles registered. */
+extern "C" int bpm_lmp_main(int argc, char **argv)
+{
+  MPI_Init(&argc, &argv);
+  int status = 0;
+  try {
+    auto lmp = new LAMMPS(argc, argv, MPI_COMM_WORLD);
+    bpm_register_styles(lmp);
+    lmp->input->file();
+    delete lmp;
+  } catch (std::exception &e) {
+    fprintf(stderr, "ERROR: %s\n", e.what());
+    status = 1;
+    MPI_Abort(MPI_COMM_WORLD, 1);
+  }
+  MPI_Finalize();
+  return status;
+}
+
+#if __has_include("lammpsplugin.h")
+#include "lammpsplugin.h"
+#include "version.h"
+
+extern "C" void lammpsplugin_init(void *lmp, void *handle, void *regfunc)
+{
+  lammpsplugin_t plugin;
+  auto register_plugin = (lammpsplugin_regfunc) regfunc;
+  plugin.version = LAMMPS_VERSION;
+  plugin.author = "bpm project";
+  plugin.handle = handle;
+  plugin.style = "bond";
+  plugin.name = "bpm/multibody";
+  plugin.info = "bonded particle model bond with multibody volume term";
+  plugin.creator.v1 = (lammpsplugin_factory1 *) &bond_creator;
+  register_plugin(&plugin, lmp);
+  plugin.style = "pair";
+  plugin.name = "bpm/contact";
+  plugin.info = "bonded particle model contact pair style";
+  plugin.creator.v1 = (lammpsplugin_factory1 *) &pair_creator;
+  register_plugin(&plugin, lmp);
+  plugin.style = "fix";
+  plugin.name = "BPM/REFERENCE";
+  plugin.info = "reference lengths of bond_style bpm/multibody (internal)";
+  plugin.creator.v2 = (lammpsplugin_factory2 *) &fix_creator;
+  register_plugin(&plugin, lmp);
+}
+#endif

@@ -1,0 +1,302 @@
+#include "fmt_compat.h"
+
+#include "fix_bpm_reference.h"
+
+#include "atom.h"
+#include "comm.h"
+#include "domain.h"
+#include "error.h"
+#include "memory.h"
+#include "neighbor.h"
+#include "update.h"
+
+#include <cmath>
+#include <cstring>
+#include <string>
+
+using namespace LAMMPS_NS;
+using namespace FixConst;
+
+FixBPMReference::FixBPMReference(LAMMPS *lmp, int narg, char **arg) :
+    Fix(lmp, narg, arg), vol(nullptr), vol0(nullptr), r0(nullptr), captured(0), nmax_vol(0),
+    list_built_at(-1), list_size(-1), max_r0_all(0.0)
+{
+  if (narg != 3) error->all(FLERR, std::string("Illegal fix BPM/REFERENCE command: it takes no arguments"));
+  if (!atom->molecular) error->all(FLERR, std::string("Fix BPM/REFERENCE requires an atom style with bonds"));
+  stride = atom->bond_per_atom;
+  restart_global = 1;
+  restart_peratom = 1;
+  create_attribute = 1;
+  comm_forward = 2;
+  comm_reverse = 2;
+  grow_arrays(atom->nmax);
+  atom->add_callback(Atom::GROW);
+  atom->add_callback(Atom::RESTART);
+}
+
+FixBPMReference::~FixBPMReference()
+{
+  atom->delete_callback(id, Atom::GROW);
+  atom->delete_callback(id, Atom::RESTART);
+  memory->destroy(r0);
+  memory->destroy(vol);
+  memory->destroy(vol0);
+}
+
+int FixBPMReference::setmask()
+{
+  return PRE_FORCE;
+}
+
+void FixBPMReference::setup_pre_force(int)
+{
+  if (!captured) capture();
+  double local = 0.0;
+  for (int i = 0; i < atom->nlocal; i++)
+    for (int m = 0; m < atom->num_bond[i]; m++) local = std::fmax(local, r0[i][m]);
+  MPI_Allreduce(&local, &max_r0_all, 1, MPI_DOUBLE, MPI_MAX, world);
+  if (max_r0_all > comm->cutghostuser && max_r0_all > neighbor->cutneighmax)
+    error->all(FLERR, "bond_style bpm/multibody: a reference length (" + std::to_string(max_r0_all) +
+                          ") exceeds the communication cutoff (" +
+                          std::to_string(neighbor->cutneighmax) + "): use comm_modify cutoff");
+  list_built_at = -1;
+}
+
+// Sets every r0 to the current bond length (first run, or after "reset").
+void FixBPMReference::capture()
+{
+  double **x = atom->x;
+  tagint **bond_atom = atom->bond_atom;
+  for (int i = 0; i < atom->nlocal; i++) {
+    for (int m = 0; m < atom->num_bond[i]; m++) {
+      int j = atom->map(bond_atom[i][m]);
+      if (j < 0)
+        error->one(FLERR, "bond_style bpm/multibody: partner " + std::to_string(bond_atom[i][m]) +
+                              " of atom " + std::to_string(atom->tag[i]) +
+                              " is not on this rank: the bond is longer than the communication "
+                              "cutoff (use comm_modify cutoff)");
+      j = domain->closest_image(i, j);
+      double dx = x[i][0] - x[j][0], dy = x[i][1] - x[j][1], dz = x[i][2] - x[j][2];
+      r0[i][m] = std::sqrt(dx * dx + dy * dy + dz * dz);
+      if (!given.empty()) {
+        tagint a = atom->tag[i], b = bond_atom[i][m];
+        auto it = given.find(a < b ? std::make_pair(a, b) : std::make_pair(b, a));
+        if (it != given.end()) r0[i][m] = it->second;
+      }
+    }
+  }
+  given.clear();
+  captured = 1;
+}
+
+// Reads "tag_i tag_j r0" lines (# comments); used at the next capture.
+void FixBPMReference::read_lengths(const char *path)
+{
+  std::vector<double> values;
+  long count = 0;
+  if (comm->me == 0) {
+    FILE *fp = fopen(path, "r");
+    if (!fp) error->one(FLERR, std::string("fix_modify BPM_REFERENCE lengths: cannot open ") + path);
+    char line[512];
+    while (fgets(line, sizeof(line), fp)) {
+      if (line[0] == '#' || line[0] == '\n') continue;
+      double a, b, r;
+      if (sscanf(line, "%lf %lf %lf", &a, &b, &r) != 3 || !(r > 0.0)) {
+        fclose(fp);
+        error->one(FLERR, std::string("fix_modify BPM_REFERENCE lengths: bad line in ") + path + ": " + line);
+      }
+      values.push_back(a);
+      values.push_back(b);
+      values.push_back(r);
+    }
+    fclose(fp);
+    count = (long) values.size();
+  }
+  MPI_Bcast(&count, 1, MPI_LONG, 0, world);
+  values.resize(count);
+  MPI_Bcast(values.data(), (int) count, MPI_DOUBLE, 0, world);
+  given.clear();
+  for (long k = 0; k + 2 < count; k += 3) {
+    tagint a = (tagint) values[k], b = (tagint) values[k + 1];
+    given[a < b ? std::make_pair(a, b) : std::make_pair(b, a)] = values[k + 2];
+  }
+  captured = 0;
+}
+
+int FixBPMReference::modify_param(int narg, char **arg)
+{
+  if (strcmp(arg[0], "reset") == 0) {
+    captured = 0;    // the next run's setup takes the current lengths
+    given.clear();
+    return 1;
+  }
+  if (strcmp(arg[0], "lengths") == 0) {
+    if (narg < 2) error->all(FLERR, std::string("fix_modify BPM_REFERENCE lengths needs a file name"));
+    read_lengths(arg[1]);
+    return 2;
+  }
+  return 0;
+}
+
+const double *FixBPMReference::bondlist_r0()
+{
+  int n = neighbor->nbondlist;
+  if (list_built_at == neighbor->lastcall && list_size == n) return list_r0.data();
+  int **bondlist = neighbor->bondlist;
+  tagint *tag = atom->tag;
+  list_r0.resize(n);
+  for (int k = 0; k < n; k++) {
+    double value = r0_between(bondlist[k][0], bondlist[k][1]);
+    if (!(value > 0.0))
+      error->one(FLERR, "bond_style bpm/multibody: bond " + std::to_string(tag[bondlist[k][0]]) + "-" +
+                            std::to_string(tag[bondlist[k][1]]) +
+                            " has no reference length (created after the reference was taken? "
+                            "use fix_modify BPM_REFERENCE reset)");
+    list_r0[k] = value;
+  }
+  list_built_at = neighbor->lastcall;
+  list_size = n;
+  return list_r0.data();
+}
+
+double FixBPMReference::r0_between(int i, int j)
+{
+  tagint *tag = atom->tag;
+  int nlocal = atom->nlocal;
+  // The bond is stored on one of its atoms (both with newton_bond off).
+  for (int side = 0; side < 2; side++) {
+    int a = side ? j : i, b = side ? i : j;
+    if (a >= nlocal) continue;
+    for (int m = 0; m < atom->num_bond[a]; m++)
+      if (atom->bond_atom[a][m] == tag[b]) return r0[a][m];
+  }
+  return -1.0;
+}
+
+void FixBPMReference::clear_volumes(int nall)
+{
+  if (nall > nmax_vol) {
+    nmax_vol = atom->nmax > nall ? atom->nmax : nall;
+    memory->destroy(vol);
+    memory->destroy(vol0);
+    memory->create(vol, nmax_vol, "bpm/reference:vol");
+    memory->create(vol0, nmax_vol, "bpm/reference:vol0");
+  }
+  for (int i = 0; i < nall; i++) vol[i] = vol0[i] = 0.0;
+}
+
+void FixBPMReference::communicate_volumes(int newton_bond)
+{
+  if (newton_bond) comm->reverse_comm_fix(this);
+  comm->forward_comm_fix(this);
+}
+
+int FixBPMReference::pack_forward_comm(int n, int *list, double *buf, int, int *)
+{
+  int m = 0;
+  for (int k = 0; k < n; k++) {
+    buf[m++] = vol[list[k]];
+    buf[m++] = vol0[list[k]];
+  }
+  return m;
+}
+
+void FixBPMReference::unpack_forward_comm(int n, int first, double *buf)
+{
+  int m = 0;
+  for (int i = first; i < first + n; i++) {
+    vol[i] = buf[m++];
+    vol0[i] = buf[m++];
+  }
+}
+
+int FixBPMReference::pack_reverse_comm(int n, int first, double *buf)
+{
+  int m = 0;
+  for (int i = first; i < first + n; i++) {
+    buf[m++] = vol[i];
+    buf[m++] = vol0[i];
+  }
+  return m;
+}
+
+void FixBPMReference::unpack_reverse_comm(int n, int *list, double *buf)
+{
+  int m = 0;
+  for (int k = 0; k < n; k++) {
+    vol[list[k]] += buf[m++];
+    vol0[list[k]] += buf[m++];
+  }
+}
+
+void FixBPMReference::grow_arrays(int nmax)
+{
+  memory->grow(r0, nmax, stride, "bpm/reference:r0");
+}
+
+void FixBPMReference::copy_arrays(int i, int j, int)
+{
+  for (int m = 0; m < stride; m++) r0[j][m] = r0[i][m];
+}
+
+int FixBPMReference::pack_exchange(int i, double *buf)
+{
+  int n = atom->num_bond[i];
+  for (int m = 0; m < n; m++) buf[m] = r0[i][m];
+  return n;
+}
+
+int FixBPMReference::unpack_exchange(int nlocal, double *buf)
+{
+  int n = atom->num_bond[nlocal];
+  for (int m = 0; m < n; m++) r0[nlocal][m] = buf[m];
+  for (int m = n; m < stride; m++) r0[nlocal][m] = 0.0;
+  return n;
+}
+
+int FixBPMReference::pack_restart(int i, double *buf)
+{
+  int n = atom->num_bond[i];
+  buf[0] = n + 1;    // LAMMPS convention: first value is the count including itself
+  for (int m = 0; m < n; m++) buf[m + 1] = r0[i][m];
+  return n + 1;
+}
+
+void FixBPMReference::unpack_restart(int nlocal, int nth)
+{
+  double **extra = atom->extra;
+  int m = 0;
+  for (int k = 0; k < nth; k++) m += static_cast<int>(extra[nlocal][m]);
+  int n = static_cast<int>(extra[nlocal][m]) - 1;
+  for (int b = 0; b < n && b < stride; b++) r0[nlocal][b] = extra[nlocal][m + 1 + b];
+}
+
+int FixBPMReference::size_restart(int i)
+{
+  return atom->num_bond[i] + 1;
+}
+
+int FixBPMReference::maxsize_restart()
+{
+  return stride + 1;
+}
+
+void FixBPMReference::write_restart(FILE *fp)
+{
+  if (comm->me == 0) {
+    int size = sizeof(double);
+    double flag = captured;
+    fwrite(&size, sizeof(int), 1, fp);
+    fwrite(&flag, sizeof(double), 1, fp);
+  }
+}
+
+void FixBPMReference::restart(char *buf)
+{
+  captured = static_cast<int>(reinterpret_cast<double *>(buf)[0]);
+}
+
+double FixBPMReference::memory_usage()
+{
+  return (double) atom->nmax * stride * sizeof(double) + 2.0 * nmax_vol * sizeof(double);
+}

@@ -1,0 +1,68 @@
+/* Internal fix of bond_style bpm/multibody: per-bond reference lengths r0,
+ * stored per atom beside atom->bond_atom so they move with atoms between
+ * ranks and go into restart files, and the volume proxies V, V0 with their
+ * ghost communication. Created by the bond style with ID BPM_REFERENCE. */
+#ifndef LMP_FIX_BPM_REFERENCE_H
+#define LMP_FIX_BPM_REFERENCE_H
+
+#include "fix.h"
+#include <map>
+#include <utility>
+#include <vector>
+
+namespace LAMMPS_NS {
+
+class FixBPMReference : public Fix {
+ public:
+  FixBPMReference(class LAMMPS *, int, char **);
+  ~FixBPMReference() override;
+  int setmask() override;
+  void setup_pre_force(int) override;
+  int modify_param(int, char **) override;
+
+  void grow_arrays(int) override;
+  void copy_arrays(int, int, int) override;
+  int pack_exchange(int, double *) override;
+  int unpack_exchange(int, double *) override;
+  int pack_restart(int, double *) override;
+  void unpack_restart(int, int) override;
+  int size_restart(int) override;
+  int maxsize_restart() override;
+  void write_restart(FILE *) override;
+  void restart(char *) override;
+
+  int pack_forward_comm(int, int *, double *, int, int *) override;
+  void unpack_forward_comm(int, int, double *) override;
+  int pack_reverse_comm(int, int, double *) override;
+  void unpack_reverse_comm(int, int *, double *) override;
+  double memory_usage() override;
+
+  // r0 of each entry of neighbor->bondlist, rebuilt when the list changes.
+  const double *bondlist_r0();
+  // Zeroed V and V0 arrays for nall atoms.
+  void clear_volumes(int nall);
+  // Sums ghost parts into owners (newton_bond on), then copies owners to ghosts.
+  void communicate_volumes(int newton_bond);
+  // r0 of the bond between local atoms i and j (-1 if none).
+  double r0_between(int i, int j);
+  double max_r0() const { return max_r0_all; }
+
+  double *vol, *vol0;
+
+ private:
+  double **r0;    // [nmax][bond_per_atom], aligned with atom->bond_atom
+  int captured;
+  int nmax_vol;
+  int stride;
+  std::vector<double> list_r0;
+  bigint list_built_at;
+  int list_size;
+  double max_r0_all;
+  std::map<std::pair<tagint, tagint>, double> given;    // from "lengths FILE"
+  void capture();
+  void read_lengths(const char *path);
+};
+
+}    // namespace LAMMPS_NS
+
+#endif

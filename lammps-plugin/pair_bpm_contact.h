@@ -1,0 +1,35 @@
+/* pair_style bpm/contact: harmonic + cubic repulsion + damping between
+ * non-bonded particles closer than d (paper 1, eq. 4). Physics in the Rust
+ * kernels; bonded pairs are excluded with special_bonds lj 0 1 1. */
+#ifndef LMP_PAIR_BPM_CONTACT_H
+#define LMP_PAIR_BPM_CONTACT_H
+
+#include "pair.h"
+#include "bpm_kernels.h"
+#include <vector>
+
+namespace LAMMPS_NS {
+
+class PairBPMContact : public Pair {
+ public:
+  PairBPMContact(class LAMMPS *);
+  ~PairBPMContact() override;
+  void compute(int, int) override;
+  void settings(int, char **) override;
+  void coeff(int, char **) override;
+  void init_style() override;
+  double init_one(int, int) override;
+  void write_restart(FILE *) override;
+  void read_restart(FILE *) override;
+  void write_data(FILE *) override;
+  void write_data_all(FILE *) override;
+
+ protected:
+  std::vector<bpm_pair_coeffs> table;    // (i-1) * ntypes + (j-1)
+  bool damped;
+  void allocate();
+};
+
+}    // namespace LAMMPS_NS
+
+#endif

@@ -1,0 +1,144 @@
+//! Writes a scene as a LAMMPS data file (`atom_style bond`) plus the
+//! `-var` values of the input templates in `lammps_inputs/`.
+
+use crate::scene::Scene;
+use std::fmt::Write as _;
+
+/// Input-script variables derived from a scene.
+#[derive(Clone, Debug)]
+pub struct ScriptVars {
+    /// `(name, value)` pairs for `-var name value`.
+    pub vars: Vec<(String, String)>,
+}
+
+impl ScriptVars {
+    /// The variables of `scene` for a data file at `data` (reference lengths
+    /// at `data.r0`, see [`write_reference_lengths`]) and `newton` setting.
+    pub fn of(scene: &Scene, data: &str, newton: bool) -> Self {
+        let ff = &scene.force_field;
+        let pair = ff.pair.unwrap_or(crate::kernels::PairCoeffs {
+            k: 0.0,
+            d: 1.0,
+            a: 0.0,
+            gamma: 0.0,
+        });
+        let boundary: Vec<&str> = scene
+            .simbox
+            .periodic
+            .iter()
+            .map(|&p| if p { "p" } else { "f" })
+            .collect();
+        let max_r0 = scene
+            .bonds
+            .r0
+            .as_ref()
+            .map_or(1.5, |r| r.iter().cloned().fold(0.0, f64::max));
+        // Ghosts must reach every bond partner: the longest bond plus the skin.
+        let comm_cutoff = (max_r0 * 1.2).max(pair.d) + ff.skin;
+        let g = |v: f64| format!("{v:.17e}");
+        let vars = [
+            ("data", data.to_string()),
+            ("lengths", format!("{data}.r0")),
+            ("boundary", boundary.join(" ")),
+            ("newton", if newton { "on" } else { "off" }.to_string()),
+            ("kB", g(ff.bond.k)),
+            ("aB", g(ff.bond.a)),
+            ("gB", g(ff.bond.gamma)),
+            ("kP", g(pair.k)),
+            ("d", g(pair.d)),
+            ("aP", g(pair.a)),
+            ("gP", g(pair.gamma)),
+            ("skin", g(ff.skin)),
+            ("commcut", g(comm_cutoff)),
+        ];
+        Self {
+            vars: vars.into_iter().map(|(k, v)| (k.to_string(), v)).collect(),
+        }
+    }
+
+    /// As command-line arguments: `-var name value ...`.
+    pub fn args(&self) -> Vec<String> {
+        self.vars
+            .iter()
+            .flat_map(|(k, v)| ["-var".to_string(), k.clone(), v.clone()])
+            .collect()
+    }
+}
+
+/// The data file text of `scene`: atoms (id, grain + 1 as molecule, type
+/// 1, x y z), velocities and bonds (type 1). Particle `i` is atom `i + 1`.
+pub fn write_data_file(scene: &Scene) -> String {
+    let b = &scene.simbox;
+    let pa = &scene.particles;
+    let n = pa.positions.len();
+    let mut s = String::new();
+    let _ = writeln!(
+        s,
+        "LAMMPS data file written by bpm {} (scene seed {})\n",
+        crate::VERSION,
+        scene.seed
+    );
+    let _ = writeln!(
+        s,
+        "{n} atoms\n{} bonds\n1 atom types\n1 bond types\n",
+        scene.bonds.pairs.len()
+    );
+    let hi = |d: usize| b.lo[d] + b.lengths[d];
+    let _ = writeln!(s, "{:.17e} {:.17e} xlo xhi", b.lo[0], hi(0));
+    let _ = writeln!(s, "{:.17e} {:.17e} ylo yhi", b.lo[1], hi(1));
+    let _ = writeln!(s, "{:.17e} {:.17e} zlo zhi", b.lo[2], hi(2));
+    if b.tilt.iter().any(|&t| t != 0.0) {
+        let _ = writeln!(
+            s,
+            "{:.17e} {:.17e} {:.17e} xy xz yz",
+            b.tilt[0], b.tilt[1], b.tilt[2]
+        );
+    }
+    let _ = writeln!(s, "\nMasses\n\n1 {:.17e}\n\nAtoms # bond\n", pa.mass);
+    for (i, x) in pa.positions.iter().enumerate() {
+        let grain = pa.grain.as_ref().map_or(0, |g| g[i]);
+        let _ = writeln!(
+            s,
+            "{} {} 1 {:.17e} {:.17e} {:.17e}",
+            i + 1,
+            grain + 1,
+            x[0],
+            x[1],
+            x[2]
+        );
+    }
+    if let Some(v) = &pa.velocities {
+        let _ = writeln!(s, "\nVelocities\n");
+        for (i, v) in v.iter().enumerate() {
+            let _ = writeln!(s, "{} {:.17e} {:.17e} {:.17e}", i + 1, v[0], v[1], v[2]);
+        }
+    }
+    if !scene.bonds.pairs.is_empty() {
+        let _ = writeln!(s, "\nBonds\n");
+        for (k, [i, j]) in scene.bonds.pairs.iter().enumerate() {
+            let _ = writeln!(s, "{} 1 {} {}", k + 1, i + 1, j + 1);
+        }
+    }
+    s
+}
+
+/// The reference length of every bond as `tag_i tag_j r0` lines, read by
+/// `fix_modify BPM_REFERENCE lengths FILE`. Bonds without an explicit `r0`
+/// get their minimum-image length, as the native engine does.
+pub fn write_reference_lengths(scene: &Scene) -> String {
+    use crate::kernels::Separation;
+    let simbox = crate::scene::validate::simbox_of(scene);
+    let x = &scene.particles.positions;
+    let mut s = String::from("# tag_i tag_j r0\n");
+    for (k, &[i, j]) in scene.bonds.pairs.iter().enumerate() {
+        let r0 = scene.bonds.r0.as_ref().map_or_else(
+            || {
+                let d = simbox.delta(&x[i], &x[j]);
+                (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt()
+            },
+            |r| r[k],
+        );
+        let _ = writeln!(s, "{} {} {:.17e}", i + 1, j + 1, r0);
+    }
+    s
+}

@@ -1,0 +1,221 @@
+//! The LAMMPS plugin (Debian's LAMMPS + our styles, `lmp-bpm`) against the
+//! native engine on identical configurations, under MPI and newton on/off.
+
+mod common;
+
+use bpm::engine::StageDrivers;
+use bpm::lammps::{write_data_file, write_reference_lengths, ScriptVars};
+use bpm::scene::builders::bulk::{build_bulk, BulkParams};
+use bpm::scene::{build_system, ForceField, Scene, StageSpec};
+use std::path::PathBuf;
+use std::process::Command;
+use std::sync::OnceLock;
+
+fn workdir() -> PathBuf {
+    let d = std::env::temp_dir().join(format!("bpm-plugin-{}", std::process::id()));
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+/// A small strained, moving bulk solid with two grains' worth of contacts:
+/// bonds carry force, velocities exercise damping, and removing the bonds
+/// of a slab creates non-bonded overlaps for the pair style.
+fn test_scene(a_b: f64) -> Scene {
+    static BASE: OnceLock<Scene> = OnceLock::new();
+    let base = BASE.get_or_init(|| {
+        let mut p = BulkParams::paper(6.0, 5, 0.0);
+        p.relax_time = 20.0;
+        p.thermal_time = 50.0;
+        p.quench_time = 100.0;
+        build_bulk(&p, 1, false).unwrap().0
+    });
+    let mut s = base.clone();
+    s.force_field = ForceField::paper(a_b);
+    let squeeze = 0.985;
+    for (i, x) in s.particles.positions.iter_mut().enumerate() {
+        for (d, c) in x.iter_mut().enumerate() {
+            *c = *c * squeeze + 1e-3 * (((i * 7 + d * 3) % 11) as f64 - 5.0);
+        }
+    }
+    s.simbox.lengths = s.simbox.lengths.map(|l| l * squeeze);
+    s.particles.velocities = Some(common::random_rows(s.particles.positions.len(), 0.05, 77));
+    // Cut the bonds crossing the plane z = 3: the two halves touch through
+    // pair contacts only (a "grain with surface contacts").
+    let z = &s.particles.positions;
+    let keep: Vec<usize> = (0..s.bonds.pairs.len())
+        .filter(|&k| {
+            let [i, j] = s.bonds.pairs[k];
+            (z[i][2] < 3.0 * squeeze) == (z[j][2] < 3.0 * squeeze)
+        })
+        .collect();
+    let r0 = s.bonds.r0.clone().unwrap();
+    s.bonds.pairs = keep.iter().map(|&k| s.bonds.pairs[k]).collect();
+    s.bonds.r0 = Some(keep.iter().map(|&k| r0[k]).collect());
+    s.stages = vec![StageSpec::hold("point", 0, 0.1)];
+    s
+}
+
+struct LammpsResult {
+    forces: Vec<[f64; 3]>,
+    pressure: [f64; 6],
+    energies: [f64; 2],
+}
+
+fn run_lammps(scene: &Scene, newton: bool, ranks: usize, tag: &str) -> LammpsResult {
+    let dir = workdir();
+    let data = dir.join(format!("{tag}.data"));
+    let dump = dir.join(format!("{tag}.dump"));
+    std::fs::write(&data, write_data_file(scene)).unwrap();
+    std::fs::write(
+        format!("{}.r0", data.display()),
+        write_reference_lengths(scene),
+    )
+    .unwrap();
+    let vars = ScriptVars::of(scene, data.to_str().unwrap(), newton);
+    let input = concat!(env!("CARGO_MANIFEST_DIR"), "/lammps_inputs/single_point.in");
+    let mut cmd = if ranks > 1 {
+        let mut c = Command::new("mpirun.openmpi");
+        c.args([
+            "--allow-run-as-root",
+            "--oversubscribe",
+            "--bind-to",
+            "none",
+            "-np",
+            &ranks.to_string(),
+        ]);
+        c.arg(env!("CARGO_BIN_EXE_lmp-bpm"));
+        c
+    } else {
+        Command::new(env!("CARGO_BIN_EXE_lmp-bpm"))
+    };
+    cmd.args([
+        "-in",
+        input,
+        "-log",
+        "none",
+        "-var",
+        "dump",
+        dump.to_str().unwrap(),
+    ]);
+    cmd.args(vars.args());
+    cmd.env("OMPI_MCA_btl_vader_single_copy_mechanism", "none");
+    let out = cmd.output().expect("run lmp-bpm");
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "lmp-bpm failed:\n{stdout}\n{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let numbers = |key: &str| -> Vec<f64> {
+        let line = stdout
+            .lines()
+            .find(|l| l.starts_with(key))
+            .unwrap_or_else(|| panic!("no {key} in\n{stdout}"));
+        line.split_whitespace()
+            .skip(1)
+            .map(|v| v.parse().unwrap())
+            .collect()
+    };
+    let p = numbers("BPM_PRESSURE");
+    let e = numbers("BPM_ENERGY");
+    let text = std::fs::read_to_string(&dump).unwrap();
+    let mut forces = vec![[f64::NAN; 3]; scene.particles.positions.len()];
+    for line in text
+        .lines()
+        .skip_while(|l| !l.starts_with("ITEM: ATOMS"))
+        .skip(1)
+    {
+        let v: Vec<f64> = line
+            .split_whitespace()
+            .map(|t| t.parse().unwrap())
+            .collect();
+        forces[v[0] as usize - 1] = [v[1], v[2], v[3]];
+    }
+    LammpsResult {
+        forces,
+        pressure: [p[0], p[1], p[2], p[3], p[4], p[5]],
+        energies: [e[0], e[1]],
+    }
+}
+
+struct Native {
+    forces: Vec<[f64; 3]>,
+    pressure: [f64; 6],
+    energies: [f64; 2],
+}
+
+fn run_native(scene: &Scene) -> Native {
+    let mut sys = build_system(scene, 1);
+    sys.setup(&StageDrivers {
+        dt: 0.1,
+        ..Default::default()
+    });
+    Native {
+        forces: sys.f.clone(),
+        pressure: sys.pressure_tensor(),
+        energies: [
+            sys.report.interactions.bonds.energy,
+            sys.report.interactions.pairs.energy,
+        ],
+    }
+}
+
+fn max_rel_force_dev(a: &[[f64; 3]], b: &[[f64; 3]]) -> f64 {
+    let scale = common::max_abs(b);
+    a.iter()
+        .zip(b)
+        .flat_map(|(p, q)| (0..3).map(move |d| (p[d] - q[d]).abs()))
+        .fold(0.0, f64::max)
+        / scale
+}
+
+#[test]
+fn plugin_forces_and_pressure_equal_the_native_engine() {
+    for a_b in [0.0, -0.5, 1.0] {
+        let scene = test_scene(a_b);
+        let native = run_native(&scene);
+        assert!(
+            native.energies[1] > 0.0,
+            "the scene must have pair contacts"
+        );
+        let lmp = run_lammps(&scene, true, 1, &format!("np1-{a_b}"));
+        let dev = max_rel_force_dev(&lmp.forces, &native.forces);
+        assert!(dev < 1e-12, "a_B = {a_b}: max force deviation {dev:e}");
+        let pscale = native.pressure.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        for k in 0..6 {
+            assert!(
+                (lmp.pressure[k] - native.pressure[k]).abs() < 1e-12 * pscale,
+                "a_B = {a_b}: P[{k}] {} vs {}",
+                lmp.pressure[k],
+                native.pressure[k]
+            );
+        }
+        for k in 0..2 {
+            assert!(
+                (lmp.energies[k] - native.energies[k]).abs()
+                    < 1e-12 * native.energies[k].abs().max(1e-300)
+            );
+        }
+    }
+}
+
+#[test]
+fn one_and_two_ranks_agree_with_newton_on_and_off() {
+    let scene = test_scene(-0.5);
+    let native = run_native(&scene);
+    for (ranks, newton) in [(1, false), (2, true), (2, false)] {
+        let lmp = run_lammps(&scene, newton, ranks, &format!("mpi-{ranks}-{newton}"));
+        let dev = max_rel_force_dev(&lmp.forces, &native.forces);
+        assert!(
+            dev < 1e-10,
+            "np {ranks}, newton {newton}: max force deviation {dev:e}"
+        );
+        let pscale = native.pressure.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        for k in 0..6 {
+            assert!(
+                (lmp.pressure[k] - native.pressure[k]).abs() < 1e-10 * pscale,
+                "np {ranks}, newton {newton}: P[{k}]"
+            );
+        }
+    }
+}
