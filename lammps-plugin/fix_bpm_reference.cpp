@@ -18,7 +18,7 @@ using namespace LAMMPS_NS;
 using namespace FixConst;
 
 FixBPMReference::FixBPMReference(LAMMPS *lmp, int narg, char **arg) :
-    Fix(lmp, narg, arg), vol(nullptr), vol0(nullptr), r0(nullptr), captured(0), nmax_vol(0),
+    Fix(lmp, narg, arg), vol(nullptr), vol0(nullptr), r0(nullptr), captured(0), nmax_vol(0), nmax_r0(0),
     list_built_at(-1), list_size(-1), max_r0_all(0.0)
 {
   if (narg != 3) error->all(FLERR, std::string("Illegal fix BPM/REFERENCE command: it takes no arguments"));
@@ -231,7 +231,11 @@ void FixBPMReference::unpack_reverse_comm(int n, int *list, double *buf)
 
 void FixBPMReference::grow_arrays(int nmax)
 {
+  // New rows start at 0 ("no reference length"), never at stale memory.
   memory->grow(r0, nmax, stride, "bpm/reference:r0");
+  for (int i = nmax_r0; i < nmax; i++)
+    for (int m = 0; m < stride; m++) r0[i][m] = 0.0;
+  if (nmax > nmax_r0) nmax_r0 = nmax;
 }
 
 void FixBPMReference::copy_arrays(int i, int j, int)

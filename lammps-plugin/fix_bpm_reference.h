@@ -53,6 +53,7 @@ class FixBPMReference : public Fix {
   double **r0;    // [nmax][bond_per_atom], aligned with atom->bond_atom
   int captured;
   int nmax_vol;
+  int nmax_r0;
   int stride;
   std::vector<double> list_r0;
   bigint list_built_at;

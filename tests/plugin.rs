@@ -61,10 +61,18 @@ struct LammpsResult {
     energies: [f64; 2],
 }
 
-fn run_lammps(scene: &Scene, newton: bool, ranks: usize, tag: &str) -> LammpsResult {
+/// Runs `lmp-bpm` on template `input` for `scene`; returns the status and
+/// the output. `extra` adds `-var name value` pairs.
+fn lmp_bpm(
+    scene: &Scene,
+    input: &str,
+    newton: bool,
+    ranks: usize,
+    tag: &str,
+    extra: &[(&str, String)],
+) -> (bool, String) {
     let dir = workdir();
     let data = dir.join(format!("{tag}.data"));
-    let dump = dir.join(format!("{tag}.dump"));
     std::fs::write(&data, write_data_file(scene)).unwrap();
     std::fs::write(
         format!("{}.r0", data.display()),
@@ -72,40 +80,62 @@ fn run_lammps(scene: &Scene, newton: bool, ranks: usize, tag: &str) -> LammpsRes
     )
     .unwrap();
     let vars = ScriptVars::of(scene, data.to_str().unwrap(), newton);
-    let input = concat!(env!("CARGO_MANIFEST_DIR"), "/lammps_inputs/single_point.in");
-    let mut cmd = if ranks > 1 {
-        let mut c = Command::new("mpirun.openmpi");
-        c.args([
+    let input = format!("{}/lammps_inputs/{input}", env!("CARGO_MANIFEST_DIR"));
+    // A hung LAMMPS (e.g. NaN positions) must fail the test, not stall CI.
+    let mut cmd = Command::new("timeout");
+    cmd.arg("120");
+    if ranks > 1 {
+        cmd.args([
+            "mpirun.openmpi",
             "--allow-run-as-root",
             "--oversubscribe",
             "--bind-to",
             "none",
-            "-np",
-            &ranks.to_string(),
         ]);
-        c.arg(env!("CARGO_BIN_EXE_lmp-bpm"));
-        c
-    } else {
-        Command::new(env!("CARGO_BIN_EXE_lmp-bpm"))
-    };
-    cmd.args([
-        "-in",
-        input,
-        "-log",
-        "none",
-        "-var",
-        "dump",
-        dump.to_str().unwrap(),
-    ]);
+        cmd.args(["-np", &ranks.to_string()]);
+    }
+    cmd.arg(env!("CARGO_BIN_EXE_lmp-bpm"));
+    cmd.args(["-in", &input, "-log", "none"]);
     cmd.args(vars.args());
+    for (k, v) in extra {
+        cmd.args(["-var", k, v]);
+    }
     cmd.env("OMPI_MCA_btl_vader_single_copy_mechanism", "none");
     let out = cmd.output().expect("run lmp-bpm");
-    let stdout = String::from_utf8_lossy(&out.stdout);
-    assert!(
-        out.status.success(),
-        "lmp-bpm failed:\n{stdout}\n{}",
+    let text = format!(
+        "{}{}",
+        String::from_utf8_lossy(&out.stdout),
         String::from_utf8_lossy(&out.stderr)
     );
+    (out.status.success(), text)
+}
+
+/// Rows of a LAMMPS custom dump sorted by id, without the id column.
+fn read_dump(path: &std::path::Path) -> Vec<Vec<f64>> {
+    let text = std::fs::read_to_string(path).unwrap();
+    text.lines()
+        .skip_while(|l| !l.starts_with("ITEM: ATOMS"))
+        .skip(1)
+        .map(|line| {
+            line.split_whitespace()
+                .skip(1)
+                .map(|t| t.parse().unwrap())
+                .collect()
+        })
+        .collect()
+}
+
+fn run_lammps(scene: &Scene, newton: bool, ranks: usize, tag: &str) -> LammpsResult {
+    let dump = workdir().join(format!("{tag}.dump"));
+    let (ok, stdout) = lmp_bpm(
+        scene,
+        "single_point.in",
+        newton,
+        ranks,
+        tag,
+        &[("dump", dump.display().to_string())],
+    );
+    assert!(ok, "lmp-bpm failed:\n{stdout}");
     let numbers = |key: &str| -> Vec<f64> {
         let line = stdout
             .lines()
@@ -118,19 +148,11 @@ fn run_lammps(scene: &Scene, newton: bool, ranks: usize, tag: &str) -> LammpsRes
     };
     let p = numbers("BPM_PRESSURE");
     let e = numbers("BPM_ENERGY");
-    let text = std::fs::read_to_string(&dump).unwrap();
-    let mut forces = vec![[f64::NAN; 3]; scene.particles.positions.len()];
-    for line in text
-        .lines()
-        .skip_while(|l| !l.starts_with("ITEM: ATOMS"))
-        .skip(1)
-    {
-        let v: Vec<f64> = line
-            .split_whitespace()
-            .map(|t| t.parse().unwrap())
-            .collect();
-        forces[v[0] as usize - 1] = [v[1], v[2], v[3]];
-    }
+    let forces: Vec<[f64; 3]> = read_dump(&dump)
+        .iter()
+        .map(|v| [v[0], v[1], v[2]])
+        .collect();
+    assert_eq!(forces.len(), scene.particles.positions.len());
     LammpsResult {
         forces,
         pressure: [p[0], p[1], p[2], p[3], p[4], p[5]],
@@ -218,4 +240,56 @@ fn one_and_two_ranks_agree_with_newton_on_and_off() {
             );
         }
     }
+}
+
+#[test]
+fn a_restart_keeps_every_bond_reference_length() {
+    let scene = test_scene(-0.5);
+    let dir = workdir();
+    let restart = dir.join("state.restart");
+    let continuous = dir.join("continuous.dump");
+    let resumed = dir.join("resumed.dump");
+    let (ok, out) = lmp_bpm(
+        &scene,
+        "restart_write.in",
+        true,
+        1,
+        "restart",
+        &[
+            ("restart", restart.display().to_string()),
+            ("dump", continuous.display().to_string()),
+        ],
+    );
+    assert!(ok, "{out}");
+    let (ok, out) = lmp_bpm(
+        &scene,
+        "restart_read.in",
+        true,
+        1,
+        "restart",
+        &[
+            ("restart", restart.display().to_string()),
+            ("dump", resumed.display().to_string()),
+        ],
+    );
+    assert!(ok, "{out}");
+    let a = read_dump(&continuous);
+    let b = read_dump(&resumed);
+    assert_eq!(a.len(), b.len());
+    let fscale = a
+        .iter()
+        .flat_map(|r| r[3..6].iter())
+        .fold(0.0f64, |m, v| m.max(v.abs()));
+    let mut dx = 0.0f64;
+    let mut df = 0.0f64;
+    for (p, q) in a.iter().zip(&b) {
+        for k in 0..3 {
+            dx = dx.max((p[k] - q[k]).abs());
+            df = df.max((p[k + 3] - q[k + 3]).abs());
+        }
+    }
+    assert!(
+        dx < 1e-10 && df < 1e-10 * fscale,
+        "after restart: positions differ by {dx:e}, forces by {df:e} (scale {fscale:e})"
+    );
 }

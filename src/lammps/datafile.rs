@@ -37,6 +37,10 @@ impl ScriptVars {
         let comm_cutoff = (max_r0 * 1.2).max(pair.d) + ff.skin;
         let g = |v: f64| format!("{v:.17e}");
         let vars = [
+            (
+                "inputs",
+                concat!(env!("CARGO_MANIFEST_DIR"), "/lammps_inputs").to_string(),
+            ),
             ("data", data.to_string()),
             ("lengths", format!("{data}.r0")),
             ("boundary", boundary.join(" ")),
