@@ -80,7 +80,11 @@ fn lmp_bpm(
     )
     .unwrap();
     let vars = ScriptVars::of(scene, data.to_str().unwrap(), newton);
-    let input = format!("{}/lammps_inputs/{input}", env!("CARGO_MANIFEST_DIR"));
+    let input = if input.starts_with('/') {
+        input.to_string()
+    } else {
+        format!("{}/lammps_inputs/{input}", env!("CARGO_MANIFEST_DIR"))
+    };
     // A hung LAMMPS (e.g. NaN positions) must fail the test, not stall CI.
     let mut cmd = Command::new("timeout");
     cmd.arg("120");
@@ -292,4 +296,112 @@ fn a_restart_keeps_every_bond_reference_length() {
         dx < 1e-10 && df < 1e-10 * fscale,
         "after restart: positions differ by {dx:e}, forces by {df:e} (scale {fscale:e})"
     );
+}
+
+/// Runs a script made of `setup.in` with `replace` applied, and returns the
+/// status and output of `lmp-bpm`.
+fn run_edited_setup(tag: &str, replace: &[(&str, &str)], tail: &str) -> (bool, String) {
+    let setup = std::fs::read_to_string(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/lammps_inputs/setup.in"
+    ))
+    .unwrap();
+    let mut text = setup;
+    for (from, to) in replace {
+        assert!(text.contains(from), "setup.in has no `{from}`");
+        text = text.replace(from, to);
+    }
+    text.push_str(tail);
+    let script = workdir().join(format!("{tag}.in"));
+    std::fs::write(&script, text).unwrap();
+    let scene = test_scene(-0.5);
+    lmp_bpm(&scene, script.to_str().unwrap(), true, 1, tag, &[])
+}
+
+#[test]
+fn bad_input_gets_a_clear_lammps_error() {
+    let bond = "bond_coeff      1 ${kB} ${aB} ${gB}";
+    let pair = "pair_coeff      1 1 ${kP} ${d} ${aP} ${gP}";
+    let cases: Vec<(&str, Vec<(&str, &str)>, &str)> = vec![
+        (
+            "count",
+            vec![(bond, "bond_coeff 1 1.0 0.0")],
+            "takes 4 values",
+        ),
+        (
+            "numeric",
+            vec![(bond, "bond_coeff 1 abc 0 1")],
+            "Expected floating point",
+        ),
+        (
+            "negative",
+            vec![(bond, "bond_coeff 1 -1 0 1")],
+            "k_B must be >= 0",
+        ),
+        (
+            "pair_count",
+            vec![(pair, "pair_coeff 1 1 1 1 50")],
+            "takes 6 values",
+        ),
+        (
+            "d_zero",
+            vec![(pair, "pair_coeff 1 1 1 0 50 1")],
+            "d must be > 0",
+        ),
+        ("no_bond_coeff", vec![(bond, "")], "oeffs are not set"),
+        ("no_pair_coeff", vec![(pair, "")], "oeffs are not set"),
+        (
+            "ghost_velocity",
+            vec![(
+                "comm_modify     vel yes cutoff ${commcut}",
+                "comm_modify cutoff ${commcut}",
+            )],
+            "comm_modify vel yes",
+        ),
+        (
+            "special",
+            vec![("special_bonds   lj 0 1 1", "special_bonds lj 1 1 1")],
+            "special_bonds lj 0 1 1",
+        ),
+        (
+            "short_comm",
+            vec![("cutoff ${commcut}", "cutoff 1.0")],
+            "exceeds the communication cutoff",
+        ),
+    ];
+    for (tag, replace, expected) in cases {
+        let (ok, out) = run_edited_setup(tag, &replace, "run 0\n");
+        assert!(!ok, "{tag}: LAMMPS accepted bad input:\n{out}");
+        assert!(
+            out.contains(expected),
+            "{tag}: expected `{expected}` in:\n{out}"
+        );
+        assert!(
+            !out.contains("Segmentation") && !out.contains("panicked"),
+            "{tag}: crashed:\n{out}"
+        );
+    }
+}
+
+#[test]
+fn an_atom_style_without_bonds_is_refused() {
+    let script = workdir().join("atomic.in");
+    std::fs::write(
+        &script,
+        "units lj\natom_style atomic\nregion b block 0 5 0 5 0 5\ncreate_box 1 b\nbond_style bpm/multibody\n",
+    )
+    .unwrap();
+    let out = Command::new("timeout")
+        .args(["60", env!("CARGO_BIN_EXE_lmp-bpm"), "-in"])
+        .arg(&script)
+        .args(["-log", "none"])
+        .output()
+        .unwrap();
+    let text = format!(
+        "{}{}",
+        String::from_utf8_lossy(&out.stdout),
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(!out.status.success(), "{text}");
+    assert!(text.contains("bonds"), "{text}");
 }
