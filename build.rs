@@ -51,6 +51,25 @@ fn main() {
         println!("cargo:rerun-if-changed=lammps-plugin/{h}");
     }
     build.compile("bpm_lammps_shim");
+
+    // Rust bindings of LAMMPS's C library interface, for running LAMMPS
+    // in-process (src/lammps/sys.rs).
+    let header = Path::new(&include).join("library.h");
+    println!("cargo:rerun-if-changed={}", header.display());
+    let bindings = bindgen::Builder::default()
+        .header(header.to_string_lossy())
+        .allowlist_function("lammps_.*")
+        .generate()
+        .unwrap_or_else(|e| {
+            panic!(
+                "bindgen on {}: {e} (needs Debian's libclang-dev)",
+                header.display()
+            )
+        });
+    let out = std::path::PathBuf::from(env::var("OUT_DIR").expect("OUT_DIR"));
+    bindings
+        .write_to_file(out.join("lammps_library.rs"))
+        .expect("writing LAMMPS bindings");
     if let Ok(lib) = env::var("BPM_LAMMPS_LIB") {
         println!("cargo:rustc-link-search=native={lib}");
     }

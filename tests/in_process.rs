@@ -1,0 +1,65 @@
+//! LAMMPS opened in this process through the bindgen bindings of
+//! `library.h`, with our styles registered by `bpm_register_styles`.
+
+use bpm::engine::StageDrivers;
+use bpm::lammps::{write_data_file, write_reference_lengths, Lammps, ScriptVars};
+use bpm::scene::builders::bulk::{build_bulk, BulkParams};
+use bpm::scene::{build_system, ForceField};
+
+#[test]
+fn in_process_lammps_gives_the_native_forces() {
+    let mut p = BulkParams::paper(5.0, 8, 0.0);
+    p.relax_time = 10.0;
+    p.thermal_time = 10.0;
+    p.quench_time = 20.0;
+    let mut scene = build_bulk(&p, 1, false).unwrap().0;
+    scene.force_field = ForceField::paper(-0.5);
+    for x in &mut scene.particles.positions {
+        *x = x.map(|c| c * 0.99);
+    }
+    scene.simbox.lengths = scene.simbox.lengths.map(|l| l * 0.99);
+    let dir = std::env::temp_dir().join(format!("bpm-inproc-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let data = dir.join("s.data");
+    std::fs::write(&data, write_data_file(&scene)).unwrap();
+    std::fs::write(
+        format!("{}.r0", data.display()),
+        write_reference_lengths(&scene),
+    )
+    .unwrap();
+    let vars = ScriptVars::of(&scene, data.to_str().unwrap(), true);
+    let mut lmp = Lammps::open(&["-log", "none", "-screen", "none"]).unwrap();
+    let mut script = String::new();
+    for (k, v) in &vars.vars {
+        script.push_str(&format!("variable {k} string \"{v}\"\n"));
+    }
+    script.push_str(&format!(
+        "include {}/lammps_inputs/setup.in\nthermo_style custom step pe pxx pyy pzz\nrun 0\n",
+        env!("CARGO_MANIFEST_DIR")
+    ));
+    lmp.commands(&script).unwrap();
+    let forces = lmp.gather_vectors("f").unwrap();
+
+    let mut sys = build_system(&scene, 1);
+    sys.setup(&StageDrivers {
+        dt: 0.1,
+        ..Default::default()
+    });
+    let scale = sys
+        .f
+        .iter()
+        .flat_map(|r| r.iter())
+        .fold(0.0f64, |m, v| m.max(v.abs()));
+    assert!(scale > 1e-3);
+    let dev = forces
+        .iter()
+        .zip(&sys.f)
+        .flat_map(|(a, b)| (0..3).map(move |d| (a[d] - b[d]).abs()))
+        .fold(0.0f64, f64::max);
+    assert!(
+        dev < 1e-12 * scale,
+        "in-process LAMMPS forces differ by {dev:e}"
+    );
+    let pxx = lmp.thermo("pxx").unwrap();
+    assert!((pxx - sys.pressure_tensor()[0]).abs() < 1e-12 * pxx.abs());
+}
