@@ -322,7 +322,9 @@ fn run_edited_setup(tag: &str, replace: &[(&str, &str)], tail: &str) -> (bool, S
 fn bad_input_gets_a_clear_lammps_error() {
     let bond = "bond_coeff      1 ${kB} ${aB} ${gB}";
     let pair = "pair_coeff      1 1 ${kP} ${d} ${aP} ${gP}";
-    let cases: Vec<(&str, Vec<(&str, &str)>, &str)> = vec![
+    // (name, edits of setup.in, expected words of the error)
+    type Case<'a> = (&'a str, Vec<(&'a str, &'a str)>, &'a str);
+    let cases: Vec<Case> = vec![
         (
             "count",
             vec![(bond, "bond_coeff 1 1.0 0.0")],
