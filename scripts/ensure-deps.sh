@@ -6,7 +6,7 @@ set -euo pipefail
 
 # LAMMPS 20220106 and its headers (the plugin builds against them), fmt for
 # those headers, Open MPI (Debian's LAMMPS is built with it).
-packages=(build-essential pkg-config lammps liblammps-dev libfmt-dev openmpi-bin libopenmpi-dev)
+packages=(build-essential pkg-config lammps liblammps-dev libfmt-dev openmpi-bin libopenmpi-dev libclang-dev)
 missing=()
 for p in "${packages[@]}"; do
   dpkg -s "$p" >/dev/null 2>&1 || missing+=("$p")

@@ -85,3 +85,73 @@ pub fn bench_case(solid: &Scene, a_b: f64, threads: usize, steps: u64) -> BenchC
             .collect(),
     }
 }
+
+/// Time spent in LAMMPS's bond computation, from its timing breakdown.
+#[derive(Clone, Debug, Serialize)]
+pub struct LammpsBondTiming {
+    /// Variant: "harmonic", "bpm a_B=..." and so on.
+    pub name: String,
+    /// Bond time per particle-step (ns).
+    pub bond_ns: f64,
+    /// Whole loop per particle-step (ns).
+    pub loop_ns: f64,
+}
+
+/// Runs `lmp-bpm` on `lammps_inputs/bench_bonds.in` for one variant and
+/// reads the bond and loop times from LAMMPS's output.
+pub fn lammps_bond_timing(
+    lmp_bpm: &std::path::Path,
+    solid: &Scene,
+    dir: &std::path::Path,
+    style: &str,
+    a_b: f64,
+    steps: u64,
+) -> anyhow::Result<LammpsBondTiming> {
+    use anyhow::{bail, Context};
+    let mut scene = solid.clone();
+    scene.force_field = ForceField::paper(a_b);
+    let data = dir.join(format!("bench-{a_b}.data"));
+    std::fs::write(&data, crate::lammps::write_data_file(&scene))?;
+    std::fs::write(
+        format!("{}.r0", data.display()),
+        crate::lammps::write_reference_lengths(&scene),
+    )?;
+    let vars = crate::lammps::ScriptVars::of(&scene, &data.display().to_string(), true);
+    let input = concat!(env!("CARGO_MANIFEST_DIR"), "/lammps_inputs/bench_bonds.in");
+    let out = std::process::Command::new(lmp_bpm)
+        .args([
+            "-in",
+            input,
+            "-log",
+            "none",
+            "-var",
+            "style",
+            style,
+            "-var",
+            "steps",
+            &steps.to_string(),
+        ])
+        .args(vars.args())
+        .output()
+        .with_context(|| format!("running {}", lmp_bpm.display()))?;
+    let text = String::from_utf8_lossy(&out.stdout).to_string();
+    if !out.status.success() {
+        bail!("lmp-bpm failed:\n{text}");
+    }
+    let field = |prefix: &str, col: usize| -> Option<f64> {
+        let line = text.lines().find(|l| l.starts_with(prefix))?;
+        line.split(['|', ' '])
+            .filter(|t| !t.is_empty())
+            .nth(col)?
+            .parse()
+            .ok()
+    };
+    let bond = field("Bond    |", 2).context("no Bond line in LAMMPS timing")?;
+    let total = field("Loop time of", 3).context("no loop time")?;
+    let per = |secs: f64| secs * 1e9 / (steps as f64 * solid.particles.positions.len() as f64);
+    Ok(LammpsBondTiming {
+        name: format!("{style} a_B={a_b}"),
+        bond_ns: per(bond),
+        loop_ns: per(total),
+    })
+}

@@ -54,6 +54,19 @@ enum Command {
         #[arg(short, long)]
         output: Option<PathBuf>,
     },
+    /// Time the plugin's bond style against LAMMPS's bond_style harmonic on
+    /// the same bulk solid, in one session (runs lmp-bpm).
+    BenchLammps {
+        /// Box side of the bulk solid (d).
+        #[arg(long, default_value_t = 14.0)]
+        size: f64,
+        /// Seed of the bulk solid.
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+        /// Steps per variant.
+        #[arg(long, default_value_t = 1000)]
+        steps: u64,
+    },
 }
 
 #[derive(Clone, Copy, ValueEnum)]
@@ -280,6 +293,37 @@ fn real_main() -> Result<()> {
                 });
                 std::fs::write(&path, serde_json::to_string_pretty(&report)?)?;
             }
+        }
+        Command::BenchLammps { size, seed, steps } => {
+            let solid = bpm::bench::bench_solid(size, seed, cli.threads)?;
+            let lmp = std::env::current_exe()?.with_file_name("lmp-bpm");
+            let dir = std::env::temp_dir().join(format!("bpm-bench-lammps-{}", std::process::id()));
+            std::fs::create_dir_all(&dir)?;
+            let variants = [
+                ("harmonic", 0.0),
+                ("bpm", 0.0),
+                ("nodamp", 0.0),
+                ("bpm", -0.5),
+                ("nodamp", -0.5),
+            ];
+            let mut timings = Vec::new();
+            for (style, a_b) in variants {
+                let t = bpm::bench::lammps_bond_timing(&lmp, &solid, &dir, style, a_b, steps)?;
+                println!(
+                    "{:<24} bond {:>7.1} ns per particle-step   loop {:>7.1}",
+                    t.name, t.bond_ns, t.loop_ns
+                );
+                timings.push(t);
+            }
+            let harmonic = timings[0].bond_ns;
+            for t in &timings[1..] {
+                println!(
+                    "{:<24} bond time / harmonic = {:.2}x",
+                    t.name,
+                    t.bond_ns / harmonic
+                );
+            }
+            let _ = std::fs::remove_dir_all(&dir);
         }
     }
     Ok(())
