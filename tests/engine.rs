@@ -280,3 +280,100 @@ fn an_unstable_run_stops_with_an_error_and_keeps_finished_stages() {
     let msg = err.expect("dt = 50 must blow up").to_string();
     assert!(msg.contains("unstable"), "{msg}");
 }
+
+#[test]
+fn bond_split_into_interior_and_boundary_matches_minimum_image_after_wraps() {
+    use bpm::kernels::{bond_forces, pair_forces, BondInputs, Ownership, PairInputs};
+    // Drift the whole solid so that atoms cross the box and get wrapped,
+    // while the box deforms: the interior/boundary split must follow.
+    let mut stage = StageSpec::hold("drift", 400, 0.1);
+    stage.deformation = Some(bpm::engine::Deformation::SimpleShear {
+        tilt: bpm::engine::TiltFactor::Xy,
+        rate: 1e-4,
+    });
+    let mut scene = solid_with(ForceField::paper(-0.5), vec![stage]);
+    let n = scene.particles.positions.len();
+    scene.particles.velocities = Some(vec![[0.11, -0.07, 0.05]; n]);
+    let mut sys = build_system(&scene, 1);
+    let (_, err) = run_scene(&mut sys, &scene, &opts(1));
+    assert!(err.is_none());
+    assert!(
+        sys.wraps > 2,
+        "atoms must have been wrapped ({} wraps)",
+        sys.wraps
+    );
+    let drivers = StageDrivers {
+        dt: 0.1,
+        ..Default::default()
+    };
+    sys.compute_forces(&drivers, 0.0, true);
+    // Reference: every bond through the minimum image, no split.
+    let sep = sys.simbox.minimum_image();
+    let (vol, vol0) = match &sys.model {
+        bpm::engine::ForceModel::Bpm(m) => {
+            let (a, b) = m.volumes();
+            (a.to_vec(), b.to_vec())
+        }
+    };
+    let mut vol_ref = vec![0.0; n];
+    bpm::kernels::accumulate_volumes(
+        &sep,
+        &sys.x,
+        &sys.bonds.entries,
+        Ownership::all(n),
+        &mut vol_ref,
+    );
+    for (a, b) in vol.iter().zip(&vol_ref) {
+        assert!((a - b).abs() < 1e-12 * b, "volume {a} vs {b}");
+    }
+    let ff = ForceField::paper(-0.5);
+    let coeffs = [ff.bond];
+    let mut f = vec![[0.0; 3]; n];
+    let inputs = BondInputs {
+        x: &sys.x,
+        v: Some(&sys.v),
+        bonds: &sys.bonds.entries,
+        r0: &sys.bonds.r0,
+        coeffs: &coeffs,
+        volumes: Some((&vol_ref, &vol0)),
+        tally: true,
+    };
+    let tb = bond_forces(&sep, &inputs, Ownership::all(n), &mut f);
+    let pcoeffs = [ff.pair.unwrap()];
+    let pin = PairInputs {
+        x: &sys.x,
+        v: Some(&sys.v),
+        types: None,
+        ntypes: 1,
+        coeffs: &pcoeffs,
+        special: [1.0; 4],
+        tally: true,
+    };
+    pair_forces(
+        &sep,
+        &pin,
+        sys.neighbours.rows(0..n),
+        Ownership::all(n),
+        &mut f,
+    );
+    // Round-off scale: inside a bond force, terms of size k r0 and a_B D
+    // (about 1) cancel to leave about 1e-3, and the split sums volumes and
+    // forces in another order, so differences are ulps of these terms.
+    let bond_scale = ff.bond.k * sys.bonds.max_r0() + ff.bond.a.abs();
+    for (a, b) in sys.f.iter().zip(&f) {
+        for d in 0..3 {
+            assert!(
+                (a[d] - b[d]).abs() < 1e-13 * bond_scale,
+                "{a:?} vs {b:?} (bond scale {bond_scale:e})"
+            );
+        }
+    }
+    let tsys = sys.report.interactions.bonds;
+    let vscale = tb.virial.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    for k in 0..6 {
+        assert!(
+            (tsys.virial[k] - tb.virial[k]).abs() < 1e-12 * vscale,
+            "virial[{k}]"
+        );
+    }
+}

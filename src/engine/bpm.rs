@@ -11,7 +11,7 @@ use super::timers::{Stage, Timers};
 use super::topology::BondTopology;
 use crate::kernels::{
     accumulate_reference_volumes, accumulate_volumes, bond_forces, pair_forces, BondCoeffs,
-    BondInputs, Ownership, PairCoeffs, PairInputs, Tally,
+    BondEntry, BondInputs, Ownership, PairCoeffs, PairInputs, Separation, Tally, Unwrapped,
 };
 
 /// Which terms of the model are live for this scene.
@@ -39,6 +39,50 @@ pub struct BpmModel {
     reference_volume: Vec<f64>,
     force_scratch: Scratch<Vec3>,
     volume_scratch: Scratch<f64>,
+    partition: BondPartition,
+}
+
+/// Bonds split by whether the plain difference of the stored positions is
+/// already the minimum image ("interior", most bonds) or not ("boundary").
+///
+/// Positions wrap only when the pair list is rebuilt, and between wraps a
+/// bond's plain difference changes continuously (also under affine
+/// deformation), so the split holds until the next wrap; interior bonds then
+/// skip the minimum-image arithmetic, as LAMMPS's ghost atoms do.
+#[derive(Debug, Default)]
+struct BondPartition {
+    /// The wrap count of the system when the split was made.
+    generation: Option<u64>,
+    interior: Vec<BondEntry>,
+    interior_r0: Vec<f64>,
+    boundary: Vec<BondEntry>,
+    boundary_r0: Vec<f64>,
+}
+
+impl BondPartition {
+    fn rebuild<S: Separation>(
+        &mut self,
+        sep: &S,
+        x: &[[f64; 3]],
+        bonds: &BondTopology,
+        generation: u64,
+    ) {
+        self.interior.clear();
+        self.interior_r0.clear();
+        self.boundary.clear();
+        self.boundary_r0.clear();
+        for (b, &r0) in bonds.entries.iter().zip(&bonds.r0) {
+            let (xi, xj) = (&x[b.i as usize], &x[b.j as usize]);
+            if sep.delta(xi, xj) == Unwrapped.delta(xi, xj) {
+                self.interior.push(*b);
+                self.interior_r0.push(r0);
+            } else {
+                self.boundary.push(*b);
+                self.boundary_r0.push(r0);
+            }
+        }
+        self.generation = Some(generation);
+    }
 }
 
 /// Energies and virials of one force evaluation.
@@ -68,6 +112,7 @@ impl BpmModel {
             reference_volume: Vec::new(),
             force_scratch: Scratch::default(),
             volume_scratch: Scratch::default(),
+            partition: BondPartition::default(),
         };
         model.set_reference(n, bonds);
         model
@@ -80,6 +125,7 @@ impl BpmModel {
 
     /// Recomputes `V0` after the reference lengths changed.
     pub fn set_reference(&mut self, n: usize, bonds: &BondTopology) {
+        self.partition.generation = None;
         if self.terms.multibody {
             self.volume = vec![0.0; n];
             self.reference_volume = vec![0.0; n];
@@ -102,10 +148,12 @@ impl BpmModel {
         (&self.volume, &self.reference_volume)
     }
 
-    /// Adds all bond and pair forces to `f`.
+    /// Adds all bond and pair forces to `f`. `wraps` counts how often the
+    /// positions were wrapped into the box (it invalidates the bond split).
     #[allow(clippy::too_many_arguments)]
     pub fn compute(
         &mut self,
+        wraps: u64,
         simbox: &SimBox,
         x: &[[f64; 3]],
         v: &[[f64; 3]],
@@ -118,16 +166,32 @@ impl BpmModel {
     ) -> InteractionTally {
         let n = x.len();
         let own = Ownership::all(n);
-        let nb = bonds.len();
         let chunks = threads.max(1);
         let sep = simbox.minimum_image();
+        if self.partition.generation != Some(wraps) {
+            self.partition.rebuild(&sep, x, bonds, wraps);
+        }
+        let part = &self.partition;
+        let (ni, nb) = (part.interior.len(), part.boundary.len());
         if self.terms.multibody {
             let _t = timers.start(Stage::Volumes);
             self.volume.fill(0.0);
             self.volume_scratch
                 .scatter(chunks, &mut self.volume, |c, out| {
-                    let range = chunk_range(nb, chunks, c);
-                    accumulate_volumes(&sep, x, &bonds.entries[range], own, out);
+                    accumulate_volumes(
+                        &Unwrapped,
+                        x,
+                        &part.interior[chunk_range(ni, chunks, c)],
+                        own,
+                        out,
+                    );
+                    accumulate_volumes(
+                        &sep,
+                        x,
+                        &part.boundary[chunk_range(nb, chunks, c)],
+                        own,
+                        out,
+                    );
                     Tally::default()
                 });
         }
@@ -140,17 +204,25 @@ impl BpmModel {
             let v_opt = self.terms.bond_damping.then_some(v);
             let coeffs = [self.bond];
             self.force_scratch.scatter(chunks, as_vec3(f), |c, out| {
-                let range = chunk_range(nb, chunks, c);
-                let inputs = BondInputs {
+                let out = as_rows(out);
+                let ri = chunk_range(ni, chunks, c);
+                let rb = chunk_range(nb, chunks, c);
+                let interior = BondInputs {
                     x,
                     v: v_opt,
-                    bonds: &bonds.entries[range.clone()],
-                    r0: &bonds.r0[range],
+                    bonds: &part.interior[ri.clone()],
+                    r0: &part.interior_r0[ri],
                     coeffs: &coeffs,
                     volumes,
                     tally,
                 };
-                bond_forces(&sep, &inputs, own, as_rows(out))
+                let boundary = BondInputs {
+                    bonds: &part.boundary[rb.clone()],
+                    r0: &part.boundary_r0[rb],
+                    ..interior
+                };
+                bond_forces(&Unwrapped, &interior, own, out)
+                    .merged(&bond_forces(&sep, &boundary, own, out))
             })
         };
         let pair_tally = match (self.terms.pairs, self.pair) {

@@ -111,6 +111,8 @@ pub struct System {
     pub timers: Timers,
     /// Observables of the last force evaluation.
     pub report: StepReport,
+    /// How many times positions were wrapped into the box.
+    pub wraps: u64,
 }
 
 impl System {
@@ -178,6 +180,7 @@ impl System {
             for (x, n) in self.x.iter_mut().zip(self.image.iter_mut()) {
                 self.simbox.wrap(x, n);
             }
+            self.wraps += 1;
             self.neighbours
                 .build(&self.simbox, &self.x, cutoff, self.skin, Some(&self.bonds));
         }
@@ -191,6 +194,7 @@ impl System {
         }
         let interactions = match &mut self.model {
             ForceModel::Bpm(m) => m.compute(
+                self.wraps,
                 &self.simbox,
                 &self.x,
                 &self.v,

@@ -81,5 +81,6 @@ pub fn build_system(scene: &Scene, threads: usize) -> System {
         time: 0.0,
         timers: Timers::default(),
         report: StepReport::default(),
+        wraps: 0,
     }
 }

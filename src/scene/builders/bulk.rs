@@ -161,6 +161,7 @@ pub fn build_bulk(
     for (x, n) in sys.x.iter_mut().zip(sys.image.iter_mut()) {
         sys.simbox.wrap(x, n);
     }
+    sys.wraps += 1;
     sort_spatially(&mut sys.x, &sys.simbox, 2.0 * pair.d);
     let max_overlap = max_overlap(&sys, pair.d);
     let bonds = bond_within(&sys, params.bond_cutoff);
