@@ -437,8 +437,24 @@ fn cube_root_is_within_two_ulp_of_the_library() {
         }
         q *= 7.3;
     }
-    for v in [0.5, 0.9, 0.999, 1.0, 1.001, 1.1, 2.0] {
-        assert!((cube_root(v) - v.cbrt()).abs() <= 2.0 * f64::EPSILON);
+    // The fast path near 1 (|q - 1| <= 1/4) and both sides of its edges.
+    for k in 0..=200_000 {
+        let v = 0.7 + 0.6 * k as f64 / 200_000.0;
+        let (ours, lib) = (cube_root(v), v.cbrt());
+        assert!(
+            (ours - lib).abs() <= 2.0 * f64::EPSILON * lib,
+            "{v}: {ours} vs {lib}"
+        );
+    }
+    for v in [
+        0.75,
+        0.75 - 1e-16,
+        1.25,
+        1.25 + 1e-15,
+        1.0,
+        1.0 + f64::EPSILON,
+    ] {
+        assert!((cube_root(v) - v.cbrt()).abs() <= 2.0 * f64::EPSILON, "{v}");
     }
     assert!(cube_root(-8.0) == -2.0 && cube_root(0.0) == 0.0);
 }

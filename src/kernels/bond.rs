@@ -48,24 +48,55 @@ pub fn dilation(vi: f64, vj: f64, v0i: f64, v0j: f64) -> f64 {
     cube_root((vi + vj) / (v0i + v0j))
 }
 
-/// Cube root of a positive finite `q`, within 1 ulp of `f64::cbrt`.
+/// Cube root of a positive finite `q`, within 2 ulp of `f64::cbrt`.
 ///
-/// The platform `cbrt` is a generic software routine and was 40 ns of the
-/// 60 ns a multibody bond cost; here a bit-level first guess (exponent
-/// divided by 3, error below 4%) is refined by two Halley steps (cubic
-/// convergence: 4e-2, 1e-5, 1e-15) and one Newton step to round-off.
-/// Non-positive or non-finite `q` falls back to `f64::cbrt`.
+/// The platform `cbrt` is a generic software routine and dominated the cost
+/// of the multibody term. The dilation ratio is nearly always close to 1, so
+/// for `|q - 1| <= 1/4` a degree-7 Taylor series of `(1 + x)^(1/3)` (error
+/// below 3e-7) is refined by one Halley step (cubic convergence: below
+/// 1e-19, i.e. round-off), one division in all. Elsewhere a bit-level guess
+/// (exponent divided by 3, error below 4%) takes two Halley steps and one
+/// Newton step. Non-positive or non-finite `q` goes to `f64::cbrt`.
 #[inline(always)]
 pub fn cube_root(q: f64) -> f64 {
-    if !(q > f64::MIN_POSITIVE && q < 1e300) {
+    let x = q - 1.0;
+    let y = if x.abs() <= 0.25 {
+        // Binomial coefficients C(1/3, n), n = 0 .. 7, evaluated by
+        // Estrin's scheme: independent pairs keep the dependency chain short
+        // (the baseline x86-64 target has no fused multiply-add).
+        const C: [f64; 8] = [
+            1.0,
+            1.0 / 3.0,
+            -1.0 / 9.0,
+            5.0 / 81.0,
+            -10.0 / 243.0,
+            22.0 / 729.0,
+            -154.0 / 6561.0,
+            374.0 / 19683.0,
+        ];
+        let x2 = x * x;
+        let x4 = x2 * x2;
+        let p01 = C[0] + C[1] * x;
+        let p23 = C[2] + C[3] * x;
+        let p45 = C[4] + C[5] * x;
+        let p67 = C[6] + C[7] * x;
+        (p01 + x2 * p23) + x4 * (p45 + x2 * p67)
+    } else if q > f64::MIN_POSITIVE && q < 1e300 {
+        let mut y = f64::from_bits(q.to_bits() / 3 + 0x2A9F_7893_782D_A1CE);
+        for _ in 0..2 {
+            y = halley_cbrt_step(y, q);
+        }
+        return y - (y * y * y - q) / (3.0 * y * y);
+    } else {
         return q.cbrt();
-    }
-    let mut y = f64::from_bits(q.to_bits() / 3 + 0x2A9F_7893_782D_A1CE);
-    for _ in 0..2 {
-        let y3 = y * y * y;
-        y *= (y3 + 2.0 * q) / (2.0 * y3 + q);
-    }
-    y - (y * y * y - q) / (3.0 * y * y)
+    };
+    halley_cbrt_step(y, q)
+}
+
+#[inline(always)]
+fn halley_cbrt_step(y: f64, q: f64) -> f64 {
+    let y3 = y * y * y;
+    y * (y3 + 2.0 * q) / (2.0 * y3 + q)
 }
 
 /// Everything a bond-force pass reads.
