@@ -42,6 +42,35 @@ fn forces(
     (f, t)
 }
 
+/// Pair forces of `rows` (atom, LAMMPS-style neighbour indices) with one
+/// coefficient set, no damping.
+fn pair_on(
+    x: &[[f64; 3]],
+    c: PairCoeffs,
+    special: [f64; 4],
+    rows: &[(usize, Vec<i32>)],
+) -> (Vec<[f64; 3]>, Tally) {
+    let coeffs = [c];
+    let inputs = PairInputs {
+        x,
+        v: None,
+        types: None,
+        ntypes: 1,
+        coeffs: &coeffs,
+        special,
+        tally: true,
+    };
+    let mut f = vec![[0.0; 3]; x.len()];
+    let t = pair_forces(
+        &Unwrapped,
+        &inputs,
+        rows.iter().map(|(i, js)| (*i, &js[..])),
+        Ownership::all(x.len()),
+        &mut f,
+    );
+    (f, t)
+}
+
 fn one_bond() -> Vec<BondEntry> {
     vec![BondEntry { i: 0, j: 1, ty: 1 }]
 }
@@ -238,30 +267,10 @@ fn pair_force_is_minus_the_gradient_of_its_energy() {
         gamma: 0.0,
     };
     let n = x0.len();
-    let compute = |x: &[[f64; 3]]| {
-        let rows: Vec<Vec<i32>> = (0..n)
-            .map(|i| ((i + 1) as i32..n as i32).collect())
-            .collect();
-        let coeffs = [c];
-        let inputs = PairInputs {
-            x,
-            v: None,
-            types: None,
-            ntypes: 1,
-            coeffs: &coeffs,
-            special: [1.0; 4],
-            tally: true,
-        };
-        let mut f = vec![[0.0; 3]; n];
-        let t = pair_forces(
-            &Unwrapped,
-            &inputs,
-            rows.iter().enumerate().map(|(i, r)| (i, &r[..])),
-            Ownership::all(n),
-            &mut f,
-        );
-        (f, t)
-    };
+    let rows: Vec<(usize, Vec<i32>)> = (0..n)
+        .map(|i| (i, ((i + 1) as i32..n as i32).collect()))
+        .collect();
+    let compute = |x: &[[f64; 3]]| pair_on(x, c, [1.0; 4], &rows);
     let (f, t) = compute(&x0);
     assert!(t.energy > 0.0, "the random cloud must have overlaps");
     let h = 1e-6;
@@ -295,25 +304,7 @@ fn pair_force_has_the_cubic_term_and_stops_at_d() {
         epsilon = 1e-15
     );
     let x = [[0.0, 0.0, 0.0], [1.0 + 1e-12, 0.0, 0.0]];
-    let coeffs = [c];
-    let inputs = PairInputs {
-        x: &x,
-        v: None,
-        types: None,
-        ntypes: 1,
-        coeffs: &coeffs,
-        special: [1.0; 4],
-        tally: true,
-    };
-    let mut f = vec![[0.0; 3]; 2];
-    let js = [1i32];
-    pair_forces(
-        &Unwrapped,
-        &inputs,
-        std::iter::once((0, &js[..])),
-        Ownership::all(2),
-        &mut f,
-    );
+    let (f, _) = pair_on(&x, c, [1.0; 4], &[(0, vec![1])]);
     assert_eq!(f, vec![[0.0; 3]; 2]);
 }
 
@@ -326,25 +317,12 @@ fn special_bits_select_the_weight_and_zero_weight_skips() {
         gamma: 0.0,
     };
     let x = [[0.0, 0.0, 0.0], [0.5, 0.0, 0.0], [0.0, 0.5, 0.0]];
-    let coeffs = [c];
-    let inputs = PairInputs {
-        x: &x,
-        v: None,
-        types: None,
-        ntypes: 1,
-        coeffs: &coeffs,
-        special: [1.0, 0.0, 0.25, 1.0],
-        tally: true,
-    };
-    let mut f = vec![[0.0; 3]; 3];
     // Atom 1 listed as a 1-2 special (weight 0), atom 2 as 1-3 (weight 0.25).
-    let js = [1i32 | (1 << 30), 2i32 | (2 << 30)];
-    pair_forces(
-        &Unwrapped,
-        &inputs,
-        std::iter::once((0, &js[..])),
-        Ownership::all(3),
-        &mut f,
+    let (f, _) = pair_on(
+        &x,
+        c,
+        [1.0, 0.0, 0.25, 1.0],
+        &[(0, vec![1 | (1 << 30), 2 | (2 << 30)])],
     );
     assert_eq!(f[1], [0.0; 3]);
     assert_relative_eq!(f[2][1], 0.25 * 0.5, epsilon = 1e-15);
