@@ -16,6 +16,7 @@ pub mod ffi;
 pub mod kernels;
 pub mod lammps;
 pub mod scene;
+pub mod verify;
 
 /// The crate version, recorded in every output file.
 pub const VERSION: &str = env!("CARGO_PKG_VERSION");

@@ -1,15 +1,19 @@
 //! The LAMMPS plugin (Debian's LAMMPS + our styles, `lmp-bpm`) against the
-//! native engine on identical configurations, under MPI and newton on/off.
+//! native engine on identical configurations, under MPI and newton on/off;
+//! restart files; errors on bad input.
 
-mod common;
-
-use bpm::engine::StageDrivers;
-use bpm::lammps::{write_data_file, write_reference_lengths, ScriptVars};
-use bpm::scene::builders::bulk::{build_bulk, BulkParams};
-use bpm::scene::{build_system, ForceField, Scene, StageSpec};
-use std::path::PathBuf;
+use bpm::scene::Scene;
+use bpm::verify::{
+    contact_solid, lammps_single_point, max_relative_deviation, native_single_point, run_lmp_bpm,
+    single_point::read_dump,
+};
+use std::path::{Path, PathBuf};
 use std::process::Command;
 use std::sync::OnceLock;
+
+fn lmp() -> &'static Path {
+    Path::new(env!("CARGO_BIN_EXE_lmp-bpm"))
+}
 
 fn workdir() -> PathBuf {
     let d = std::env::temp_dir().join(format!("bpm-plugin-{}", std::process::id()));
@@ -17,209 +21,43 @@ fn workdir() -> PathBuf {
     d
 }
 
-/// A small strained, moving bulk solid with two grains' worth of contacts:
-/// bonds carry force, velocities exercise damping, and removing the bonds
-/// of a slab creates non-bonded overlaps for the pair style.
-fn test_scene(a_b: f64) -> Scene {
+/// The built-in contact solid (L = 6 d), built once per test binary.
+fn scene(a_b: f64) -> Scene {
     static BASE: OnceLock<Scene> = OnceLock::new();
-    let base = BASE.get_or_init(|| {
-        let mut p = BulkParams::paper(6.0, 5, 0.0);
-        p.relax_time = 20.0;
-        p.thermal_time = 50.0;
-        p.quench_time = 100.0;
-        build_bulk(&p, 1, false).unwrap().0
-    });
-    let mut s = base.clone();
-    s.force_field = ForceField::paper(a_b);
-    let squeeze = 0.985;
-    for (i, x) in s.particles.positions.iter_mut().enumerate() {
-        for (d, c) in x.iter_mut().enumerate() {
-            *c = *c * squeeze + 1e-3 * (((i * 7 + d * 3) % 11) as f64 - 5.0);
-        }
-    }
-    s.simbox.lengths = s.simbox.lengths.map(|l| l * squeeze);
-    s.particles.velocities = Some(common::random_rows(s.particles.positions.len(), 0.05, 77));
-    // Cut the bonds crossing the plane z = 3: the two halves touch through
-    // pair contacts only (a "grain with surface contacts").
-    let z = &s.particles.positions;
-    let keep: Vec<usize> = (0..s.bonds.pairs.len())
-        .filter(|&k| {
-            let [i, j] = s.bonds.pairs[k];
-            (z[i][2] < 3.0 * squeeze) == (z[j][2] < 3.0 * squeeze)
-        })
-        .collect();
-    let r0 = s.bonds.r0.clone().unwrap();
-    s.bonds.pairs = keep.iter().map(|&k| s.bonds.pairs[k]).collect();
-    s.bonds.r0 = Some(keep.iter().map(|&k| r0[k]).collect());
-    s.stages = vec![StageSpec::hold("point", 0, 0.1)];
+    let mut s = BASE
+        .get_or_init(|| contact_solid(6.0, 5, 0.0).unwrap())
+        .clone();
+    s.force_field = bpm::scene::ForceField::paper(a_b);
     s
 }
 
-struct LammpsResult {
-    forces: Vec<[f64; 3]>,
-    pressure: [f64; 6],
-    energies: [f64; 2],
-}
-
-/// Runs `lmp-bpm` on template `input` for `scene`; returns the status and
-/// the output. `extra` adds `-var name value` pairs.
-fn lmp_bpm(
-    scene: &Scene,
-    input: &str,
-    newton: bool,
-    ranks: usize,
-    tag: &str,
-    extra: &[(&str, String)],
-) -> (bool, String) {
-    let dir = workdir();
-    let data = dir.join(format!("{tag}.data"));
-    std::fs::write(&data, write_data_file(scene)).unwrap();
-    std::fs::write(
-        format!("{}.r0", data.display()),
-        write_reference_lengths(scene),
-    )
-    .unwrap();
-    let vars = ScriptVars::of(scene, data.to_str().unwrap(), newton);
-    let input = if input.starts_with('/') {
-        input.to_string()
-    } else {
-        format!("{}/lammps_inputs/{input}", env!("CARGO_MANIFEST_DIR"))
-    };
-    // A hung LAMMPS (e.g. NaN positions) must fail the test, not stall CI.
-    let mut cmd = Command::new("timeout");
-    cmd.arg("120");
-    if ranks > 1 {
-        cmd.args([
-            "mpirun.openmpi",
-            "--allow-run-as-root",
-            "--oversubscribe",
-            "--bind-to",
-            "none",
-        ]);
-        cmd.args(["-np", &ranks.to_string()]);
-    }
-    cmd.arg(env!("CARGO_BIN_EXE_lmp-bpm"));
-    cmd.args(["-in", &input, "-log", "none"]);
-    cmd.args(vars.args());
-    for (k, v) in extra {
-        cmd.args(["-var", k, v]);
-    }
-    cmd.env("OMPI_MCA_btl_vader_single_copy_mechanism", "none");
-    let out = cmd.output().expect("run lmp-bpm");
-    let text = format!(
-        "{}{}",
-        String::from_utf8_lossy(&out.stdout),
-        String::from_utf8_lossy(&out.stderr)
-    );
-    (out.status.success(), text)
-}
-
-/// Rows of a LAMMPS custom dump sorted by id, without the id column.
-fn read_dump(path: &std::path::Path) -> Vec<Vec<f64>> {
-    let text = std::fs::read_to_string(path).unwrap();
-    text.lines()
-        .skip_while(|l| !l.starts_with("ITEM: ATOMS"))
-        .skip(1)
-        .map(|line| {
-            line.split_whitespace()
-                .skip(1)
-                .map(|t| t.parse().unwrap())
-                .collect()
-        })
-        .collect()
-}
-
-fn run_lammps(scene: &Scene, newton: bool, ranks: usize, tag: &str) -> LammpsResult {
-    let dump = workdir().join(format!("{tag}.dump"));
-    let (ok, stdout) = lmp_bpm(
-        scene,
-        "single_point.in",
-        newton,
-        ranks,
-        tag,
-        &[("dump", dump.display().to_string())],
-    );
-    assert!(ok, "lmp-bpm failed:\n{stdout}");
-    let numbers = |key: &str| -> Vec<f64> {
-        let line = stdout
-            .lines()
-            .find(|l| l.starts_with(key))
-            .unwrap_or_else(|| panic!("no {key} in\n{stdout}"));
-        line.split_whitespace()
-            .skip(1)
-            .map(|v| v.parse().unwrap())
-            .collect()
-    };
-    let p = numbers("BPM_PRESSURE");
-    let e = numbers("BPM_ENERGY");
-    let forces: Vec<[f64; 3]> = read_dump(&dump)
-        .iter()
-        .map(|v| [v[0], v[1], v[2]])
-        .collect();
-    assert_eq!(forces.len(), scene.particles.positions.len());
-    LammpsResult {
-        forces,
-        pressure: [p[0], p[1], p[2], p[3], p[4], p[5]],
-        energies: [e[0], e[1]],
-    }
-}
-
-struct Native {
-    forces: Vec<[f64; 3]>,
-    pressure: [f64; 6],
-    energies: [f64; 2],
-}
-
-fn run_native(scene: &Scene) -> Native {
-    let mut sys = build_system(scene, 1);
-    sys.setup(&StageDrivers {
-        dt: 0.1,
-        ..Default::default()
-    });
-    Native {
-        forces: sys.f.clone(),
-        pressure: sys.pressure_tensor(),
-        energies: [
-            sys.report.interactions.bonds.energy,
-            sys.report.interactions.pairs.energy,
-        ],
-    }
-}
-
-fn max_rel_force_dev(a: &[[f64; 3]], b: &[[f64; 3]]) -> f64 {
-    let scale = common::max_abs(b);
-    a.iter()
-        .zip(b)
-        .flat_map(|(p, q)| (0..3).map(move |d| (p[d] - q[d]).abs()))
-        .fold(0.0, f64::max)
-        / scale
+fn pressure_ok(a: &[f64; 6], b: &[f64; 6], tol: f64) -> bool {
+    let scale = b.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    a.iter().zip(b).all(|(x, y)| (x - y).abs() < tol * scale)
 }
 
 #[test]
 fn plugin_forces_and_pressure_equal_the_native_engine() {
     for a_b in [0.0, -0.5, 1.0] {
-        let scene = test_scene(a_b);
-        let native = run_native(&scene);
+        let s = scene(a_b);
+        let native = native_single_point(&s);
         assert!(
             native.energies[1] > 0.0,
             "the scene must have pair contacts"
         );
-        let lmp = run_lammps(&scene, true, 1, &format!("np1-{a_b}"));
-        let dev = max_rel_force_dev(&lmp.forces, &native.forces);
+        let lmp =
+            lammps_single_point(lmp(), &s, true, 1, &workdir(), &format!("np1-{a_b}")).unwrap();
+        let dev = max_relative_deviation(&lmp.forces, &native.forces);
         assert!(dev < 1e-12, "a_B = {a_b}: max force deviation {dev:e}");
-        let pscale = native.pressure.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-        for k in 0..6 {
-            assert!(
-                (lmp.pressure[k] - native.pressure[k]).abs() < 1e-12 * pscale,
-                "a_B = {a_b}: P[{k}] {} vs {}",
-                lmp.pressure[k],
-                native.pressure[k]
-            );
-        }
+        assert!(
+            pressure_ok(&lmp.pressure, &native.pressure, 1e-12),
+            "a_B = {a_b}: {:?} vs {:?}",
+            lmp.pressure,
+            native.pressure
+        );
         for k in 0..2 {
             assert!(
-                (lmp.energies[k] - native.energies[k]).abs()
-                    < 1e-12 * native.energies[k].abs().max(1e-300)
+                (lmp.energies[k] - native.energies[k]).abs() < 1e-12 * native.energies[k].abs()
             );
         }
     }
@@ -227,65 +65,73 @@ fn plugin_forces_and_pressure_equal_the_native_engine() {
 
 #[test]
 fn one_and_two_ranks_agree_with_newton_on_and_off() {
-    let scene = test_scene(-0.5);
-    let native = run_native(&scene);
+    let s = scene(-0.5);
+    let native = native_single_point(&s);
     for (ranks, newton) in [(1, false), (2, true), (2, false)] {
-        let lmp = run_lammps(&scene, newton, ranks, &format!("mpi-{ranks}-{newton}"));
-        let dev = max_rel_force_dev(&lmp.forces, &native.forces);
+        let lmp = lammps_single_point(
+            lmp(),
+            &s,
+            newton,
+            ranks,
+            &workdir(),
+            &format!("mpi-{ranks}-{newton}"),
+        )
+        .unwrap();
+        let dev = max_relative_deviation(&lmp.forces, &native.forces);
         assert!(
             dev < 1e-10,
             "np {ranks}, newton {newton}: max force deviation {dev:e}"
         );
-        let pscale = native.pressure.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-        for k in 0..6 {
-            assert!(
-                (lmp.pressure[k] - native.pressure[k]).abs() < 1e-10 * pscale,
-                "np {ranks}, newton {newton}: P[{k}]"
-            );
-        }
+        assert!(
+            pressure_ok(&lmp.pressure, &native.pressure, 1e-10),
+            "np {ranks}, newton {newton}"
+        );
     }
 }
 
 #[test]
 fn a_restart_keeps_every_bond_reference_length() {
-    let scene = test_scene(-0.5);
+    let s = scene(-0.5);
     let dir = workdir();
     let restart = dir.join("state.restart");
     let continuous = dir.join("continuous.dump");
     let resumed = dir.join("resumed.dump");
-    let (ok, out) = lmp_bpm(
-        &scene,
+    let var = |dump: &Path| {
+        [
+            ("restart", restart.display().to_string()),
+            ("dump", dump.display().to_string()),
+        ]
+    };
+    run_lmp_bpm(
+        lmp(),
+        &s,
         "restart_write.in",
         true,
         1,
+        &dir,
         "restart",
-        &[
-            ("restart", restart.display().to_string()),
-            ("dump", continuous.display().to_string()),
-        ],
-    );
-    assert!(ok, "{out}");
-    let (ok, out) = lmp_bpm(
-        &scene,
+        &var(&continuous),
+    )
+    .unwrap();
+    run_lmp_bpm(
+        lmp(),
+        &s,
         "restart_read.in",
         true,
         1,
+        &dir,
         "restart",
-        &[
-            ("restart", restart.display().to_string()),
-            ("dump", resumed.display().to_string()),
-        ],
-    );
-    assert!(ok, "{out}");
-    let a = read_dump(&continuous);
-    let b = read_dump(&resumed);
+        &var(&resumed),
+    )
+    .unwrap();
+    let a = read_dump(&continuous).unwrap();
+    let b = read_dump(&resumed).unwrap();
     assert_eq!(a.len(), b.len());
     let fscale = a
         .iter()
         .flat_map(|r| r[3..6].iter())
         .fold(0.0f64, |m, v| m.max(v.abs()));
-    let mut dx = 0.0f64;
-    let mut df = 0.0f64;
+    let (mut dx, mut df) = (0.0f64, 0.0f64);
     for (p, q) in a.iter().zip(&b) {
         for k in 0..3 {
             dx = dx.max((p[k] - q[k]).abs());
@@ -294,19 +140,17 @@ fn a_restart_keeps_every_bond_reference_length() {
     }
     assert!(
         dx < 1e-10 && df < 1e-10 * fscale,
-        "after restart: positions differ by {dx:e}, forces by {df:e} (scale {fscale:e})"
+        "after restart: positions differ by {dx:e}, forces by {df:e}"
     );
 }
 
-/// Runs a script made of `setup.in` with `replace` applied, and returns the
-/// status and output of `lmp-bpm`.
-fn run_edited_setup(tag: &str, replace: &[(&str, &str)], tail: &str) -> (bool, String) {
-    let setup = std::fs::read_to_string(concat!(
+/// Runs `setup.in` with `replace` applied plus `tail`; returns the error text.
+fn error_of_edited_setup(tag: &str, replace: &[(&str, &str)], tail: &str) -> String {
+    let mut text = std::fs::read_to_string(concat!(
         env!("CARGO_MANIFEST_DIR"),
         "/lammps_inputs/setup.in"
     ))
     .unwrap();
-    let mut text = setup;
     for (from, to) in replace {
         assert!(text.contains(from), "setup.in has no `{from}`");
         text = text.replace(from, to);
@@ -314,8 +158,19 @@ fn run_edited_setup(tag: &str, replace: &[(&str, &str)], tail: &str) -> (bool, S
     text.push_str(tail);
     let script = workdir().join(format!("{tag}.in"));
     std::fs::write(&script, text).unwrap();
-    let scene = test_scene(-0.5);
-    lmp_bpm(&scene, script.to_str().unwrap(), true, 1, tag, &[])
+    match run_lmp_bpm(
+        lmp(),
+        &scene(-0.5),
+        script.to_str().unwrap(),
+        true,
+        1,
+        &workdir(),
+        tag,
+        &[],
+    ) {
+        Ok(out) => panic!("{tag}: LAMMPS accepted bad input:\n{out}"),
+        Err(e) => e.to_string(),
+    }
 }
 
 #[test]
@@ -372,15 +227,14 @@ fn bad_input_gets_a_clear_lammps_error() {
         ),
     ];
     for (tag, replace, expected) in cases {
-        let (ok, out) = run_edited_setup(tag, &replace, "run 0\n");
-        assert!(!ok, "{tag}: LAMMPS accepted bad input:\n{out}");
+        let err = error_of_edited_setup(tag, &replace, "run 0\n");
         assert!(
-            out.contains(expected),
-            "{tag}: expected `{expected}` in:\n{out}"
+            err.contains(expected),
+            "{tag}: expected `{expected}` in:\n{err}"
         );
         assert!(
-            !out.contains("Segmentation") && !out.contains("panicked"),
-            "{tag}: crashed:\n{out}"
+            !err.contains("Segmentation") && !err.contains("panicked"),
+            "{tag}: crashed:\n{err}"
         );
     }
 }

@@ -1,0 +1,189 @@
+//! One force evaluation of a scene in both engines.
+
+use crate::engine::StageDrivers;
+use crate::lammps::{write_data_file, write_reference_lengths, ScriptVars};
+use crate::scene::{build_system, Scene};
+use anyhow::{bail, Context, Result};
+use serde::Serialize;
+use std::path::Path;
+use std::process::Command;
+
+/// Forces, pressure tensor and energies of one evaluation.
+#[derive(Clone, Debug, Serialize)]
+pub struct SinglePoint {
+    /// Per-particle forces, by particle index.
+    pub forces: Vec<[f64; 3]>,
+    /// Pressure tensor `[xx, yy, zz, xy, xz, yz]`.
+    pub pressure: [f64; 6],
+    /// `[bond, pair]` energies.
+    pub energies: [f64; 2],
+}
+
+/// Runs `lmp_bpm` on the template `input` (a path, or a name in
+/// `lammps_inputs/`) for `scene`, files in `dir` named after `tag`, on
+/// `ranks` MPI ranks; `extra` adds `-var` pairs. Returns the output; a
+/// LAMMPS error, a crash or 120 s without finishing is an error.
+#[allow(clippy::too_many_arguments)]
+pub fn run_lmp_bpm(
+    lmp_bpm: &Path,
+    scene: &Scene,
+    input: &str,
+    newton: bool,
+    ranks: usize,
+    dir: &Path,
+    tag: &str,
+    extra: &[(&str, String)],
+) -> Result<String> {
+    let data = dir.join(format!("{tag}.data"));
+    std::fs::write(&data, write_data_file(scene))
+        .with_context(|| format!("writing {}", data.display()))?;
+    std::fs::write(
+        format!("{}.r0", data.display()),
+        write_reference_lengths(scene),
+    )?;
+    let vars = ScriptVars::of(scene, &data.display().to_string(), newton);
+    let input = if input.starts_with('/') {
+        input.to_string()
+    } else {
+        format!("{}/lammps_inputs/{input}", env!("CARGO_MANIFEST_DIR"))
+    };
+    // A hung LAMMPS (e.g. NaN positions) must end as an error, not stall.
+    let mut cmd = Command::new("timeout");
+    cmd.arg("120");
+    if ranks > 1 {
+        cmd.args([
+            "mpirun.openmpi",
+            "--allow-run-as-root",
+            "--oversubscribe",
+            "--bind-to",
+            "none",
+        ]);
+        cmd.args(["-np", &ranks.to_string()]);
+    }
+    cmd.arg(lmp_bpm)
+        .args(["-in", &input, "-log", "none"])
+        .args(vars.args());
+    for (k, v) in extra {
+        cmd.args(["-var", k, v]);
+    }
+    cmd.env("OMPI_MCA_btl_vader_single_copy_mechanism", "none");
+    let out = cmd
+        .output()
+        .with_context(|| format!("starting {}", lmp_bpm.display()))?;
+    let text = format!(
+        "{}{}",
+        String::from_utf8_lossy(&out.stdout),
+        String::from_utf8_lossy(&out.stderr)
+    );
+    if !out.status.success() {
+        bail!("lmp-bpm ({ranks} ranks) failed on {input}:\n{text}");
+    }
+    Ok(text)
+}
+
+/// Rows of a LAMMPS custom dump sorted by id, without the id column.
+pub fn read_dump(path: &Path) -> Result<Vec<Vec<f64>>> {
+    let text =
+        std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
+    text.lines()
+        .skip_while(|l| !l.starts_with("ITEM: ATOMS"))
+        .skip(1)
+        .map(|line| {
+            line.split_whitespace()
+                .skip(1)
+                .map(|t| {
+                    t.parse::<f64>()
+                        .with_context(|| format!("bad number {t} in {}", path.display()))
+                })
+                .collect()
+        })
+        .collect()
+}
+
+/// One evaluation through LAMMPS with our styles (`single_point.in`).
+pub fn lammps_single_point(
+    lmp_bpm: &Path,
+    scene: &Scene,
+    newton: bool,
+    ranks: usize,
+    dir: &Path,
+    tag: &str,
+) -> Result<SinglePoint> {
+    let dump = dir.join(format!("{tag}.dump"));
+    let out = run_lmp_bpm(
+        lmp_bpm,
+        scene,
+        "single_point.in",
+        newton,
+        ranks,
+        dir,
+        tag,
+        &[("dump", dump.display().to_string())],
+    )?;
+    let numbers = |key: &str| -> Result<Vec<f64>> {
+        let line = out
+            .lines()
+            .find(|l| l.starts_with(key))
+            .with_context(|| format!("no {key} line in the LAMMPS output"))?;
+        line.split_whitespace()
+            .skip(1)
+            .map(|v| {
+                v.parse::<f64>()
+                    .with_context(|| format!("bad {key} value {v}"))
+            })
+            .collect()
+    };
+    let p = numbers("BPM_PRESSURE")?;
+    let e = numbers("BPM_ENERGY")?;
+    if p.len() != 6 || e.len() != 2 {
+        bail!("unexpected BPM_PRESSURE or BPM_ENERGY line");
+    }
+    let forces: Vec<[f64; 3]> = read_dump(&dump)?
+        .iter()
+        .map(|v| [v[0], v[1], v[2]])
+        .collect();
+    if forces.len() != scene.particles.positions.len() {
+        bail!(
+            "dump has {} atoms, scene {}",
+            forces.len(),
+            scene.particles.positions.len()
+        );
+    }
+    Ok(SinglePoint {
+        forces,
+        pressure: [p[0], p[1], p[2], p[3], p[4], p[5]],
+        energies: [e[0], e[1]],
+    })
+}
+
+/// One evaluation by the native engine.
+pub fn native_single_point(scene: &Scene) -> SinglePoint {
+    let mut sys = build_system(scene, 1);
+    sys.setup(&StageDrivers {
+        dt: 0.1,
+        ..Default::default()
+    });
+    SinglePoint {
+        forces: sys.f.clone(),
+        pressure: sys.pressure_tensor(),
+        energies: [
+            sys.report.interactions.bonds.energy,
+            sys.report.interactions.pairs.energy,
+        ],
+    }
+}
+
+/// Largest component difference of `a` and `b`, relative to the largest
+/// component of `b`.
+pub fn max_relative_deviation(a: &[[f64; 3]], b: &[[f64; 3]]) -> f64 {
+    let scale = b
+        .iter()
+        .flat_map(|r| r.iter())
+        .fold(0.0f64, |m, v| m.max(v.abs()));
+    let dev = a
+        .iter()
+        .zip(b)
+        .flat_map(|(p, q)| (0..3).map(move |d| (p[d] - q[d]).abs()))
+        .fold(0.0f64, f64::max);
+    dev / scale
+}
