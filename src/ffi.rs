@@ -229,23 +229,29 @@ pub unsafe extern "C" fn bpm_pair_forces(
         }
         let ilist = list(ilist, inum);
         let types = (!types.is_null()).then(|| list(types, nall));
-        let mut rows_in: Vec<(usize, &[i32])> = Vec::with_capacity(inum);
+        // Validate every row first, so the pass itself needs no allocation.
         for &i in ilist {
             if i < 0 || i as usize >= nall {
                 return BPM_ERR_INDEX;
             }
-            let i = i as usize;
-            let count = *numneigh.add(i);
-            let first = *firstneigh.add(i);
+            let count = *numneigh.add(i as usize);
+            let first = *firstneigh.add(i as usize);
             if count < 0 || (count > 0 && first.is_null()) {
                 return BPM_ERR_NULL;
             }
-            let js = list(first, count as usize);
-            if js.iter().any(|&j| (j & NEIGHMASK) as usize >= nall) {
+            if list(first, count as usize)
+                .iter()
+                .any(|&j| (j & NEIGHMASK) as usize >= nall)
+            {
                 return BPM_ERR_INDEX;
             }
-            rows_in.push((i, js));
         }
+        let rows_in = ilist.iter().map(|&i| {
+            let i = i as usize;
+            // SAFETY: checked above: i < nall, count >= 0, first non-null when count > 0.
+            let js = unsafe { list(*firstneigh.add(i), *numneigh.add(i) as usize) };
+            (i, js)
+        });
         if let Some(t) = types {
             if t.iter().any(|&t| t < 1 || t as usize > ntypes) {
                 return BPM_ERR_TYPE;
@@ -266,7 +272,7 @@ pub unsafe extern "C" fn bpm_pair_forces(
             newton: newton != 0,
         };
         let f = slice::from_raw_parts_mut(f as *mut [f64; 3], nall);
-        *tally = pair_forces(&Unwrapped, &inputs, rows_in.into_iter(), own, f);
+        *tally = pair_forces(&Unwrapped, &inputs, rows_in, own, f);
         BPM_OK
     })
 }

@@ -10,6 +10,7 @@ use crate::kernels::Tally;
 #[derive(Debug, Default)]
 pub struct Scratch<T> {
     buffers: Vec<Vec<T>>,
+    tallies: Vec<Tally>,
 }
 
 impl<T: Copy + Default + Send + Sync + std::ops::AddAssign> Scratch<T> {
@@ -27,8 +28,9 @@ impl<T: Copy + Default + Send + Sync + std::ops::AddAssign> Scratch<T> {
             buf.clear();
             buf.resize(out.len(), T::default());
         }
-        let mut tallies = vec![Tally::default(); chunks];
-        let (first, rest) = tallies.split_at_mut(1);
+        self.tallies.clear();
+        self.tallies.resize(chunks, Tally::default());
+        let (first, rest) = self.tallies.split_at_mut(1);
         let work = &work;
         rayon::scope(|s| {
             for ((c, buf), tally) in self.buffers.iter_mut().enumerate().zip(rest.iter_mut()) {
@@ -41,7 +43,7 @@ impl<T: Copy + Default + Send + Sync + std::ops::AddAssign> Scratch<T> {
                 *o += *b;
             }
         }
-        tallies
+        self.tallies
             .iter()
             .fold(Tally::default(), |acc, t| acc.merged(t))
     }
