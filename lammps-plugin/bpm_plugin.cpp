@@ -1,6 +1,7 @@
 /* Registration of the styles: with Debian's LAMMPS (no PLUGIN package) by
  * inserting creators into the style maps through the library handle, and,
- * where lammpsplugin.h exists, through the standard plugin entry point. */
+ * built with -DBPM_MODERN_LAMMPS against a LAMMPS with the PLUGIN package,
+ * through the standard entry point for `plugin load`. */
 #include "fmt_compat.h"
 
 #include "bond_bpm_multibody.h"
@@ -58,15 +59,14 @@ extern "C" int bpm_lmp_main(int argc, char **argv)
   return status;
 }
 
-#if __has_include("lammpsplugin.h")
-#include "lammpsplugin.h"
-#include "version.h"
+#if defined(BPM_MODERN_LAMMPS)
+#include "lammpsplugin_compat.h"
 
 extern "C" void lammpsplugin_init(void *lmp, void *handle, void *regfunc)
 {
   lammpsplugin_t plugin;
   auto register_plugin = (lammpsplugin_regfunc) regfunc;
-  plugin.version = LAMMPS_VERSION;
+  plugin.version = static_cast<LAMMPS *>(lmp)->version;    // the host's, so no version warning
   plugin.author = "bpm project";
   plugin.handle = handle;
   plugin.style = "bond";

@@ -187,8 +187,13 @@ void FixBPMReference::clear_volumes(int nall)
 
 void FixBPMReference::communicate_volumes(int newton_bond)
 {
+#if defined(BPM_MODERN_LAMMPS)    // 2022 and later: comm calls overloaded by class
+  if (newton_bond) comm->reverse_comm(this);
+  comm->forward_comm(this);
+#else
   if (newton_bond) comm->reverse_comm_fix(this);
   comm->forward_comm_fix(this);
+#endif
 }
 
 int FixBPMReference::pack_forward_comm(int n, int *list, double *buf, int, int *)
