@@ -99,8 +99,7 @@ impl BondTopology {
     /// reset of the compaction protocol).
     pub fn reset_reference<S: Separation>(&mut self, sep: &S, x: &[[f64; 3]]) {
         for (bond, r0) in self.entries.iter().zip(self.r0.iter_mut()) {
-            let d = sep.delta(&x[bond.i as usize], &x[bond.j as usize]);
-            *r0 = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
+            *r0 = sep.distance(&x[bond.i as usize], &x[bond.j as usize]);
         }
     }
 

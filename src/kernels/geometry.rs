@@ -8,6 +8,13 @@
 pub trait Separation: Sync {
     /// The separation vector `x_i - x_j` under this convention.
     fn delta(&self, xi: &[f64; 3], xj: &[f64; 3]) -> [f64; 3];
+
+    /// The distance `|x_i - x_j|` under this convention.
+    #[inline]
+    fn distance(&self, xi: &[f64; 3], xj: &[f64; 3]) -> f64 {
+        let d = self.delta(xi, xj);
+        super::dot(&d, &d).sqrt()
+    }
 }
 
 /// Positions are already the interacting images (LAMMPS ghost atoms, or an

@@ -1,6 +1,7 @@
 //! Writes a scene as a LAMMPS data file (`atom_style bond`) plus the
 //! `-var` values of the input templates in `lammps_inputs/`.
 
+use crate::scene::load::reference_lengths;
 use crate::scene::Scene;
 use std::fmt::Write as _;
 
@@ -28,11 +29,7 @@ impl ScriptVars {
             .iter()
             .map(|&p| if p { "p" } else { "f" })
             .collect();
-        let max_r0 = scene
-            .bonds
-            .r0
-            .as_ref()
-            .map_or(1.5, |r| r.iter().cloned().fold(0.0, f64::max));
+        let max_r0 = reference_lengths(scene).into_iter().fold(0.0, f64::max);
         // Ghosts must reach every bond partner: the longest bond plus the skin.
         let comm_cutoff = (max_r0 * 1.2).max(pair.d) + ff.skin;
         let g = |v: f64| format!("{v:.17e}");
@@ -130,18 +127,8 @@ pub fn write_data_file(scene: &Scene) -> String {
 /// `fix_modify BPM_REFERENCE lengths FILE`. Bonds without an explicit `r0`
 /// get their minimum-image length, as the native engine does.
 pub fn write_reference_lengths(scene: &Scene) -> String {
-    use crate::kernels::Separation;
-    let simbox = crate::scene::validate::simbox_of(scene);
-    let x = &scene.particles.positions;
     let mut s = String::from("# tag_i tag_j r0\n");
-    for (k, &[i, j]) in scene.bonds.pairs.iter().enumerate() {
-        let r0 = scene.bonds.r0.as_ref().map_or_else(
-            || {
-                let d = simbox.delta(&x[i], &x[j]);
-                (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt()
-            },
-            |r| r[k],
-        );
+    for (&[i, j], r0) in scene.bonds.pairs.iter().zip(reference_lengths(scene)) {
         let _ = writeln!(s, "{} {} {:.17e}", i + 1, j + 1, r0);
     }
     s

@@ -41,6 +41,23 @@ pub fn model_of(ff: &ForceField, n: usize, bonds: &BondTopology) -> ForceModel {
     ForceModel::Bpm(BpmModel::new(ff.bond, ff.pair, n, bonds))
 }
 
+/// The reference length of every bond of a validated scene, in scene order:
+/// the given `r0`, or else the bond's minimum-image length at load. Both
+/// engines take their reference from here.
+pub fn reference_lengths(scene: &Scene) -> Vec<f64> {
+    if let Some(r0) = &scene.bonds.r0 {
+        return r0.clone();
+    }
+    let simbox = simbox_of(scene);
+    let x = &scene.particles.positions;
+    scene
+        .bonds
+        .pairs
+        .iter()
+        .map(|&[i, j]| simbox.distance(&x[i], &x[j]))
+        .collect()
+}
+
 /// Builds the engine system of a validated scene.
 pub fn build_system(scene: &Scene, threads: usize) -> System {
     let simbox = simbox_of(scene);
@@ -50,17 +67,8 @@ pub fn build_system(scene: &Scene, threads: usize) -> System {
         .bonds
         .pairs
         .iter()
-        .enumerate()
-        .map(|(k, &[i, j])| {
-            let r0 = scene.bonds.r0.as_ref().map_or_else(
-                || {
-                    let d = simbox.delta(&pa.positions[i], &pa.positions[j]);
-                    (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt()
-                },
-                |r| r[k],
-            );
-            (i, j, r0)
-        })
+        .zip(reference_lengths(scene))
+        .map(|(&[i, j], r0)| (i, j, r0))
         .collect();
     let bonds = BondTopology::new(n, &triples);
     let model = model_of(&scene.force_field, n, &bonds);

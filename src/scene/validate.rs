@@ -274,8 +274,7 @@ pub fn validate(scene: &Scene) -> Result<(), SceneError> {
         if !seen.insert((i.min(j), i.max(j))) {
             return Err(invalid(field, format!("bond ({i}, {j}) is listed twice")));
         }
-        let del = simbox.delta(&pa.positions[i], &pa.positions[j]);
-        let r = (del[0] * del[0] + del[1] * del[1] + del[2] * del[2]).sqrt();
+        let r = simbox.distance(&pa.positions[i], &pa.positions[j]);
         if r == 0.0 {
             return Err(invalid(
                 field,

@@ -7,6 +7,7 @@
 
 use crate::engine::{BondTopology, NeighbourList, System};
 use crate::kernels::PairCoeffs;
+use crate::kernels::Separation;
 use crate::scene::load::build_system;
 use crate::scene::model::{Bonds, BoxSpec, ForceField, Particles, Scene, StageSpec, VelocityInit};
 use crate::scene::run::{run_scene, RunOptions};
@@ -218,33 +219,27 @@ pub fn sort_spatially(x: &mut [[f64; 3]], simbox: &crate::engine::SimBox, cell: 
     x.sort_by_key(key);
 }
 
-/// Bonds every pair of `sys` closer than `cutoff`, with that distance as `r0`.
-pub fn bond_within(sys: &System, cutoff: f64) -> BondTopology {
+/// Every pair of `sys` closer than `cutoff`, with its distance.
+fn pairs_within(sys: &System, cutoff: f64) -> Vec<(usize, usize, f64)> {
     let mut list = NeighbourList::default();
     list.build(&sys.simbox, &sys.x, cutoff, 0.0, None);
-    let mut triples = Vec::new();
+    let mut pairs = Vec::new();
     for i in 0..sys.len() {
         for &j in list.of(i) {
-            let d = crate::kernels::Separation::delta(&sys.simbox, &sys.x[i], &sys.x[j as usize]);
-            triples.push((
-                i,
-                j as usize,
-                (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt(),
-            ));
+            let j = j as usize;
+            pairs.push((i, j, sys.simbox.distance(&sys.x[i], &sys.x[j])));
         }
     }
-    BondTopology::new(sys.len(), &triples)
+    pairs
+}
+
+/// Bonds every pair of `sys` closer than `cutoff`, with that distance as `r0`.
+pub fn bond_within(sys: &System, cutoff: f64) -> BondTopology {
+    BondTopology::new(sys.len(), &pairs_within(sys, cutoff))
 }
 
 fn max_overlap(sys: &System, d: f64) -> f64 {
-    let mut list = NeighbourList::default();
-    list.build(&sys.simbox, &sys.x, d, 0.0, None);
-    let mut worst: f64 = 0.0;
-    for i in 0..sys.len() {
-        for &j in list.of(i) {
-            let del = crate::kernels::Separation::delta(&sys.simbox, &sys.x[i], &sys.x[j as usize]);
-            worst = worst.max(d - (del[0] * del[0] + del[1] * del[1] + del[2] * del[2]).sqrt());
-        }
-    }
-    worst
+    pairs_within(sys, d)
+        .iter()
+        .fold(0.0, |worst, &(_, _, r)| f64::max(worst, d - r))
 }
