@@ -107,37 +107,21 @@ pub fn lammps_bond_timing(
     a_b: f64,
     steps: u64,
 ) -> anyhow::Result<LammpsBondTiming> {
-    use anyhow::{bail, Context};
+    use anyhow::Context;
     let mut scene = solid.clone();
     scene.force_field = ForceField::paper(a_b);
-    let data = dir.join(format!("bench-{a_b}.data"));
-    std::fs::write(&data, crate::lammps::write_data_file(&scene))?;
-    std::fs::write(
-        format!("{}.r0", data.display()),
-        crate::lammps::write_reference_lengths(&scene),
+    let vars = [("style", style.to_string()), ("steps", steps.to_string())];
+    let text = crate::verify::run_lmp_bpm(
+        lmp_bpm,
+        &scene,
+        "bench_bonds.in",
+        true,
+        1,
+        dir,
+        &format!("bench-{a_b}"),
+        &vars,
+        3600,
     )?;
-    let vars = crate::lammps::ScriptVars::of(&scene, &data.display().to_string(), true);
-    let input = concat!(env!("CARGO_MANIFEST_DIR"), "/lammps_inputs/bench_bonds.in");
-    let out = std::process::Command::new(lmp_bpm)
-        .args([
-            "-in",
-            input,
-            "-log",
-            "none",
-            "-var",
-            "style",
-            style,
-            "-var",
-            "steps",
-            &steps.to_string(),
-        ])
-        .args(vars.args())
-        .output()
-        .with_context(|| format!("running {}", lmp_bpm.display()))?;
-    let text = String::from_utf8_lossy(&out.stdout).to_string();
-    if !out.status.success() {
-        bail!("lmp-bpm failed:\n{text}");
-    }
     let field = |prefix: &str, col: usize| -> Option<f64> {
         let line = text.lines().find(|l| l.starts_with(prefix))?;
         line.split(['|', ' '])

@@ -5,7 +5,7 @@
 use bpm::scene::Scene;
 use bpm::verify::{
     contact_solid, lammps_single_point, max_relative_deviation, native_single_point, run_lmp_bpm,
-    single_point::read_dump,
+    single_point::read_dump, CHECK_LIMIT_SECONDS,
 };
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -111,6 +111,7 @@ fn a_restart_keeps_every_bond_reference_length() {
         &dir,
         "restart",
         &var(&continuous),
+        CHECK_LIMIT_SECONDS,
     )
     .unwrap();
     run_lmp_bpm(
@@ -122,6 +123,7 @@ fn a_restart_keeps_every_bond_reference_length() {
         &dir,
         "restart",
         &var(&resumed),
+        CHECK_LIMIT_SECONDS,
     )
     .unwrap();
     let a = read_dump(&continuous).unwrap();
@@ -167,6 +169,7 @@ fn error_of_edited_setup(tag: &str, replace: &[(&str, &str)], tail: &str) -> Str
         &workdir(),
         tag,
         &[],
+        CHECK_LIMIT_SECONDS,
     ) {
         Ok(out) => panic!("{tag}: LAMMPS accepted bad input:\n{out}"),
         Err(e) => e.to_string(),

@@ -8,6 +8,10 @@ use serde::Serialize;
 use std::path::Path;
 use std::process::Command;
 
+/// Wall-clock limit of a single-point LAMMPS run (it takes about a second):
+/// a hung LAMMPS (e.g. NaN positions) fails instead of stalling.
+pub const CHECK_LIMIT_SECONDS: u32 = 120;
+
 /// Forces, pressure tensor and energies of one evaluation.
 #[derive(Clone, Debug, Serialize)]
 pub struct SinglePoint {
@@ -22,7 +26,7 @@ pub struct SinglePoint {
 /// Runs `lmp_bpm` on the template `input` (a path, or a name in
 /// `lammps_inputs/`) for `scene`, files in `dir` named after `tag`, on
 /// `ranks` MPI ranks; `extra` adds `-var` pairs. Returns the output; a
-/// LAMMPS error, a crash or 120 s without finishing is an error.
+/// LAMMPS error, a crash or `limit_seconds` without finishing is an error.
 #[allow(clippy::too_many_arguments)]
 pub fn run_lmp_bpm(
     lmp_bpm: &Path,
@@ -33,6 +37,7 @@ pub fn run_lmp_bpm(
     dir: &Path,
     tag: &str,
     extra: &[(&str, String)],
+    limit_seconds: u32,
 ) -> Result<String> {
     let data = dir.join(format!("{tag}.data"));
     std::fs::write(&data, write_data_file(scene))
@@ -47,9 +52,8 @@ pub fn run_lmp_bpm(
     } else {
         format!("{}/lammps_inputs/{input}", env!("CARGO_MANIFEST_DIR"))
     };
-    // A hung LAMMPS (e.g. NaN positions) must end as an error, not stall.
     let mut cmd = Command::new("timeout");
-    cmd.arg("120");
+    cmd.arg(limit_seconds.to_string());
     if ranks > 1 {
         cmd.args([
             "mpirun.openmpi",
@@ -119,6 +123,7 @@ pub fn lammps_single_point(
         dir,
         tag,
         &[("dump", dump.display().to_string())],
+        CHECK_LIMIT_SECONDS,
     )?;
     let numbers = |key: &str| -> Result<Vec<f64>> {
         let line = out
