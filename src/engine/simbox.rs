@@ -24,11 +24,6 @@ impl SimBox {
         self.lengths[0] * self.lengths[1] * self.lengths[2]
     }
 
-    /// Whether any tilt factor is non-zero.
-    pub fn is_triclinic(&self) -> bool {
-        self.tilt.iter().any(|&t| t != 0.0)
-    }
-
     /// Fractional coordinates of `x` (0..1 inside the primary cell).
     #[inline]
     pub fn to_fractional(&self, x: &[f64; 3]) -> [f64; 3] {

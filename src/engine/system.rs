@@ -141,12 +141,7 @@ impl System {
     /// Pressure tensor `[xx, yy, zz, xy, xz, yz]` from kinetic and virial
     /// parts, positive in compression (LAMMPS `compute pressure`).
     pub fn pressure_tensor(&self) -> [f64; 6] {
-        let mut p = self
-            .report
-            .interactions
-            .bonds
-            .merged(&self.report.interactions.pairs)
-            .virial;
+        let mut p = self.interaction_tally().virial;
         for v in &self.v {
             p[0] += self.mass * v[0] * v[0];
             p[1] += self.mass * v[1] * v[1];

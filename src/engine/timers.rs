@@ -76,9 +76,4 @@ impl Timers {
     pub fn total(&self, stage: Stage) -> Duration {
         self.totals[stage as usize]
     }
-
-    /// Time spent in all stages.
-    pub fn sum(&self) -> Duration {
-        self.totals.iter().sum()
-    }
 }

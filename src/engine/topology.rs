@@ -90,11 +90,6 @@ impl BondTopology {
         self.partners(i).binary_search(&(j as u32)).is_ok()
     }
 
-    /// Number of bonds of each atom.
-    pub fn degree(&self, i: usize) -> usize {
-        self.partner_offsets[i + 1] - self.partner_offsets[i]
-    }
-
     /// Sets every reference length to the current distance (the stress-free
     /// reset of the compaction protocol).
     pub fn reset_reference<S: Separation>(&mut self, sep: &S, x: &[[f64; 3]]) {
