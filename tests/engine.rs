@@ -11,11 +11,9 @@ use std::sync::OnceLock;
 fn small_solid() -> &'static Scene {
     static SOLID: OnceLock<Scene> = OnceLock::new();
     SOLID.get_or_init(|| {
-        let mut p = BulkParams::paper(5.0, 4, 0.0);
-        p.relax_time = 20.0;
-        p.thermal_time = 50.0;
-        p.quench_time = 100.0;
-        build_bulk(&p, 1, false).expect("bulk build").0
+        build_bulk(&BulkParams::shortened(5.0, 4, 0.0), 1, false)
+            .expect("bulk build")
+            .0
     })
 }
 

@@ -8,11 +8,9 @@ use bpm::scene::{build_system, ForceField};
 
 #[test]
 fn in_process_lammps_gives_the_native_forces() {
-    let mut p = BulkParams::paper(5.0, 8, 0.0);
-    p.relax_time = 10.0;
-    p.thermal_time = 10.0;
-    p.quench_time = 20.0;
-    let mut scene = build_bulk(&p, 1, false).unwrap().0;
+    let mut scene = build_bulk(&BulkParams::shortened(5.0, 8, 0.0), 1, false)
+        .unwrap()
+        .0;
     scene.force_field = ForceField::paper(-0.5);
     for x in &mut scene.particles.positions {
         *x = x.map(|c| c * 0.99);

@@ -8,13 +8,9 @@ use rand::{Rng, SeedableRng};
 /// random velocities (rms about 0.05), and its bonds across the plane
 /// `z = L/2` removed: bonds carry force, damping acts, and the two halves
 /// touch through pair contacts only (two bodies with surface contacts).
-/// The build is shortened (relax 20, thermal 50, quench 100 tau).
+/// The build is [`BulkParams::shortened`].
 pub fn contact_solid(size: f64, seed: u64, a_b: f64) -> Result<Scene, SceneError> {
-    let mut p = BulkParams::paper(size, seed, 0.0);
-    p.relax_time = 20.0;
-    p.thermal_time = 50.0;
-    p.quench_time = 100.0;
-    let mut s = build_bulk(&p, 1, false)?.0;
+    let mut s = build_bulk(&BulkParams::shortened(size, seed, 0.0), 1, false)?.0;
     s.force_field = ForceField::paper(a_b);
     let squeeze = 0.985;
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed ^ 0x5EED);

@@ -61,6 +61,19 @@ impl BulkParams {
     }
 }
 
+impl BulkParams {
+    /// The paper's protocol with short stages (relax 20, thermal 50, quench
+    /// 100 tau): a quick solid for cross-checks and tests, not for physics.
+    pub fn shortened(size: f64, seed: u64, a_b: f64) -> Self {
+        Self {
+            relax_time: 20.0,
+            thermal_time: 50.0,
+            quench_time: 100.0,
+            ..Self::paper(size, seed, a_b)
+        }
+    }
+}
+
 /// What the builder reports besides the scene.
 #[derive(Clone, Debug, Serialize)]
 pub struct BulkSummary {
