@@ -90,7 +90,8 @@ fn columns(stage: &StageSpec) -> Vec<String> {
     c
 }
 
-fn thermo_row(sys: &System) -> Vec<f64> {
+/// One row of the columns of [`columns`] for `stage`.
+fn thermo_row(sys: &System, stage: &StageSpec) -> Vec<f64> {
     let b = &sys.simbox;
     let p = sys.pressure_tensor();
     let it = &sys.report.interactions;
@@ -120,6 +121,9 @@ fn thermo_row(sys: &System) -> Vec<f64> {
     {
         row.push(*f);
         row.push(*x);
+    }
+    if stage.sphere_wall.is_some() {
+        row.push(sys.report.sphere_wall_force);
     }
     row
 }
@@ -218,11 +222,7 @@ pub fn run_stage(
     };
     let record = |sys: &System, out: &mut StageOutput, k: u64| {
         if spec.record.every > 0 && k % spec.record.every == 0 {
-            let mut row = thermo_row(sys);
-            if spec.sphere_wall.is_some() {
-                row.push(sys.report.sphere_wall_force);
-            }
-            out.rows.push(row);
+            out.rows.push(thermo_row(sys, spec));
         }
         if spec.record.positions_every > 0 && k % spec.record.positions_every == 0 {
             out.checkpoints.push(Checkpoint {
