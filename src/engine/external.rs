@@ -154,30 +154,27 @@ pub struct ActiveTether {
 }
 
 impl ActiveTether {
-    /// Resolves the group and the anchor from unwrapped positions.
-    pub fn new(spec: &Tether, grain: &[u32], unwrapped: &[[f64; 3]]) -> Self {
+    /// Resolves the group and the anchor (by default the group's current
+    /// centre of mass, unwrapped with `image`).
+    pub fn new(
+        spec: &Tether,
+        grain: &[u32],
+        simbox: &SimBox,
+        x: &[[f64; 3]],
+        image: &[[i32; 3]],
+    ) -> Self {
         let members: Vec<usize> = (0..grain.len())
             .filter(|&i| spec.grain.is_none_or(|g| grain[i] == g))
             .collect();
         let anchor = spec
             .anchor
-            .unwrap_or_else(|| centre_of(&members, unwrapped));
+            .unwrap_or_else(|| centre_of(&members, simbox, x, image));
         Self {
             members,
             anchor,
             dims: spec.dims,
             stiffness: spec.stiffness,
         }
-    }
-
-    /// Number of particles in the group.
-    pub fn len(&self) -> usize {
-        self.members.len()
-    }
-
-    /// Whether the group is empty.
-    pub fn is_empty(&self) -> bool {
-        self.members.is_empty()
     }
 
     /// Adds the tether force (uniform masses: shared equally); returns energy.
@@ -192,14 +189,7 @@ impl ActiveTether {
         if self.members.is_empty() {
             return 0.0;
         }
-        let mut com = [0.0; 3];
-        for &i in &self.members {
-            let w = simbox.image_vector(&image[i]);
-            for d in 0..3 {
-                com[d] += x[i][d] + w[d];
-            }
-        }
-        let com = com.map(|c| c / self.members.len() as f64);
+        let com = centre_of(&self.members, simbox, x, image);
         let share = 1.0 / self.members.len() as f64;
         let mut energy = 0.0;
         for d in 0..3 {
@@ -217,11 +207,14 @@ impl ActiveTether {
     }
 }
 
-fn centre_of(members: &[usize], x: &[[f64; 3]]) -> [f64; 3] {
+/// Centre of the `members` (uniform masses) in unwrapped coordinates, so a
+/// group that straddles the box is not torn apart.
+fn centre_of(members: &[usize], simbox: &SimBox, x: &[[f64; 3]], image: &[[i32; 3]]) -> [f64; 3] {
     let mut c = [0.0; 3];
     for &i in members {
+        let w = simbox.image_vector(&image[i]);
         for d in 0..3 {
-            c[d] += x[i][d];
+            c[d] += x[i][d] + w[d];
         }
     }
     let inv = 1.0 / members.len().max(1) as f64;

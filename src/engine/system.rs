@@ -116,18 +116,6 @@ pub struct System {
 }
 
 impl System {
-    /// Unwrapped positions.
-    pub fn unwrapped(&self) -> Vec<[f64; 3]> {
-        self.x
-            .iter()
-            .zip(&self.image)
-            .map(|(x, n)| {
-                let w = self.simbox.image_vector(n);
-                [x[0] + w[0], x[1] + w[1], x[2] + w[2]]
-            })
-            .collect()
-    }
-
     /// Kinetic energy.
     pub fn kinetic_energy(&self) -> f64 {
         0.5 * self.mass

@@ -197,7 +197,7 @@ pub fn run_stage(
     let tether = spec
         .tether
         .as_ref()
-        .map(|t| ActiveTether::new(t, &sys.grain, &sys.unwrapped()));
+        .map(|t| ActiveTether::new(t, &sys.grain, &sys.simbox, &sys.x, &sys.image));
     let drivers = StageDrivers {
         dt: spec.dt,
         walls: spec.walls.clone(),
