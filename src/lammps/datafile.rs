@@ -88,7 +88,7 @@ pub fn write_data_file(scene: &Scene) -> String {
     let _ = writeln!(s, "{:.17e} {:.17e} xlo xhi", b.lo[0], hi(0));
     let _ = writeln!(s, "{:.17e} {:.17e} ylo yhi", b.lo[1], hi(1));
     let _ = writeln!(s, "{:.17e} {:.17e} zlo zhi", b.lo[2], hi(2));
-    if b.tilt.iter().any(|&t| t != 0.0) {
+    if super::script::needs_triclinic(scene) {
         let _ = writeln!(
             s,
             "{:.17e} {:.17e} {:.17e} xy xz yz",

@@ -104,6 +104,75 @@ impl Lammps {
         Ok(unsafe { sys::lammps_get_thermo(self.handle, c.as_ptr()) })
     }
 
+    /// An integer setting of `lammps_extract_setting` (e.g. "world_rank").
+    pub fn setting(&self, name: &str) -> i32 {
+        let c = CString::new(name).unwrap_or_default();
+        // SAFETY: live handle, valid C string.
+        unsafe { sys::lammps_extract_setting(self.handle, c.as_ptr()) }
+    }
+
+    /// Box lower corner, upper corner and tilts `xy xz yz`.
+    pub fn box_geometry(&self) -> ([f64; 3], [f64; 3], [f64; 3]) {
+        let (mut lo, mut hi) = ([0.0; 3], [0.0; 3]);
+        let (mut xy, mut yz, mut xz) = (0.0, 0.0, 0.0);
+        let (mut periodic, mut changed) = ([0i32; 3], 0i32);
+        // SAFETY: live handle; every pointer is to a local of the right size.
+        unsafe {
+            sys::lammps_extract_box(
+                self.handle,
+                lo.as_mut_ptr(),
+                hi.as_mut_ptr(),
+                &mut xy,
+                &mut yz,
+                &mut xz,
+                periodic.as_mut_ptr(),
+                &mut changed,
+            )
+        };
+        (lo, hi, [xy, xz, yz])
+    }
+
+    /// The first `rows` rows of a fix's global array (e.g. `fix vector`).
+    pub fn fix_array(
+        &self,
+        id: &str,
+        rows: u64,
+        columns: usize,
+    ) -> Result<Vec<Vec<f64>>, LammpsError> {
+        let c = CString::new(id).map_err(|_| LammpsError::Nul)?;
+        let mut out = Vec::with_capacity(rows as usize);
+        for i in 0..rows {
+            let mut row = Vec::with_capacity(columns);
+            for j in 0..columns {
+                // SAFETY: live handle; style 0 (global), type 2 (array)
+                // returns a malloc'd double (or null), freed with lammps_free.
+                let value = unsafe {
+                    let p =
+                        sys::lammps_extract_fix(self.handle, c.as_ptr(), 0, 2, i as i32, j as i32)
+                            as *mut f64;
+                    if p.is_null() {
+                        None
+                    } else {
+                        let v = *p;
+                        sys::lammps_free(p as *mut c_void);
+                        Some(v)
+                    }
+                };
+                match value {
+                    Some(v) => row.push(v),
+                    None => {
+                        return Err(LammpsError::Command {
+                            command: format!("extract fix {id} [{i}][{j}]"),
+                            message: "no such fix or element".into(),
+                        })
+                    }
+                }
+            }
+            out.push(row);
+        }
+        Ok(out)
+    }
+
     /// A per-atom 3-vector ("x", "v", "f") of all atoms, ordered by atom id.
     pub fn gather_vectors(&self, name: &str) -> Result<Vec<[f64; 3]>, LammpsError> {
         let n = self.natoms();

@@ -3,14 +3,26 @@
 
 pub mod datafile;
 pub mod instance;
+pub mod runner;
+pub mod script;
 pub mod sys;
 
 pub use datafile::{write_data_file, write_reference_lengths, ScriptVars};
 pub use instance::{Lammps, LammpsError};
+pub use runner::{run_scene_lammps, LammpsRun, LammpsRunError};
+pub use script::{write_driver, Driver, ScriptError};
 
 extern "C" {
     /// Registers `bond_style bpm/multibody`, `pair_style bpm/contact` and
     /// the internal fix in the LAMMPS instance behind `handle` (a
     /// `LAMMPS_NS::LAMMPS *`, e.g. from `lammps_open_no_mpi`).
     pub fn bpm_register_styles(handle: *mut std::ffi::c_void);
+}
+
+/// Finalises MPI if LAMMPS initialised it (call once, after the last
+/// LAMMPS instance is closed; every rank must call it before exiting).
+pub fn finalize_mpi() {
+    // SAFETY: no LAMMPS instance is open; LAMMPS checks whether MPI is
+    // initialised and not yet finalised.
+    unsafe { sys::lammps_mpi_finalize() };
 }

@@ -5,10 +5,10 @@ use super::model::{Scene, StageSpec, VelocityInit};
 use crate::engine::{ActiveTether, EngineError, Stage, StageDrivers, System};
 use indicatif::{ProgressBar, ProgressStyle};
 use rand::{Rng, SeedableRng};
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 /// Observables of one stage.
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct StageOutput {
     /// Stage name.
     pub name: String,
@@ -37,11 +37,14 @@ impl StageOutput {
 }
 
 /// Positions at one step.
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct Checkpoint {
     /// Global step.
     pub step: u64,
-    /// Positions (wrapped).
+    /// Box lower corner, edge lengths and tilts at that step (d).
+    pub simbox: [[f64; 3]; 3],
+    /// Positions; wrapped into the box at the last neighbour-list build, so
+    /// compare them through the minimum image.
     pub positions: Vec<[f64; 3]>,
 }
 
@@ -55,7 +58,7 @@ pub struct RunOptions {
 }
 
 /// The thermo columns recorded for a stage.
-fn columns(stage: &StageSpec) -> Vec<String> {
+pub fn thermo_columns(stage: &StageSpec) -> Vec<String> {
     let mut c: Vec<String> = [
         "step",
         "time",
@@ -128,40 +131,45 @@ fn thermo_row(sys: &System, stage: &StageSpec) -> Vec<f64> {
     row
 }
 
-/// Seeded uniform velocity components, zero net momentum, exact rms speed.
-pub fn set_velocities(sys: &mut System, init: &VelocityInit, seed: u64) {
+/// Seeded uniform velocity components for `n` particles, zero net
+/// momentum, exact rms speed. The LAMMPS harness passes these same numbers
+/// to LAMMPS, so both engines start a stage from identical velocities.
+pub fn random_velocities(n: usize, init: &VelocityInit, seed: u64) -> Vec<[f64; 3]> {
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
-    for v in &mut sys.v {
-        *v = [
-            rng.gen_range(-1.0..1.0),
-            rng.gen_range(-1.0..1.0),
-            rng.gen_range(-1.0..1.0),
-        ];
-    }
-    let n = sys.v.len() as f64;
+    let mut v: Vec<[f64; 3]> = (0..n)
+        .map(|_| {
+            [
+                rng.gen_range(-1.0..1.0),
+                rng.gen_range(-1.0..1.0),
+                rng.gen_range(-1.0..1.0),
+            ]
+        })
+        .collect();
+    let count = n as f64;
     let mut mean = [0.0; 3];
-    for v in &sys.v {
+    for vi in &v {
         for d in 0..3 {
-            mean[d] += v[d] / n;
+            mean[d] += vi[d] / count;
         }
     }
     let mut sq = 0.0;
-    for v in &mut sys.v {
+    for vi in &mut v {
         for d in 0..3 {
-            v[d] -= mean[d];
-            sq += v[d] * v[d];
+            vi[d] -= mean[d];
+            sq += vi[d] * vi[d];
         }
     }
     let scale = if sq > 0.0 {
-        init.rms_speed / (sq / n).sqrt()
+        init.rms_speed / (sq / count).sqrt()
     } else {
         0.0
     };
-    for v in &mut sys.v {
-        for c in v.iter_mut() {
+    for vi in &mut v {
+        for c in vi.iter_mut() {
             *c *= scale;
         }
     }
+    v
 }
 
 /// Seed of the random draws of stage `index`: distinct per stage, fixed by
@@ -192,7 +200,7 @@ pub fn run_stage(
         sys.v.iter_mut().for_each(|v| *v = [0.0; 3]);
     }
     if let Some(init) = &spec.set_velocities {
-        set_velocities(sys, init, stage_seed(seed, index));
+        sys.v = random_velocities(sys.len(), init, stage_seed(seed, index));
     }
     let tether = spec
         .tether
@@ -213,7 +221,7 @@ pub fn run_stage(
     let mut out = StageOutput {
         name: spec.name.clone(),
         steps: spec.steps,
-        columns: columns(spec),
+        columns: thermo_columns(spec),
         rows: Vec::new(),
         checkpoints: Vec::new(),
         wall_seconds: 0.0,
@@ -225,8 +233,10 @@ pub fn run_stage(
             out.rows.push(thermo_row(sys, spec));
         }
         if spec.record.positions_every > 0 && k % spec.record.positions_every == 0 {
+            let b = &sys.simbox;
             out.checkpoints.push(Checkpoint {
                 step: sys.step,
+                simbox: [b.lo, b.lengths, b.tilt],
                 positions: sys.x.clone(),
             });
         }

@@ -1,10 +1,18 @@
 //! The cross-check: the same scene through LAMMPS with our plugin and
 //! through the native engine, compared observable by observable.
 
+pub mod calibration;
+pub mod check;
+pub mod compare;
+pub mod engines;
 pub mod scenes;
 pub mod single_point;
+pub mod tolerances;
+pub mod upstream;
 
-pub use scenes::contact_solid;
+pub use compare::{compare_runs, Deviation};
+pub use engines::{run_native, EngineRun, HarnessError, LammpsLauncher};
+pub use scenes::{as_trajectory, contact_solid, contact_solid_reference, grain_pair};
 pub use single_point::{
     lammps_single_point, max_relative_deviation, native_single_point, run_lmp_bpm, SinglePoint,
     CHECK_LIMIT_SECONDS,

@@ -1,17 +1,38 @@
 //! Built-in cross-check scenes.
 
+use crate::kernels::{Separation, Unwrapped};
 use crate::scene::builders::bulk::{build_bulk, BulkParams};
 use crate::scene::{ForceField, Scene, SceneError, StageSpec};
 use rand::{Rng, SeedableRng};
 
-/// A small bulk solid, compressed 1.5% with a small seeded jitter, with
-/// random velocities (rms about 0.05), and its bonds across the plane
-/// `z = L/2` removed: bonds carry force, damping acts, and the two halves
-/// touch through pair contacts only (two bodies with surface contacts).
-/// The build is [`BulkParams::shortened`].
-pub fn contact_solid(size: f64, seed: u64, a_b: f64) -> Result<Scene, SceneError> {
+/// A small bulk solid at its reference state (every bond at its `r0`, zero
+/// velocities) with its bonds across the plane `z = L/2` removed: two bodies
+/// that touch through pair contacts only. The build is
+/// [`BulkParams::shortened`].
+pub fn contact_solid_reference(size: f64, seed: u64, a_b: f64) -> Result<Scene, SceneError> {
     let mut s = build_bulk(&BulkParams::shortened(size, seed, 0.0), 1, false)?.0;
     s.force_field = ForceField::paper(a_b);
+    let cut = 0.5 * size;
+    let z = &s.particles.positions;
+    let r0 = s.bonds.r0.clone().unwrap_or_default();
+    let keep: Vec<usize> = (0..s.bonds.pairs.len())
+        .filter(|&k| {
+            let [i, j] = s.bonds.pairs[k];
+            (z[i][2] < cut) == (z[j][2] < cut)
+        })
+        .collect();
+    s.bonds.pairs = keep.iter().map(|&k| s.bonds.pairs[k]).collect();
+    s.bonds.r0 = Some(keep.iter().map(|&k| r0[k]).collect());
+    s.stages = vec![StageSpec::hold("point", 0, 0.1)];
+    s.description = format!("contact solid L = {size} d at reference, seed {seed}, a_B = {a_b}");
+    Ok(s)
+}
+
+/// [`contact_solid_reference`] compressed 1.5% with a small seeded jitter
+/// and random velocities (rms about 0.05): bonds carry force, damping acts,
+/// and the two halves press on each other through pair contacts.
+pub fn contact_solid(size: f64, seed: u64, a_b: f64) -> Result<Scene, SceneError> {
+    let mut s = contact_solid_reference(size, seed, a_b)?;
     let squeeze = 0.985;
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed ^ 0x5EED);
     for x in s.particles.positions.iter_mut() {
@@ -32,18 +53,114 @@ pub fn contact_solid(size: f64, seed: u64, a_b: f64) -> Result<Scene, SceneError
             })
             .collect(),
     );
-    let cut = 0.5 * size * squeeze;
-    let z = &s.particles.positions;
-    let r0 = s.bonds.r0.clone().unwrap_or_default();
-    let keep: Vec<usize> = (0..s.bonds.pairs.len())
-        .filter(|&k| {
-            let [i, j] = s.bonds.pairs[k];
-            (z[i][2] < cut) == (z[j][2] < cut)
-        })
-        .collect();
-    s.bonds.pairs = keep.iter().map(|&k| s.bonds.pairs[k]).collect();
-    s.bonds.r0 = Some(keep.iter().map(|&k| r0[k]).collect());
-    s.stages = vec![StageSpec::hold("point", 0, 0.1)];
     s.description = format!("contact solid L = {size} d, seed {seed}, a_B = {a_b}");
     Ok(s)
+}
+
+/// Two rough grains of radius `radius` (spheres cut from a quick bulk
+/// solid at two places, MODEL.md "Grains"), side by side along x in a
+/// closed box, their closest particles overlapping by 0.3 d, approaching
+/// at 0.02 d / tau each: bonds, multibody volumes and grain-grain
+/// contacts all act, without periodic images.
+pub fn grain_pair(radius: f64, seed: u64, a_b: f64) -> Result<Scene, SceneError> {
+    let size = (2.0 * radius + 3.0).max(6.0);
+    let bulk = build_bulk(&BulkParams::shortened(size, seed, 0.0), 1, false)?.0;
+    let simbox = crate::scene::validate::simbox_of(&bulk);
+    let image = simbox.minimum_image();
+    let r0 = crate::scene::load::reference_lengths(&bulk);
+    let margin = 4.0;
+    let (width, depth) = (
+        4.0 * radius + 1.0 + 2.0 * margin,
+        2.0 * radius + 2.0 * margin,
+    );
+    let mut positions = Vec::new();
+    let mut velocities = Vec::new();
+    let mut grain = Vec::new();
+    let mut pairs = Vec::new();
+    let mut lengths = Vec::new();
+    let centre = simbox.centre();
+    let gap = 2.0 * radius + 1.0 - 0.3;
+    for (g, shift) in [0.0, 0.5 * size].into_iter().enumerate() {
+        let cut = [centre[0], centre[1] + shift, centre[2]];
+        let place = [
+            margin + radius + 0.5 + g as f64 * gap,
+            0.5 * depth,
+            0.5 * depth,
+        ];
+        let mut index = vec![usize::MAX; bulk.particles.positions.len()];
+        for (i, x) in bulk.particles.positions.iter().enumerate() {
+            let d = image.delta(x, &cut);
+            if (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt() <= radius {
+                index[i] = positions.len();
+                positions.push([place[0] + d[0], place[1] + d[1], place[2] + d[2]]);
+                velocities.push([if g == 0 { 0.02 } else { -0.02 }, 0.0, 0.0]);
+                grain.push(g as u32);
+            }
+        }
+        for (k, &[i, j]) in bulk.bonds.pairs.iter().enumerate() {
+            if index[i] != usize::MAX && index[j] != usize::MAX {
+                pairs.push([index[i], index[j]]);
+                lengths.push(r0[k]);
+            }
+        }
+    }
+    // Rough grains rarely have a particle exactly at radius R: slide grain 1
+    // along x until the closest inter-grain pair is 0.3 d inside contact.
+    let first = grain
+        .iter()
+        .position(|&g| g == 1)
+        .unwrap_or(positions.len());
+    let closest = |p: &[[f64; 3]]| {
+        p[..first]
+            .iter()
+            .flat_map(|a| p[first..].iter().map(move |b| Unwrapped.distance(a, b)))
+            .fold(f64::INFINITY, f64::min)
+    };
+    for _ in 0..50 {
+        let shift = closest(&positions) - 0.7;
+        if !shift.is_finite() || shift.abs() < 1e-12 {
+            break;
+        }
+        for x in &mut positions[first..] {
+            x[0] -= shift;
+        }
+    }
+    Ok(Scene {
+        description: format!(
+            "two rough grains R = {radius} d in contact, seed {seed}, a_B = {a_b}"
+        ),
+        seed,
+        simbox: crate::scene::BoxSpec {
+            lo: [0.0; 3],
+            lengths: [width, depth, depth],
+            tilt: [0.0; 3],
+            periodic: [false; 3],
+        },
+        particles: crate::scene::Particles {
+            positions,
+            velocities: Some(velocities),
+            grain: Some(grain),
+            mass: 1.0,
+        },
+        bonds: crate::scene::Bonds {
+            pairs,
+            r0: Some(lengths),
+        },
+        force_field: ForceField::paper(a_b),
+        stages: vec![StageSpec::hold("point", 0, 0.1)],
+        provenance: serde_json::json!({
+            "builder": "verify::scenes::grain_pair", "radius": radius, "seed": seed,
+            "bulk": BulkParams::shortened(size, seed, 0.0),
+        }),
+    })
+}
+
+/// `scene` with its stages replaced by one hold of `steps` steps that
+/// records every 10 steps and positions five times.
+pub fn as_trajectory(mut scene: Scene, steps: u64) -> Scene {
+    let mut stage = StageSpec::hold("trajectory", steps, 0.1);
+    stage.record.every = 10;
+    stage.record.positions_every = (steps / 5).max(1);
+    scene.stages = vec![stage];
+    scene
 }

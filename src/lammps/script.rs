@@ -1,0 +1,324 @@
+//! A scene as a LAMMPS driver script: `setup.in`, then per stage the force
+//! field changes, velocity settings, one protocol template
+//! (`lammps_inputs/stage_<protocol>.in`) with its variables, the run and
+//! `stage_end.in`.
+//!
+//! The script written to disk is exactly what the in-process harness
+//! executes, so `lmp-bpm -in <tag>.in` repeats a harness run by hand. The
+//! harness handles the `run` lines itself (in chunks at position
+//! checkpoints) and reads the recorded rows back after each.
+
+use super::datafile::{write_data_file, write_reference_lengths, ScriptVars};
+use crate::engine::{Deformation, TiltFactor};
+use crate::scene::run::{random_velocities, stage_seed, thermo_columns};
+use crate::scene::{ForceField, Scene, StageSpec};
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+
+/// Why a scene cannot be run through LAMMPS.
+#[derive(Debug, thiserror::Error)]
+pub enum ScriptError {
+    /// A stage uses something the LAMMPS templates do not express yet.
+    #[error("stage {index} (`{name}`) uses {what}, which the LAMMPS harness does not support yet; run it on the native engine")]
+    Unsupported {
+        /// Stage index.
+        index: usize,
+        /// Stage name.
+        name: String,
+        /// The feature.
+        what: &'static str,
+    },
+    /// Writing an input file failed.
+    #[error("writing {path}: {source}")]
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// The error.
+        source: std::io::Error,
+    },
+}
+
+/// One line of the driver: a LAMMPS command, or the run of a stage.
+#[derive(Clone, Debug)]
+pub enum DriverLine {
+    /// Passed to LAMMPS as is.
+    Command(String),
+    /// `run <steps>` of stage `stage`.
+    Run {
+        /// Stage index.
+        stage: usize,
+    },
+}
+
+/// What the harness needs to know about a stage to run and read it.
+#[derive(Clone, Debug)]
+pub struct StagePlan {
+    /// Stage name.
+    pub name: String,
+    /// Steps.
+    pub steps: u64,
+    /// Time step.
+    pub dt: f64,
+    /// Steps between recorded rows (0 = none).
+    pub every: u64,
+    /// Steps between position checkpoints (0 = none).
+    pub positions_every: u64,
+    /// Thermo columns, as the native engine names them.
+    pub columns: Vec<String>,
+}
+
+/// The driver script of a scene and the plan of its stages.
+#[derive(Clone, Debug)]
+pub struct Driver {
+    /// Lines in order.
+    pub lines: Vec<DriverLine>,
+    /// One plan per stage.
+    pub stages: Vec<StagePlan>,
+}
+
+impl Driver {
+    /// The script as LAMMPS input text.
+    pub fn text(&self) -> String {
+        self.lines
+            .iter()
+            .map(|l| match l {
+                DriverLine::Command(c) => c.clone(),
+                DriverLine::Run { stage } => {
+                    format!("run             {}", self.stages[*stage].steps)
+                }
+            })
+            .collect::<Vec<_>>()
+            .join("\n")
+            + "\n"
+    }
+}
+
+/// Columns of `fix bpm_record` (`stage_record.in`), in order.
+pub const RECORDED_COLUMNS: [&str; 15] = [
+    "lx",
+    "ly",
+    "lz",
+    "xy",
+    "xz",
+    "yz",
+    "pxx",
+    "pyy",
+    "pzz",
+    "pxy",
+    "pxz",
+    "pyz",
+    "e_bond",
+    "e_pair",
+    "e_kinetic",
+];
+
+/// Whether LAMMPS needs a triclinic box for `scene` (tilted, or sheared later).
+pub fn needs_triclinic(scene: &Scene) -> bool {
+    scene.simbox.tilt.iter().any(|&t| t != 0.0)
+        || scene
+            .stages
+            .iter()
+            .any(|s| matches!(s.deformation, Some(Deformation::SimpleShear { .. })))
+}
+
+fn check_supported(index: usize, stage: &StageSpec, scene: &Scene) -> Result<(), ScriptError> {
+    let unsupported = |what| ScriptError::Unsupported {
+        index,
+        name: stage.name.clone(),
+        what,
+    };
+    if !stage.walls.is_empty() {
+        return Err(unsupported("flat walls"));
+    }
+    if stage.sphere_wall.is_some() {
+        return Err(unsupported("a spherical wall"));
+    }
+    if stage.tether.is_some() {
+        return Err(unsupported("a centre-of-mass tether"));
+    }
+    if stage.barostat.is_some() {
+        return Err(unsupported("a barostat"));
+    }
+    if matches!(stage.deformation, Some(Deformation::Isotropic { .. }))
+        && !scene.simbox.periodic.iter().all(|&p| p)
+    {
+        return Err(unsupported(
+            "isotropic deformation of a box that is not periodic in every dimension",
+        ));
+    }
+    Ok(())
+}
+
+fn g(v: f64) -> String {
+    format!("{v:.17e}")
+}
+
+fn write(path: &Path, text: &str) -> Result<(), ScriptError> {
+    std::fs::write(path, text).map_err(|source| ScriptError::Io {
+        path: path.to_path_buf(),
+        source,
+    })
+}
+
+/// A native dump of velocities, read by `read_dump ... vx vy vz`.
+fn velocity_dump(v: &[[f64; 3]]) -> String {
+    let mut s = format!(
+        "ITEM: TIMESTEP\n0\nITEM: NUMBER OF ATOMS\n{}\nITEM: BOX BOUNDS pp pp pp\n0 1\n0 1\n0 1\nITEM: ATOMS id vx vy vz\n",
+        v.len()
+    );
+    for (i, v) in v.iter().enumerate() {
+        let _ = writeln!(s, "{} {} {} {}", i + 1, g(v[0]), g(v[1]), g(v[2]));
+    }
+    s
+}
+
+fn force_field_commands(ff: &ForceField) -> Vec<String> {
+    let pair = ff.pair.unwrap_or(crate::kernels::PairCoeffs {
+        k: 0.0,
+        d: 1.0,
+        a: 0.0,
+        gamma: 0.0,
+    });
+    vec![
+        format!(
+            "bond_coeff      1 {} {} {}",
+            g(ff.bond.k),
+            g(ff.bond.a),
+            g(ff.bond.gamma)
+        ),
+        format!(
+            "pair_coeff      1 1 {} {} {} {}",
+            g(pair.k),
+            g(pair.d),
+            g(pair.a),
+            g(pair.gamma)
+        ),
+        format!("neighbor        {} bin", g(ff.skin)),
+    ]
+}
+
+/// Writes the data file, reference lengths, velocity files and the driver
+/// script `<dir>/<tag>.in` of `scene`; returns the driver.
+pub fn write_driver(
+    scene: &Scene,
+    dir: &Path,
+    tag: &str,
+    newton: bool,
+) -> Result<Driver, ScriptError> {
+    for (i, stage) in scene.stages.iter().enumerate() {
+        check_supported(i, stage, scene)?;
+    }
+    let data = dir.join(format!("{tag}.data"));
+    write(&data, &write_data_file(scene))?;
+    write(
+        Path::new(&format!("{}.r0", data.display())),
+        &write_reference_lengths(scene),
+    )?;
+    let mut lines = vec![DriverLine::Command(format!(
+        "# Scene `{}` (seed {}) through LAMMPS with bpm's styles; written by bpm {}.\n# By hand: lmp-bpm -in {tag}.in",
+        scene.description.replace('\n', " "),
+        scene.seed,
+        crate::VERSION
+    ))];
+    let cmd = |lines: &mut Vec<DriverLine>, c: String| lines.push(DriverLine::Command(c));
+    for (name, value) in ScriptVars::of(scene, &data.display().to_string(), newton).vars {
+        cmd(
+            &mut lines,
+            format!("variable        {name} string \"{value}\""),
+        );
+    }
+    cmd(&mut lines, "include         ${inputs}/setup.in".into());
+    let triclinic = needs_triclinic(scene);
+    let n = scene.particles.positions.len();
+    let mut stages = Vec::with_capacity(scene.stages.len());
+    for (i, stage) in scene.stages.iter().enumerate() {
+        cmd(
+            &mut lines,
+            format!("\n# Stage {i} `{}`: {} steps", stage.name, stage.steps),
+        );
+        if let Some(ff) = &stage.force_field {
+            for c in force_field_commands(ff) {
+                cmd(&mut lines, c);
+            }
+        }
+        if stage.reset_reference {
+            cmd(&mut lines, "fix_modify      BPM_REFERENCE reset".into());
+        }
+        if stage.zero_velocities {
+            cmd(&mut lines, "velocity        all set 0 0 0".into());
+        }
+        if let Some(init) = &stage.set_velocities {
+            let file = dir.join(format!("{tag}.stage{i}.velocities"));
+            write(
+                &file,
+                &velocity_dump(&random_velocities(n, init, stage_seed(scene.seed, i))),
+            )?;
+            cmd(
+                &mut lines,
+                format!(
+                    "read_dump       {} 0 vx vy vz box no # the native engine's seeded draw",
+                    file.display()
+                ),
+            );
+        }
+        let every = if stage.record.every > 0 {
+            stage.record.every
+        } else {
+            0
+        };
+        for (name, value) in [
+            ("dt", g(stage.dt)),
+            ("viscous", g(stage.viscous)),
+            ("every", every.to_string()),
+        ] {
+            cmd(&mut lines, format!("variable        {name} string {value}"));
+        }
+        let template = match &stage.deformation {
+            None => "stage_hold.in",
+            Some(Deformation::Isotropic { true_strain_rate }) => {
+                cmd(
+                    &mut lines,
+                    format!("variable        rate string {}", g(*true_strain_rate)),
+                );
+                cmd(
+                    &mut lines,
+                    format!("variable        triclinic string {}", u8::from(triclinic)),
+                );
+                "stage_compress.in"
+            }
+            Some(Deformation::SimpleShear { tilt, rate }) => {
+                let name = match tilt {
+                    TiltFactor::Xy => "xy",
+                    TiltFactor::Xz => "xz",
+                    TiltFactor::Yz => "yz",
+                };
+                cmd(
+                    &mut lines,
+                    format!("variable        rate string {}", g(*rate)),
+                );
+                cmd(&mut lines, format!("variable        tilt string {name}"));
+                "stage_shear.in"
+            }
+        };
+        cmd(
+            &mut lines,
+            format!("include         ${{inputs}}/{template}"),
+        );
+        lines.push(DriverLine::Run { stage: i });
+        cmd(&mut lines, "include         ${inputs}/stage_end.in".into());
+        if stage.deformation.is_some() {
+            cmd(&mut lines, "unfix           bpm_deform".into());
+        }
+        stages.push(StagePlan {
+            name: stage.name.clone(),
+            steps: stage.steps,
+            dt: stage.dt,
+            every,
+            positions_every: stage.record.positions_every,
+            columns: thermo_columns(stage),
+        });
+    }
+    let driver = Driver { lines, stages };
+    write(&dir.join(format!("{tag}.in")), &driver.text())?;
+    Ok(driver)
+}

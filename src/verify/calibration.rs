@@ -1,0 +1,536 @@
+//! Calibration runs: K and G of a bulk solid at one `a_B` (MODEL.md
+//! "Calibration"), on either engine.
+
+use super::engines::{run_native, EngineRun, HarnessError, LammpsLauncher};
+use crate::analysis::moduli::{
+    bulk_modulus, paper_bulk_modulus, paper_shear_to_bulk, poisson_ratio, shear_modulus,
+};
+use crate::scene::{protocols, ForceField, Scene};
+use serde::Serialize;
+
+/// Strain and rate of the calibration runs.
+#[derive(Clone, Copy, Debug, Serialize)]
+pub struct Loading {
+    /// Final strain of both runs (volumetric strain is about 3x this).
+    pub strain: f64,
+    /// True strain rate of compression and engineering shear rate (1 / tau).
+    pub rate: f64,
+    /// Time step (tau).
+    pub dt: f64,
+    /// Rows recorded per run.
+    pub records: u64,
+}
+
+impl Default for Loading {
+    /// 0.5% strain at 1e-5 / tau, dt 0.1, 50 rows (MODEL.md "Calibration").
+    fn default() -> Self {
+        Self {
+            strain: 0.005,
+            rate: 1e-5,
+            dt: 0.1,
+            records: 50,
+        }
+    }
+}
+
+/// Which engine runs a calibration.
+#[derive(Clone, Debug)]
+pub enum CalibrationEngine {
+    /// The native engine with this many threads.
+    Native(usize),
+    /// LAMMPS with our styles on this many ranks.
+    Lammps(LammpsLauncher, usize),
+}
+
+impl CalibrationEngine {
+    /// Short name for reports.
+    pub fn name(&self) -> String {
+        match self {
+            Self::Native(_) => "native".into(),
+            Self::Lammps(_, ranks) => format!("lammps-np{ranks}"),
+        }
+    }
+
+    fn run(&self, scene: &Scene, tag: &str) -> Result<EngineRun, HarnessError> {
+        match self {
+            Self::Native(threads) => run_native(scene, tag, *threads),
+            Self::Lammps(launcher, ranks) => launcher.run(scene, tag, *ranks, true),
+        }
+    }
+}
+
+/// K, G and what follows from them, for one solid and `a_B`.
+#[derive(Clone, Debug, Serialize)]
+pub struct Moduli {
+    /// Multibody strength (k d).
+    pub a_b: f64,
+    /// Bulk modulus (k / d).
+    pub k: f64,
+    /// Shear modulus (k / d).
+    pub g: f64,
+    /// G / K.
+    pub g_over_k: f64,
+    /// Poisson's ratio.
+    pub nu: f64,
+    /// The paper's fit of K at this a_B.
+    pub paper_k: f64,
+    /// The paper's fit of G/K at this a_B.
+    pub paper_g_over_k: f64,
+    /// Wall seconds of the two runs.
+    pub seconds: f64,
+}
+
+/// The compression and shear scenes of `solid` at `a_b`.
+pub fn calibration_scenes(solid: &Scene, a_b: f64, loading: &Loading) -> [Scene; 2] {
+    let mut base = solid.clone();
+    base.force_field = ForceField {
+        skin: solid.force_field.skin,
+        ..ForceField::paper(a_b)
+    };
+    base.particles.velocities = None;
+    let mut compress = base.clone();
+    compress.stages = vec![protocols::isotropic_compression(
+        loading.strain,
+        loading.rate,
+        loading.dt,
+        loading.records,
+    )];
+    let mut shear = base;
+    shear.stages = vec![protocols::simple_shear(
+        loading.strain,
+        loading.rate,
+        loading.dt,
+        loading.records,
+    )];
+    [compress, shear]
+}
+
+/// Measures K and G of `solid` at `a_b` on `engine`; `tag` names the runs.
+/// Returns the moduli and the two runs.
+pub fn measure_moduli(
+    solid: &Scene,
+    a_b: f64,
+    loading: &Loading,
+    engine: &CalibrationEngine,
+    tag: &str,
+) -> Result<(Moduli, [EngineRun; 2]), HarnessError> {
+    let [compress, shear] = calibration_scenes(solid, a_b, loading);
+    let c = engine.run(&compress, &format!("{tag}-compress"))?;
+    let s = engine.run(&shear, &format!("{tag}-shear"))?;
+    let fail = |e: crate::analysis::moduli::ModulusError| HarnessError::Native {
+        scene: tag.into(),
+        message: e.to_string(),
+    };
+    let k = bulk_modulus(&c.stages[0]).map_err(fail)?;
+    let g = shear_modulus(&s.stages[0]).map_err(fail)?;
+    let moduli = Moduli {
+        a_b,
+        k,
+        g,
+        g_over_k: g / k,
+        nu: poisson_ratio(k, g),
+        paper_k: paper_bulk_modulus(a_b),
+        paper_g_over_k: paper_shear_to_bulk(a_b),
+        seconds: c.seconds + s.seconds,
+    };
+    Ok((moduli, [c, s]))
+}
+
+/// What `bpm calibrate` runs.
+#[derive(Clone, Debug, Serialize)]
+pub struct StudyOptions {
+    /// Box sides L (d); the largest is the main table's.
+    pub sizes: Vec<f64>,
+    /// Seeds (one bulk solid per size and seed).
+    pub seeds: Vec<u64>,
+    /// a_B values at the largest size.
+    pub a_b: Vec<f64>,
+    /// a_B values of the size-convergence runs (every size).
+    pub convergence_a_b: Vec<f64>,
+    /// Sizes at which LAMMPS repeats every case of the first seed.
+    pub lammps_sizes: Vec<f64>,
+    /// Loading of every run.
+    pub loading: Loading,
+    /// Repeat the first seed's cases at the largest size at half the rate.
+    pub halve_rate: bool,
+}
+
+/// One measured case.
+#[derive(Clone, Debug, Serialize)]
+pub struct Case {
+    /// Box side (d).
+    pub size: f64,
+    /// Seed of the solid.
+    pub seed: u64,
+    /// Engine name.
+    pub engine: String,
+    /// Strain rate (1 / tau).
+    pub rate: f64,
+    /// Particles.
+    pub particles: usize,
+    /// Seconds to build the solid (shared by its cases).
+    pub build_seconds: f64,
+    /// The moduli.
+    pub moduli: Moduli,
+}
+
+/// Runs the study; `log` receives one line per case as it finishes.
+pub fn run_study(
+    opts: &StudyOptions,
+    launcher: &LammpsLauncher,
+    threads: usize,
+    log: &mut dyn FnMut(&Case),
+) -> Result<Vec<Case>, HarnessError> {
+    let largest = opts.sizes.iter().copied().fold(f64::NAN, f64::max);
+    let mut cases = Vec::new();
+    for &size in &opts.sizes {
+        for (n, &seed) in opts.seeds.iter().enumerate() {
+            let start = std::time::Instant::now();
+            let (solid, summary) = crate::scene::builders::bulk::build_bulk(
+                &crate::scene::builders::bulk::BulkParams::paper(size, seed, 0.0),
+                threads,
+                false,
+            )
+            .map_err(|source| HarnessError::Scene {
+                scene: format!("bulk L={size} seed {seed}"),
+                source,
+            })?;
+            let build_seconds = start.elapsed().as_secs_f64();
+            let a_bs = if size == largest {
+                &opts.a_b
+            } else {
+                &opts.convergence_a_b
+            };
+            let mut engines = vec![(CalibrationEngine::Native(threads), opts.loading)];
+            if n == 0 && opts.lammps_sizes.contains(&size) {
+                engines.push((CalibrationEngine::Lammps(launcher.clone(), 1), opts.loading));
+            }
+            if n == 0 && size == largest && opts.halve_rate {
+                let mut slow = opts.loading;
+                slow.rate *= 0.5;
+                engines.push((CalibrationEngine::Native(threads), slow));
+            }
+            for &a_b in a_bs {
+                for (engine, loading) in &engines {
+                    let tag = format!("L{size}-s{seed}-aB{a_b}-rate{}", loading.rate);
+                    let (moduli, _) = measure_moduli(&solid, a_b, loading, engine, &tag)?;
+                    let case = Case {
+                        size,
+                        seed,
+                        engine: engine.name(),
+                        rate: loading.rate,
+                        particles: summary.particles,
+                        build_seconds,
+                        moduli,
+                    };
+                    log(&case);
+                    cases.push(case);
+                }
+            }
+        }
+    }
+    Ok(cases)
+}
+
+/// Mean and sample standard deviation.
+pub fn mean_sd(values: &[f64]) -> (f64, f64) {
+    let n = values.len() as f64;
+    let mean = values.iter().sum::<f64>() / n;
+    let var = if values.len() > 1 {
+        values.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / (n - 1.0)
+    } else {
+        0.0
+    };
+    (mean, var.sqrt())
+}
+
+fn select<'a>(cases: &'a [Case], f: impl Fn(&Case) -> bool + 'a) -> Vec<&'a Case> {
+    cases.iter().filter(|c| f(c)).collect()
+}
+
+fn paper_nu(a_b: f64) -> f64 {
+    let gk = paper_shear_to_bulk(a_b);
+    (3.0 - 2.0 * gk) / (2.0 * (3.0 + gk))
+}
+
+/// The study's tables as Markdown, and its plots as SVG panels
+/// (`moduli_vs_a_b`, `size_convergence`).
+pub fn study_report(
+    opts: &StudyOptions,
+    cases: &[Case],
+) -> (
+    String,
+    Vec<crate::analysis::plot::Panel>,
+    Vec<crate::analysis::plot::Panel>,
+) {
+    use crate::analysis::plot::{Mark, Panel, Series};
+    use std::fmt::Write as _;
+    let largest = opts.sizes.iter().copied().fold(f64::NAN, f64::max);
+    let rate = opts.loading.rate;
+    let mut md = String::new();
+    let _ = writeln!(
+        md,
+        "## Moduli at L = {largest} d ({} seed(s), native engine, strain {} at rate {rate:e} / tau)\n",
+        opts.seeds.len(),
+        opts.loading.strain
+    );
+    let _ = writeln!(md, "| a_B | K | G | G/K | nu | paper K | paper G/K | paper nu | dK/K | d(G/K)/(G/K) | LAMMPS vs native (K, G) |");
+    let _ = writeln!(
+        md,
+        "|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|"
+    );
+    let mut gk_points = Vec::new();
+    let mut nu_points = Vec::new();
+    let mut k_points = Vec::new();
+    let mut lammps_gk = Vec::new();
+    let mut lammps_nu = Vec::new();
+    for &a_b in &opts.a_b {
+        let native = select(cases, |c| {
+            c.size == largest && c.engine == "native" && c.rate == rate && c.moduli.a_b == a_b
+        });
+        if native.is_empty() {
+            continue;
+        }
+        let col = |f: &dyn Fn(&Moduli) -> f64| {
+            mean_sd(&native.iter().map(|c| f(&c.moduli)).collect::<Vec<_>>())
+        };
+        let (k, k_sd) = col(&|m| m.k);
+        let (g, g_sd) = col(&|m| m.g);
+        let (gk, gk_sd) = col(&|m| m.g_over_k);
+        let (nu, nu_sd) = col(&|m| m.nu);
+        let lammps = select(cases, |c| {
+            c.size == largest && c.engine.starts_with("lammps") && c.moduli.a_b == a_b
+        });
+        let agreement = lammps
+            .iter()
+            .filter_map(|l| {
+                native.iter().find(|n| n.seed == l.seed).map(|n| {
+                    (
+                        ((l.moduli.k - n.moduli.k) / n.moduli.k).abs(),
+                        ((l.moduli.g - n.moduli.g) / n.moduli.g).abs(),
+                    )
+                })
+            })
+            .fold(None, |acc: Option<(f64, f64)>, (a, b)| {
+                Some(acc.map_or((a, b), |(x, y)| (x.max(a), y.max(b))))
+            });
+        for l in &lammps {
+            lammps_gk.push((a_b, l.moduli.g_over_k));
+            lammps_nu.push((a_b, l.moduli.nu));
+        }
+        let pk = paper_bulk_modulus(a_b);
+        let pgk = paper_shear_to_bulk(a_b);
+        let _ = writeln!(
+            md,
+            "| {a_b} | {k:.4} ± {k_sd:.4} | {g:.4} ± {g_sd:.4} | {gk:.3} ± {gk_sd:.3} | {nu:.3} ± {nu_sd:.3} | {pk:.3} | {pgk:.3} | {:.3} | {:+.1}% | {:+.1}% | {} |",
+            paper_nu(a_b),
+            100.0 * (k - pk) / pk,
+            100.0 * (gk - pgk) / pgk,
+            agreement.map_or("not run".into(), |(a, b)| format!("{a:.1e}, {b:.1e}"))
+        );
+        gk_points.push((a_b, gk));
+        nu_points.push((a_b, nu));
+        k_points.push((a_b, k));
+    }
+    if opts.halve_rate {
+        let _ = writeln!(
+            md,
+            "\n## Quasistatic check: rate {rate:e} against {:e} (L = {largest} d, seed {})\n",
+            rate * 0.5,
+            opts.seeds.first().copied().unwrap_or_default()
+        );
+        let _ = writeln!(
+            md,
+            "| a_B | K | K at half rate | change | G | G at half rate | change |"
+        );
+        let _ = writeln!(md, "|---:|---:|---:|---:|---:|---:|---:|");
+        for &a_b in &opts.a_b {
+            let pick = |r: f64| {
+                cases.iter().find(|c| {
+                    c.size == largest
+                        && c.engine == "native"
+                        && c.rate == r
+                        && c.moduli.a_b == a_b
+                        && Some(&c.seed) == opts.seeds.first()
+                })
+            };
+            if let (Some(a), Some(b)) = (pick(rate), pick(rate * 0.5)) {
+                let _ = writeln!(
+                    md,
+                    "| {a_b} | {:.4} | {:.4} | {:+.2e} | {:.4} | {:.4} | {:+.2e} |",
+                    a.moduli.k,
+                    b.moduli.k,
+                    (b.moduli.k - a.moduli.k) / a.moduli.k,
+                    a.moduli.g,
+                    b.moduli.g,
+                    (b.moduli.g - a.moduli.g) / a.moduli.g
+                );
+            }
+        }
+    }
+    let _ = writeln!(
+        md,
+        "\n## Size convergence (native engine, {} seed(s) per size)\n",
+        opts.seeds.len()
+    );
+    let _ = writeln!(md, "| a_B | L | particles | K mean | K sd | G mean | G sd | (K - K_fit)/K_fit | (G - G_fit)/G_fit | s per case (K and G runs) | s per solid build |");
+    let _ = writeln!(
+        md,
+        "|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|"
+    );
+    let mut dev_series = Vec::new();
+    let mut spread_series = Vec::new();
+    let mut time_series = Vec::new();
+    for &a_b in &opts.convergence_a_b {
+        let (mut dk, mut dg, mut sk, mut sg, mut t) = (vec![], vec![], vec![], vec![], vec![]);
+        for &size in &opts.sizes {
+            let sel = select(cases, |c| {
+                c.size == size && c.engine == "native" && c.rate == rate && c.moduli.a_b == a_b
+            });
+            if sel.is_empty() {
+                continue;
+            }
+            let (k, k_sd) = mean_sd(&sel.iter().map(|c| c.moduli.k).collect::<Vec<_>>());
+            let (g, g_sd) = mean_sd(&sel.iter().map(|c| c.moduli.g).collect::<Vec<_>>());
+            let secs = mean_sd(&sel.iter().map(|c| c.moduli.seconds).collect::<Vec<_>>()).0;
+            let build = mean_sd(&sel.iter().map(|c| c.build_seconds).collect::<Vec<_>>()).0;
+            let pk = paper_bulk_modulus(a_b);
+            let pg = pk * paper_shear_to_bulk(a_b);
+            let _ = writeln!(
+                md,
+                "| {a_b} | {size} | {} | {k:.4} | {k_sd:.4} | {g:.4} | {g_sd:.4} | {:+.2}% | {:+.2}% | {secs:.2} | {build:.1} |",
+                sel[0].particles,
+                100.0 * (k - pk) / pk,
+                100.0 * (g - pg) / pg
+            );
+            dk.push((size, ((k - pk) / pk).abs()));
+            dg.push((size, ((g - pg) / pg).abs()));
+            sk.push((size, k_sd / k));
+            sg.push((size, g_sd / g));
+            t.push((size, secs));
+        }
+        dev_series.push(Series::new(
+            format!("|<K> - K_fit| / K_fit, a_B={a_b}"),
+            dk,
+            Mark::LinePoints,
+        ));
+        dev_series.push(Series::new(
+            format!("|<G> - G_fit| / G_fit, a_B={a_b}"),
+            dg,
+            Mark::LinePoints,
+        ));
+        spread_series.push(Series::new(
+            format!("sd(K) / <K>, a_B={a_b}"),
+            sk,
+            Mark::LinePoints,
+        ));
+        spread_series.push(Series::new(
+            format!("sd(G) / <G>, a_B={a_b}"),
+            sg,
+            Mark::LinePoints,
+        ));
+        time_series.push(Series::new(
+            format!("native, a_B={a_b}"),
+            t,
+            Mark::LinePoints,
+        ));
+    }
+    let guide = |series: &[Series], power: f64, label: &str| -> Option<Series> {
+        let first = series
+            .iter()
+            .flat_map(|s| s.points.first())
+            .copied()
+            .find(|p| p.1 > 0.0)?;
+        let pts = opts
+            .sizes
+            .iter()
+            .map(|&l| (l, first.1 * (l / first.0).powf(power)))
+            .collect();
+        Some(Series::new(label, pts, Mark::Line))
+    };
+    if let Some(g) = guide(&dev_series, -2.0, "L^-2 (paper)") {
+        dev_series.push(g);
+    }
+    if let Some(g) = guide(&spread_series, -1.5, "L^-3/2 (paper)") {
+        spread_series.push(g);
+    }
+    let fit = |f: &dyn Fn(f64) -> f64| -> Vec<(f64, f64)> {
+        (0..=76)
+            .map(|i| -0.8 + 0.05 * i as f64)
+            .map(|a| (a, f(a)))
+            .collect()
+    };
+    let mut gk_series = vec![
+        Series::new(
+            "paper fit 0.6 + 0.475 a_B",
+            fit(&paper_shear_to_bulk),
+            Mark::Line,
+        ),
+        Series::new(format!("native, L = {largest} d"), gk_points, Mark::Points),
+    ];
+    let mut nu_series = vec![
+        Series::new("from the paper's fits", fit(&paper_nu), Mark::Line),
+        Series::new(format!("native, L = {largest} d"), nu_points, Mark::Points),
+    ];
+    if !lammps_gk.is_empty() {
+        gk_series.push(Series::new("LAMMPS + plugin", lammps_gk, Mark::Points));
+        nu_series.push(Series::new("LAMMPS + plugin", lammps_nu, Mark::Points));
+    }
+    let moduli_panels = vec![
+        Panel {
+            title: "G/K against a_B".into(),
+            x_label: "a_B (k d)".into(),
+            y_label: "G/K".into(),
+            series: gk_series,
+            ..Default::default()
+        },
+        Panel {
+            title: "Poisson ratio against a_B".into(),
+            x_label: "a_B (k d)".into(),
+            y_label: "nu".into(),
+            series: nu_series,
+            ..Default::default()
+        },
+        Panel {
+            title: "K against a_B".into(),
+            x_label: "a_B (k d)".into(),
+            y_label: "K (k / d)".into(),
+            series: vec![
+                Series::new(
+                    "paper fit 1.365 - 0.14 / (a_B + 1.168)",
+                    fit(&paper_bulk_modulus),
+                    Mark::Line,
+                ),
+                Series::new(format!("native, L = {largest} d"), k_points, Mark::Points),
+            ],
+            ..Default::default()
+        },
+    ];
+    let convergence_panels = vec![
+        Panel {
+            title: "Mean against the paper's L = 50 fits".into(),
+            x_label: "L (d)".into(),
+            y_label: "relative deviation".into(),
+            log_x: true,
+            log_y: true,
+            series: dev_series,
+        },
+        Panel {
+            title: "Spread between seeds".into(),
+            x_label: "L (d)".into(),
+            y_label: "relative standard deviation".into(),
+            log_x: true,
+            log_y: true,
+            series: spread_series,
+        },
+        Panel {
+            title: "Run time of one K and G measurement".into(),
+            x_label: "L (d)".into(),
+            y_label: "seconds (1 thread)".into(),
+            log_x: true,
+            log_y: true,
+            series: time_series,
+        },
+    ];
+    (md, moduli_panels, convergence_panels)
+}

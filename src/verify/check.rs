@@ -1,0 +1,359 @@
+//! `bpm check`: the built-in scenes through both engines, a verdict per
+//! observable, a JSON report and plots.
+
+use super::calibration::{measure_moduli, CalibrationEngine, Loading, Moduli};
+use super::compare::{compare_runs, deviation_series};
+use super::engines::{run_native, LammpsLauncher};
+use super::scenes::{as_trajectory, contact_solid, grain_pair};
+use super::single_point::{lammps_single_point, max_relative_deviation, native_single_point};
+use super::tolerances::tolerance;
+use crate::analysis::plot::{write_svg, Mark, Panel, Series};
+use crate::scene::builders::bulk::{build_bulk, BulkParams};
+use crate::scene::{ForceField, Scene};
+use anyhow::{Context, Result};
+use serde::Serialize;
+use std::path::{Path, PathBuf};
+
+/// What `bpm check` runs.
+#[derive(Clone, Debug, Serialize)]
+pub struct CheckOptions {
+    /// Box side of the contact solid (d).
+    pub solid_size: f64,
+    /// Radius of each grain of the grain pair (d).
+    pub grain_radius: f64,
+    /// Steps of the trajectories.
+    pub steps: u64,
+    /// Box side of the calibration solid (d).
+    pub calibration_size: f64,
+    /// The a_B values of the calibration cross-check.
+    pub calibration_a_b: Vec<f64>,
+    /// Seed of every built-in scene.
+    pub seed: u64,
+    /// Where the report, plots and LAMMPS files go.
+    #[serde(skip)]
+    pub out_dir: PathBuf,
+    /// The `bpm` executable (for LAMMPS child runs).
+    #[serde(skip)]
+    pub bpm: PathBuf,
+    /// The `lmp-bpm` executable (step-0 forces).
+    #[serde(skip)]
+    pub lmp_bpm: PathBuf,
+}
+
+/// One line of the verdict table.
+#[derive(Clone, Debug, Serialize)]
+pub struct Verdict {
+    /// Scene.
+    pub scene: String,
+    /// How LAMMPS ran it (ranks, newton).
+    pub lammps: String,
+    /// Observable.
+    pub observable: String,
+    /// Largest deviation (relative, or d for positions).
+    pub max_deviation: f64,
+    /// Tolerance.
+    pub tolerance: f64,
+    /// `max_deviation <= tolerance`.
+    pub pass: bool,
+    /// Native wall seconds.
+    pub native_seconds: f64,
+    /// LAMMPS wall seconds (process start included).
+    pub lammps_seconds: f64,
+}
+
+/// Everything `bpm check` measured.
+#[derive(Clone, Debug, Serialize)]
+pub struct CheckReport {
+    /// Options.
+    pub options: CheckOptions,
+    /// Verdicts in order.
+    pub verdicts: Vec<Verdict>,
+    /// Calibration moduli, native and LAMMPS.
+    pub calibration: Vec<[Moduli; 2]>,
+    /// Files written (report, plots).
+    pub files: Vec<String>,
+}
+
+impl CheckReport {
+    /// Number of failed verdicts.
+    pub fn failures(&self) -> usize {
+        self.verdicts.iter().filter(|v| !v.pass).count()
+    }
+}
+
+fn verdict(
+    scene: &str,
+    lammps: &str,
+    observable: &str,
+    max_deviation: f64,
+    seconds: (f64, f64),
+) -> Verdict {
+    let tol = tolerance(observable);
+    Verdict {
+        scene: scene.into(),
+        lammps: lammps.into(),
+        observable: observable.into(),
+        max_deviation,
+        tolerance: tol,
+        pass: max_deviation <= tol,
+        native_seconds: seconds.0,
+        lammps_seconds: seconds.1,
+    }
+}
+
+/// Prints the header of the verdict table.
+pub fn print_header() {
+    println!(
+        "{:<34} {:<14} {:<26} {:>10} {:>9} {:>7} {:>8} {:>8}",
+        "scene", "lammps", "observable", "max dev", "tolerance", "verdict", "native s", "lammps s"
+    );
+}
+
+/// Prints one verdict row.
+pub fn print_verdict(v: &Verdict) {
+    println!(
+        "{:<34} {:<14} {:<26} {:>10.2e} {:>9.0e} {:>7} {:>8.2} {:>8.2}",
+        v.scene,
+        v.lammps,
+        v.observable,
+        v.max_deviation,
+        v.tolerance,
+        if v.pass { "pass" } else { "FAIL" },
+        v.native_seconds,
+        v.lammps_seconds
+    );
+}
+
+/// Step-0 forces and pressure: the contact solid at three a_B, LAMMPS on
+/// 1 rank (newton on) and 2 ranks (newton on and off).
+fn step_zero(opts: &CheckOptions, dir: &Path, out: &mut Vec<Verdict>) -> Result<()> {
+    let base = contact_solid(opts.solid_size, opts.seed, 0.0)?;
+    for a_b in [0.0, -0.5, 1.0] {
+        let mut scene = base.clone();
+        scene.force_field = ForceField::paper(a_b);
+        let t0 = std::time::Instant::now();
+        let native = native_single_point(&scene);
+        let native_s = t0.elapsed().as_secs_f64();
+        for (ranks, newton) in [(1, true), (2, true), (2, false)] {
+            let t1 = std::time::Instant::now();
+            let tag = format!("point-aB{a_b}-np{ranks}-newton{newton}");
+            let lammps = lammps_single_point(&opts.lmp_bpm, &scene, newton, ranks, dir, &tag)?;
+            let secs = (native_s, t1.elapsed().as_secs_f64());
+            let pscale = native.pressure.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+            let press_dev = lammps
+                .pressure
+                .iter()
+                .zip(&native.pressure)
+                .map(|(a, b)| (a - b).abs() / pscale)
+                .fold(0.0f64, f64::max);
+            let name = format!("contact solid L={} a_B={a_b}", opts.solid_size);
+            let how = format!("np{ranks} newton {}", if newton { "on" } else { "off" });
+            let force_dev = max_relative_deviation(&lammps.forces, &native.forces);
+            for (observable, dev) in [("step-0 forces", force_dev), ("step-0 stress", press_dev)] {
+                let v = verdict(&name, &how, observable, dev, secs);
+                print_verdict(&v);
+                out.push(v);
+            }
+        }
+    }
+    Ok(())
+}
+
+/// A trajectory through both engines; verdicts per observable and the
+/// stress-deviation series for the divergence plot.
+fn trajectory(
+    scene: &Scene,
+    name: &str,
+    launcher: &LammpsLauncher,
+    ranks: usize,
+    newton: bool,
+    out: &mut Vec<Verdict>,
+) -> Result<Vec<(f64, f64)>> {
+    let native = run_native(scene, name, 1)?;
+    let tag = format!("{}-np{ranks}-newton{newton}", name.replace([' ', '='], "-"));
+    let lammps = launcher.run(scene, &tag, ranks, newton)?;
+    let how = format!("np{ranks} newton {}", if newton { "on" } else { "off" });
+    for d in compare_runs(&native.stages, &lammps.stages)? {
+        let observable = format!("trajectory {}", d.observable);
+        let v = verdict(
+            name,
+            &how,
+            &observable,
+            d.max_deviation,
+            (native.seconds, lammps.seconds),
+        );
+        print_verdict(&v);
+        out.push(v);
+    }
+    Ok(deviation_series(
+        &native.stages,
+        &lammps.stages,
+        &["pxx", "pyy", "pzz", "pxy", "pxz", "pyz"],
+    ))
+}
+
+/// Runs the check and writes `check.json` and plots into `opts.out_dir`.
+pub fn run_check(opts: &CheckOptions) -> Result<CheckReport> {
+    let dir = &opts.out_dir;
+    let work = dir.join("lammps");
+    std::fs::create_dir_all(&work).with_context(|| format!("creating {}", work.display()))?;
+    let launcher = LammpsLauncher {
+        bpm: opts.bpm.clone(),
+        dir: work.clone(),
+        limit_seconds: 600,
+    };
+    let mut verdicts = Vec::new();
+    print_header();
+    step_zero(opts, &work, &mut verdicts)?;
+
+    let solid = as_trajectory(contact_solid(opts.solid_size, opts.seed, -0.5)?, opts.steps);
+    let grains = as_trajectory(grain_pair(opts.grain_radius, opts.seed, 0.5)?, opts.steps);
+    let solid_name = format!("contact solid L={} a_B=-0.5", opts.solid_size);
+    let grain_name = format!("grain pair R={} a_B=0.5", opts.grain_radius);
+    let mut divergence = Vec::new();
+    for (scene, name, ranks, newton) in [
+        (&solid, &solid_name, 1, true),
+        (&solid, &solid_name, 2, false),
+        (&grains, &grain_name, 1, true),
+        (&grains, &grain_name, 2, true),
+    ] {
+        let series = trajectory(scene, name, &launcher, ranks, newton, &mut verdicts)?;
+        divergence.push(Series::new(
+            format!("{name}, np{ranks}"),
+            series,
+            Mark::LinePoints,
+        ));
+    }
+
+    let bulk = build_bulk(
+        &BulkParams::paper(opts.calibration_size, opts.seed, 0.0),
+        1,
+        false,
+    )?
+    .0;
+    let loading = Loading::default();
+    let mut calibration = Vec::new();
+    for &a_b in &opts.calibration_a_b {
+        let tag = format!("calibration-L{}-aB{a_b}", opts.calibration_size);
+        let (native, native_runs) =
+            measure_moduli(&bulk, a_b, &loading, &CalibrationEngine::Native(1), &tag)?;
+        let (lammps, lammps_runs) = measure_moduli(
+            &bulk,
+            a_b,
+            &loading,
+            &CalibrationEngine::Lammps(launcher.clone(), 1),
+            &tag,
+        )?;
+        let name = format!("bulk L={} a_B={a_b}", opts.calibration_size);
+        let secs = (native.seconds, lammps.seconds);
+        for (observable, dev) in [
+            ("K", ((lammps.k - native.k) / native.k).abs()),
+            ("G", ((lammps.g - native.g) / native.g).abs()),
+        ] {
+            let v = verdict(&name, "np1 newton on", observable, dev, secs);
+            print_verdict(&v);
+            verdicts.push(v);
+        }
+        for (n, l) in native_runs.iter().zip(&lammps_runs) {
+            let stress = compare_runs(&n.stages, &l.stages)?
+                .into_iter()
+                .find(|d| d.observable == "stress");
+            if let Some(d) = stress {
+                let observable = format!("{} stress", n.stages[0].name);
+                let v = verdict(&name, "np1 newton on", &observable, d.max_deviation, secs);
+                print_verdict(&v);
+                verdicts.push(v);
+            }
+        }
+        calibration.push([native, lammps]);
+    }
+
+    let mut files = Vec::new();
+    let plot = dir.join("trajectory-divergence.svg");
+    write_svg(
+        &plot,
+        &[Panel {
+            title: "LAMMPS vs native: stress deviation along the trajectories".into(),
+            x_label: "step".into(),
+            y_label: "max |dP| / max |P|".into(),
+            log_y: true,
+            series: divergence,
+            ..Default::default()
+        }],
+    )?;
+    files.push(plot.display().to_string());
+    if !calibration.is_empty() {
+        let plot = dir.join("calibration-engines.svg");
+        write_svg(
+            &plot,
+            &calibration_panels(&calibration, opts.calibration_size),
+        )?;
+        files.push(plot.display().to_string());
+    }
+    let report = CheckReport {
+        options: opts.clone(),
+        verdicts,
+        calibration,
+        files,
+    };
+    let json = dir.join("check.json");
+    let doc = serde_json::json!({
+        "program": "bpm check",
+        "version": crate::VERSION,
+        "lammps": "Debian 29Sep2021 update 2 + lammps-plugin",
+        "tolerances": super::tolerances::TOLERANCES.iter().map(|t| serde_json::json!({
+            "observable": t.observable, "tolerance": t.tolerance, "why": t.why,
+        })).collect::<Vec<_>>(),
+        "report": report,
+    });
+    std::fs::write(&json, serde_json::to_string_pretty(&doc)?)
+        .with_context(|| format!("writing {}", json.display()))?;
+    let mut report = report;
+    report.files.push(json.display().to_string());
+    Ok(report)
+}
+
+/// G/K and nu against a_B, both engines, with the paper's fits.
+pub fn calibration_panels(rows: &[[Moduli; 2]], size: f64) -> Vec<Panel> {
+    let fit_line = |f: &dyn Fn(f64) -> f64| -> Vec<(f64, f64)> {
+        (0..=76)
+            .map(|i| -0.8 + 0.05 * i as f64)
+            .map(|a| (a, f(a)))
+            .collect()
+    };
+    let nu_fit = |a: f64| {
+        let gk = crate::analysis::moduli::paper_shear_to_bulk(a);
+        (3.0 - 2.0 * gk) / (2.0 * (3.0 + gk))
+    };
+    let pick = |e: usize, f: &dyn Fn(&Moduli) -> f64| -> Vec<(f64, f64)> {
+        rows.iter().map(|r| (r[e].a_b, f(&r[e]))).collect()
+    };
+    vec![
+        Panel {
+            title: format!("G/K, bulk solid L = {size} d"),
+            x_label: "a_B (k d)".into(),
+            y_label: "G/K".into(),
+            series: vec![
+                Series::new(
+                    "paper fit 0.6 + 0.475 a_B",
+                    fit_line(&crate::analysis::moduli::paper_shear_to_bulk),
+                    Mark::Line,
+                ),
+                Series::new("native", pick(0, &|m| m.g_over_k), Mark::Points),
+                Series::new("LAMMPS + plugin", pick(1, &|m| m.g_over_k), Mark::Points),
+            ],
+            ..Default::default()
+        },
+        Panel {
+            title: format!("Poisson ratio, bulk solid L = {size} d"),
+            x_label: "a_B (k d)".into(),
+            y_label: "nu".into(),
+            series: vec![
+                Series::new("from the paper's fits", fit_line(&nu_fit), Mark::Line),
+                Series::new("native", pick(0, &|m| m.nu), Mark::Points),
+                Series::new("LAMMPS + plugin", pick(1, &|m| m.nu), Mark::Points),
+            ],
+            ..Default::default()
+        },
+    ]
+}

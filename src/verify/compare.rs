@@ -1,0 +1,173 @@
+//! Series-against-series comparison of two runs of the same scene.
+
+use crate::engine::SimBox;
+use crate::kernels::Separation;
+use crate::scene::run::StageOutput;
+use serde::Serialize;
+
+/// Largest deviation of one observable over every recorded row (or
+/// checkpoint) of every stage.
+#[derive(Clone, Debug, Serialize)]
+pub struct Deviation {
+    /// Observable name (a key of [`Tolerances::of`]).
+    pub observable: &'static str,
+    /// Largest deviation: relative to the observable's largest magnitude in
+    /// the reference series, or in d for positions.
+    pub max_deviation: f64,
+    /// Step of the largest deviation.
+    pub at_step: u64,
+}
+
+/// Observables compared, with the thermo columns behind each.
+pub const OBSERVABLES: [(&str, &[&str]); 6] = [
+    ("box", &["lx", "ly", "lz", "xy", "xz", "yz"]),
+    (
+        "stress",
+        &["pxx", "pyy", "pzz", "pxy", "pxz", "pyz", "pressure"],
+    ),
+    ("bond energy", &["e_bond"]),
+    ("pair energy", &["e_pair"]),
+    ("kinetic energy", &["e_kinetic"]),
+    ("time", &["time"]),
+];
+
+/// Why two runs cannot be compared.
+#[derive(Debug, thiserror::Error)]
+pub enum CompareError {
+    /// Different stages, columns, rows or checkpoints.
+    #[error("the runs differ in shape: {0}")]
+    Shape(String),
+}
+
+/// Deviations of `run` from `reference`, per observable, plus positions.
+pub fn compare_runs(
+    reference: &[StageOutput],
+    run: &[StageOutput],
+) -> Result<Vec<Deviation>, CompareError> {
+    let shape = |m: String| CompareError::Shape(m);
+    if reference.len() != run.len() {
+        return Err(shape(format!(
+            "{} vs {} stages",
+            reference.len(),
+            run.len()
+        )));
+    }
+    let mut out = Vec::new();
+    for (observable, columns) in OBSERVABLES {
+        let mut scale = 0.0f64;
+        let mut worst = (0.0f64, 0u64);
+        let mut any = false;
+        for (a, b) in reference.iter().zip(run) {
+            if a.rows.len() != b.rows.len() {
+                return Err(shape(format!(
+                    "stage `{}`: {} vs {} rows",
+                    a.name,
+                    a.rows.len(),
+                    b.rows.len()
+                )));
+            }
+            let step = a.column("step").unwrap_or_default();
+            if step != b.column("step").unwrap_or_default() {
+                return Err(shape(format!("stage `{}`: recorded steps differ", a.name)));
+            }
+            for c in columns.iter() {
+                let (Some(x), Some(y)) = (a.column(c), b.column(c)) else {
+                    continue;
+                };
+                any = true;
+                for k in 0..x.len() {
+                    scale = scale.max(x[k].abs());
+                    let d = (x[k] - y[k]).abs();
+                    // NaN counts as the worst deviation.
+                    if d.is_nan() || d > worst.0 {
+                        worst = (d, step[k] as u64);
+                    }
+                }
+            }
+        }
+        if any {
+            out.push(Deviation {
+                observable,
+                max_deviation: if scale > 0.0 {
+                    worst.0 / scale
+                } else {
+                    worst.0
+                },
+                at_step: worst.1,
+            });
+        }
+    }
+    let mut worst = (0.0f64, 0u64);
+    let mut any = false;
+    for (a, b) in reference.iter().zip(run) {
+        if a.checkpoints.len() != b.checkpoints.len() {
+            return Err(shape(format!(
+                "stage `{}`: {} vs {} position checkpoints",
+                a.name,
+                a.checkpoints.len(),
+                b.checkpoints.len()
+            )));
+        }
+        for (p, q) in a.checkpoints.iter().zip(&b.checkpoints) {
+            if p.positions.len() != q.positions.len() || p.step != q.step {
+                return Err(shape(format!("stage `{}`: checkpoints differ", a.name)));
+            }
+            any = true;
+            let [lo, lengths, tilt] = p.simbox;
+            // Periodic in every dimension: the two engines may wrap a particle
+            // differently (by a box vector), and a deviation far below half
+            // the box is unchanged by the minimum image in a closed dimension.
+            let image = SimBox {
+                lo,
+                lengths,
+                tilt,
+                periodic: [true; 3],
+            }
+            .minimum_image();
+            for (x, y) in p.positions.iter().zip(&q.positions) {
+                let d = image.delta(x, y);
+                let r = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
+                if r.is_nan() || r > worst.0 {
+                    worst = (r, p.step);
+                }
+            }
+        }
+    }
+    if any {
+        out.push(Deviation {
+            observable: "positions",
+            max_deviation: worst.0,
+            at_step: worst.1,
+        });
+    }
+    Ok(out)
+}
+
+/// Per recorded step, the largest deviation over `columns` relative to
+/// their largest magnitude in `reference` (for plots of divergence).
+pub fn deviation_series(
+    reference: &[StageOutput],
+    run: &[StageOutput],
+    columns: &[&str],
+) -> Vec<(f64, f64)> {
+    let mut scale = 0.0f64;
+    let mut raw = Vec::new();
+    for (a, b) in reference.iter().zip(run) {
+        let step = a.column("step").unwrap_or_default();
+        for (k, (ra, rb)) in a.rows.iter().zip(&b.rows).enumerate() {
+            let mut worst = 0.0f64;
+            for c in columns {
+                if let (Some(i), Some(j)) = (
+                    a.columns.iter().position(|n| n == c),
+                    b.columns.iter().position(|n| n == c),
+                ) {
+                    scale = scale.max(ra[i].abs());
+                    worst = worst.max((ra[i] - rb[j]).abs());
+                }
+            }
+            raw.push((step[k], worst));
+        }
+    }
+    let scale = if scale > 0.0 { scale } else { 1.0 };
+    raw.into_iter().map(|(s, d)| (s, d / scale)).collect()
+}

@@ -1,0 +1,109 @@
+//! Every tolerance of the cross-check, in one place, with its reason.
+//!
+//! Both engines call the same kernels on the same numbers; they differ in
+//! the order of floating-point sums (neighbour order, ghost atoms, MPI
+//! ranks), so a step-0 difference is round-off. Along a trajectory it can
+//! grow. Measured with `cargo run --release --example divergence -- 20000`
+//! (2026-11-22; relative stress deviation, position deviation in d):
+//!
+//! - damped, the paper's Gamma = 1 (contact solid L = 8, a_B = -0.5): 3.7e-14
+//!   at 2,000 steps, 4.0e-14 at 20,000; positions 2e-15 to 5.6e-14 d. The
+//!   damping contracts perturbations, so differences stay at round-off.
+//! - undamped, Gamma = 0 (same solid): 4.1e-14 at 2,000 steps, then about
+//!   tenfold per 2,000 steps (9.0e-12 at 10,000, 5.5e-7 at 20,000): chaotic
+//!   growth, exponent about 0.012 per tau.
+//!
+//! The tolerances below sit two to three decades above the largest value
+//! measured in `bpm check` and hold for damped runs of any length and for
+//! undamped runs up to about 10,000 steps; a longer undamped comparison
+//! needs a statistical, not a pointwise, criterion.
+
+/// A tolerance and why it has that value.
+#[derive(Clone, Copy, Debug)]
+pub struct Tolerance {
+    /// Observable, as named in the verdict table.
+    pub observable: &'static str,
+    /// Largest allowed deviation (relative to the observable's largest
+    /// magnitude, or in d for positions).
+    pub tolerance: f64,
+    /// Why.
+    pub why: &'static str,
+}
+
+/// The table.
+pub const TOLERANCES: &[Tolerance] = &[
+    Tolerance {
+        observable: "step-0 forces",
+        tolerance: 1e-12,
+        why: "same kernels, different summation order: measured <= 9.5e-15 (1 and 2 ranks, newton on and off)",
+    },
+    Tolerance {
+        observable: "step-0 stress",
+        tolerance: 1e-12,
+        why: "as the forces: measured <= 3.0e-15",
+    },
+    Tolerance {
+        observable: "trajectory box",
+        tolerance: 1e-13,
+        why: "both engines set L0 exp(rate t) and T0 + rate t L0 in closed form each step: measured <= 1.5e-16",
+    },
+    Tolerance {
+        observable: "trajectory time",
+        tolerance: 1e-12,
+        why: "the native engine accumulates t += dt, LAMMPS's harness uses step * dt: 8.8e-15 after 500 steps",
+    },
+    Tolerance {
+        observable: "trajectory stress",
+        tolerance: 1e-11,
+        why: "round-off that damping keeps from growing: measured <= 3e-14 over 500 steps, 4e-14 over 20,000 (see the module doc)",
+    },
+    Tolerance {
+        observable: "trajectory bond energy",
+        tolerance: 1e-11,
+        why: "as the stress: measured <= 2e-14",
+    },
+    Tolerance {
+        observable: "trajectory pair energy",
+        tolerance: 1e-11,
+        why: "as the stress: measured <= 3e-14",
+    },
+    Tolerance {
+        observable: "trajectory kinetic energy",
+        tolerance: 1e-11,
+        why: "as the stress: measured <= 2e-15",
+    },
+    Tolerance {
+        observable: "trajectory positions",
+        tolerance: 1e-11,
+        why: "in d: measured <= 5e-15 over 500 steps, 5.6e-14 over 20,000 damped steps",
+    },
+    Tolerance {
+        observable: "compress stress",
+        tolerance: 1e-11,
+        why: "5,000-step quasistatic compression: measured <= 3.4e-14",
+    },
+    Tolerance {
+        observable: "shear stress",
+        tolerance: 1e-11,
+        why: "5,000-step quasistatic shear: measured <= 3.2e-14",
+    },
+    Tolerance {
+        observable: "K",
+        tolerance: 1e-10,
+        why: "least-squares slope of stress series that agree to 1e-11 (measured <= 1.2e-14); the issue asks for 0.5%",
+    },
+    Tolerance {
+        observable: "G",
+        tolerance: 1e-10,
+        why: "as K: measured <= 2.3e-15",
+    },
+];
+
+/// The tolerance of `observable`; an unknown name gets 0, so a new
+/// observable fails until it is given a justified tolerance here.
+pub fn tolerance(observable: &str) -> f64 {
+    TOLERANCES
+        .iter()
+        .find(|t| t.observable == observable)
+        .map_or(0.0, |t| t.tolerance)
+}
