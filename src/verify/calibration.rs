@@ -6,10 +6,10 @@ use crate::analysis::moduli::{
     bulk_modulus, paper_bulk_modulus, paper_shear_to_bulk, poisson_ratio, shear_modulus,
 };
 use crate::scene::{protocols, ForceField, Scene};
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 /// Strain and rate of the calibration runs.
-#[derive(Clone, Copy, Debug, Serialize)]
+#[derive(Clone, Copy, Debug, Serialize, Deserialize)]
 pub struct Loading {
     /// Final strain of both runs (volumetric strain is about 3x this).
     pub strain: f64,
@@ -60,7 +60,7 @@ impl CalibrationEngine {
 }
 
 /// K, G and what follows from them, for one solid and `a_B`.
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct Moduli {
     /// Multibody strength (k d).
     pub a_b: f64,
@@ -137,7 +137,7 @@ pub fn measure_moduli(
 }
 
 /// What `bpm calibrate` runs.
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct StudyOptions {
     /// Box sides L (d); the largest is the main table's.
     pub sizes: Vec<f64>,
@@ -156,7 +156,7 @@ pub struct StudyOptions {
 }
 
 /// One measured case.
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct Case {
     /// Box side (d).
     pub size: f64,
@@ -473,8 +473,8 @@ pub fn study_report(
         Series::new(format!("native, L = {largest} d"), nu_points, Mark::Points),
     ];
     if !lammps_gk.is_empty() {
-        gk_series.push(Series::new("LAMMPS + plugin", lammps_gk, Mark::Points));
-        nu_series.push(Series::new("LAMMPS + plugin", lammps_nu, Mark::Points));
+        gk_series.push(Series::new("LAMMPS + plugin", lammps_gk, Mark::Rings));
+        nu_series.push(Series::new("LAMMPS + plugin", lammps_nu, Mark::Rings));
     }
     let moduli_panels = vec![
         Panel {

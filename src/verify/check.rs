@@ -340,7 +340,7 @@ pub fn calibration_panels(rows: &[[Moduli; 2]], size: f64) -> Vec<Panel> {
                     Mark::Line,
                 ),
                 Series::new("native", pick(0, &|m| m.g_over_k), Mark::Points),
-                Series::new("LAMMPS + plugin", pick(1, &|m| m.g_over_k), Mark::Points),
+                Series::new("LAMMPS + plugin", pick(1, &|m| m.g_over_k), Mark::Rings),
             ],
             ..Default::default()
         },
@@ -351,7 +351,7 @@ pub fn calibration_panels(rows: &[[Moduli; 2]], size: f64) -> Vec<Panel> {
             series: vec![
                 Series::new("from the paper's fits", fit_line(&nu_fit), Mark::Line),
                 Series::new("native", pick(0, &|m| m.nu), Mark::Points),
-                Series::new("LAMMPS + plugin", pick(1, &|m| m.nu), Mark::Points),
+                Series::new("LAMMPS + plugin", pick(1, &|m| m.nu), Mark::Rings),
             ],
             ..Default::default()
         },
