@@ -212,7 +212,10 @@ where
             .build_cartesian_2d((xs.0..xs.1).log_scale().base(2.0), ys.0..ys.1)
             .map_err(|e| e.to_string())?),
         (true, true) => finish!(builder
-            .build_cartesian_2d((xs.0..xs.1).log_scale().base(2.0), (ys.0..ys.1).log_scale().base(2.0))
+            .build_cartesian_2d(
+                (xs.0..xs.1).log_scale().base(2.0),
+                (ys.0..ys.1).log_scale().base(2.0)
+            )
             .map_err(|e| e.to_string())?),
     }
     Ok(())

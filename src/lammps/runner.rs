@@ -116,14 +116,14 @@ fn run_stage(
     }
     let mut rows = Vec::new();
     if let Some(intervals) = plan.steps.checked_div(plan.every) {
-        let recorded = lmp.fix_array("bpm_record", intervals + 1, RECORDED_COLUMNS.len())?;
+        let columns = RECORDED_COLUMNS.len() + 2 * plan.walls;
+        let recorded = lmp.fix_array("bpm_record", intervals + 1, columns)?;
         for (r, values) in recorded.into_iter().enumerate() {
             let k = r as u64 * plan.every;
             let mut row = vec![(step0 + k) as f64, time0 + k as f64 * plan.dt];
             row.extend_from_slice(&values[..12]);
             row.push((values[6] + values[7] + values[8]) / 3.0);
-            row.extend_from_slice(&values[12..15]);
-            row.push(0.0);
+            row.extend_from_slice(&values[12..]);
             rows.push(row);
         }
     }

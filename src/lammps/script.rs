@@ -1,6 +1,7 @@
 //! A scene as a LAMMPS driver script: `setup.in`, then per stage the force
 //! field changes, velocity settings, one protocol template
-//! (`lammps_inputs/stage_<protocol>.in`) with its variables, the run and
+//! (`lammps_inputs/stage_<protocol>.in`) with its variables, walls
+//! (`wall.in`) and tether (`tether.in`), `stage_record.in`, the run and
 //! `stage_end.in`.
 //!
 //! The script written to disk is exactly what the in-process harness
@@ -9,7 +10,7 @@
 //! checkpoints) and reads the recorded rows back after each.
 
 use super::datafile::{write_data_file, write_reference_lengths, ScriptVars};
-use crate::engine::{Deformation, TiltFactor};
+use crate::engine::{Deformation, TiltFactor, WallSide};
 use crate::scene::run::{random_velocities, stage_seed, thermo_columns};
 use crate::scene::{ForceField, Scene, StageSpec};
 use std::fmt::Write as _;
@@ -65,6 +66,8 @@ pub struct StagePlan {
     pub positions_every: u64,
     /// Thermo columns, as the native engine names them.
     pub columns: Vec<String>,
+    /// Flat walls (two recorded columns each, after [`RECORDED_COLUMNS`]).
+    pub walls: usize,
 }
 
 /// The driver script of a scene and the plan of its stages.
@@ -93,8 +96,9 @@ impl Driver {
     }
 }
 
-/// Columns of `fix bpm_record` (`stage_record.in`), in order.
-pub const RECORDED_COLUMNS: [&str; 15] = [
+/// Columns of `fix bpm_record` (`stage_record.in`), in order, before
+/// each wall's force and position.
+pub const RECORDED_COLUMNS: [&str; 16] = [
     "lx",
     "ly",
     "lz",
@@ -110,6 +114,7 @@ pub const RECORDED_COLUMNS: [&str; 15] = [
     "e_bond",
     "e_pair",
     "e_kinetic",
+    "e_external",
 ];
 
 /// Whether LAMMPS needs a triclinic box for `scene` (tilted, or sheared later).
@@ -127,14 +132,12 @@ fn check_supported(index: usize, stage: &StageSpec, scene: &Scene) -> Result<(),
         name: stage.name.clone(),
         what,
     };
-    if !stage.walls.is_empty() {
-        return Err(unsupported("flat walls"));
-    }
+    // LAMMPS's fix wall/region stops at particles beyond the surface and
+    // reports a force vector, not the summed magnitude the native engine
+    // records; fix press/berendsen's scalar pressure counts 3N - 3 kinetic
+    // degrees of freedom where the native barostat uses the tensor's trace.
     if stage.sphere_wall.is_some() {
         return Err(unsupported("a spherical wall"));
-    }
-    if stage.tether.is_some() {
-        return Err(unsupported("a centre-of-mass tether"));
     }
     if stage.barostat.is_some() {
         return Err(unsupported("a barostat"));
@@ -195,6 +198,82 @@ fn force_field_commands(ff: &ForceField) -> Vec<String> {
         ),
         format!("neighbor        {} bin", g(ff.skin)),
     ]
+}
+
+/// Commands that set up a stage's walls and tether (after its template, so
+/// after `reset_timestep`) and remove them after its run.
+struct ExternalCommands {
+    /// Before the template: what `stage_record.in` names.
+    variables: Vec<String>,
+    begin: Vec<String>,
+    end: Vec<String>,
+}
+
+fn external_commands(stage: &StageSpec) -> ExternalCommands {
+    let mut begin = Vec::new();
+    let mut end = Vec::new();
+    let mut energies = vec!["0".to_string()];
+    let mut recorded = Vec::new();
+    for (w, wall) in stage.walls.iter().enumerate() {
+        let (face, sign) = match wall.side {
+            WallSide::Lo => ("lo", -1),
+            WallSide::Hi => ("hi", 1),
+        };
+        let axis = ["x", "y", "z"][wall.axis.min(2)];
+        for (name, value) in [
+            ("wall", w.to_string()),
+            ("face", format!("{axis}{face}")),
+            ("wall_start", g(wall.position)),
+            ("wall_velocity", g(wall.velocity)),
+            ("wall_k", g(wall.stiffness)),
+            ("wall_cutoff", g(wall.cutoff)),
+            ("wall_sign", sign.to_string()),
+        ] {
+            begin.push(format!("variable        {name} string {value}"));
+        }
+        begin.push("include         ${inputs}/wall.in".into());
+        end.push(format!("unfix           bpm_wall{w}"));
+        energies.push(format!("v_bpm_wall{w}_energy"));
+        recorded.push(format!("v_bpm_wall{w}_force v_bpm_wall{w}_position"));
+    }
+    if let Some(t) = &stage.tether {
+        begin.push(match t.grain {
+            Some(g) => format!("group           bpm_tether molecule {}", g + 1),
+            None => "group           bpm_tether type 1".into(),
+        });
+        for (d, name) in ["tether_x", "tether_y", "tether_z"].iter().enumerate() {
+            let value = if !t.dims[d] {
+                "NULL".to_string()
+            } else if let Some(anchor) = t.anchor {
+                g(anchor[d])
+            } else {
+                // The group's centre of mass now, at the stage start, as
+                // the native engine anchors it.
+                format!("$(xcm(bpm_tether,{}):%.17g)", ["x", "y", "z"][d])
+            };
+            begin.push(format!("variable        {name} string {value}"));
+        }
+        begin.push(format!(
+            "variable        tether_k string {}",
+            g(t.stiffness)
+        ));
+        begin.push("include         ${inputs}/tether.in".into());
+        end.push("unfix           bpm_tether".into());
+        end.push("group           bpm_tether delete".into());
+        energies.push("v_bpm_tether_energy".into());
+    }
+    let variables = vec![
+        format!("variable        bpm_eext equal {}", energies.join("+")),
+        format!(
+            "variable        walls_recorded string \"{}\"",
+            recorded.join(" ")
+        ),
+    ];
+    ExternalCommands {
+        variables,
+        begin,
+        end,
+    }
 }
 
 /// Writes the data file, reference lengths, velocity files and the driver
@@ -278,6 +357,8 @@ pub fn write_driver(
         ] {
             cmd(&mut lines, format!("variable        {name} string {value}"));
         }
+        let external = external_commands(stage);
+        lines.extend(external.variables.into_iter().map(DriverLine::Command));
         let template = match &stage.deformation {
             None => "stage_hold.in",
             Some(Deformation::Isotropic { true_strain_rate }) => {
@@ -309,11 +390,17 @@ pub fn write_driver(
             &mut lines,
             format!("include         ${{inputs}}/{template}"),
         );
+        lines.extend(external.begin.into_iter().map(DriverLine::Command));
+        cmd(
+            &mut lines,
+            "include         ${inputs}/stage_record.in".into(),
+        );
         lines.push(DriverLine::Run { stage: i });
         cmd(&mut lines, "include         ${inputs}/stage_end.in".into());
         if stage.deformation.is_some() {
             cmd(&mut lines, "unfix           bpm_deform".into());
         }
+        lines.extend(external.end.into_iter().map(DriverLine::Command));
         stages.push(StagePlan {
             name: stage.name.clone(),
             steps: stage.steps,
@@ -321,6 +408,7 @@ pub fn write_driver(
             every,
             positions_every: stage.record.positions_every,
             columns: thermo_columns(stage),
+            walls: stage.walls.len(),
         });
     }
     let driver = Driver { lines, stages };

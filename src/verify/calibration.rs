@@ -196,7 +196,8 @@ pub fn run_study(
                 source,
             })?;
             let build_seconds = start.elapsed().as_secs_f64();
-            let a_bs = if size == largest {
+            // Every a_B at the largest size, and for the LAMMPS comparison.
+            let a_bs = if size == largest || (n == 0 && opts.lammps_sizes.contains(&size)) {
                 &opts.a_b
             } else {
                 &opts.convergence_a_b
@@ -331,6 +332,42 @@ pub fn study_report(
         gk_points.push((a_b, gk));
         nu_points.push((a_b, nu));
         k_points.push((a_b, k));
+    }
+    for &size in &opts.lammps_sizes {
+        let _ = writeln!(
+            md,
+            "\n## LAMMPS + plugin against the native engine (L = {size} d, seed {}, same solid)\n",
+            opts.seeds.first().copied().unwrap_or_default()
+        );
+        let _ = writeln!(
+            md,
+            "| a_B | K native | K LAMMPS | dK/K | G native | G LAMMPS | dG/G | within 0.5% |"
+        );
+        let _ = writeln!(md, "|---:|---:|---:|---:|---:|---:|---:|:---:|");
+        for &a_b in &opts.a_b {
+            let find = |lammps: bool| {
+                cases.iter().find(|c| {
+                    c.size == size
+                        && c.rate == rate
+                        && c.moduli.a_b == a_b
+                        && c.engine.starts_with("lammps") == lammps
+                        && Some(&c.seed) == opts.seeds.first()
+                })
+            };
+            if let (Some(n), Some(l)) = (find(false), find(true)) {
+                let dk = ((l.moduli.k - n.moduli.k) / n.moduli.k).abs();
+                let dg = ((l.moduli.g - n.moduli.g) / n.moduli.g).abs();
+                let _ = writeln!(
+                    md,
+                    "| {a_b} | {:.6} | {:.6} | {dk:.1e} | {:.6} | {:.6} | {dg:.1e} | {} |",
+                    n.moduli.k,
+                    l.moduli.k,
+                    n.moduli.g,
+                    l.moduli.g,
+                    if dk < 5e-3 && dg < 5e-3 { "yes" } else { "NO" }
+                );
+            }
+        }
     }
     if opts.halve_rate {
         let _ = writeln!(

@@ -4,7 +4,7 @@
 use super::calibration::{measure_moduli, CalibrationEngine, Loading, Moduli};
 use super::compare::{compare_runs, deviation_series};
 use super::engines::{run_native, LammpsLauncher};
-use super::scenes::{as_trajectory, contact_solid, grain_pair};
+use super::scenes::{as_trajectory, contact_solid, grain_pair, grain_squeeze};
 use super::single_point::{lammps_single_point, max_relative_deviation, native_single_point};
 use super::tolerances::tolerance;
 use crate::analysis::plot::{write_svg, Mark, Panel, Series};
@@ -208,14 +208,17 @@ pub fn run_check(opts: &CheckOptions) -> Result<CheckReport> {
 
     let solid = as_trajectory(contact_solid(opts.solid_size, opts.seed, -0.5)?, opts.steps);
     let grains = as_trajectory(grain_pair(opts.grain_radius, opts.seed, 0.5)?, opts.steps);
+    let squeeze = grain_squeeze(opts.grain_radius, opts.seed, -0.5, 0.01, opts.steps)?;
     let solid_name = format!("contact solid L={} a_B=-0.5", opts.solid_size);
     let grain_name = format!("grain pair R={} a_B=0.5", opts.grain_radius);
+    let squeeze_name = format!("walls+tether R={} a_B=-0.5", opts.grain_radius);
     let mut divergence = Vec::new();
     for (scene, name, ranks, newton) in [
         (&solid, &solid_name, 1, true),
         (&solid, &solid_name, 2, false),
         (&grains, &grain_name, 1, true),
         (&grains, &grain_name, 2, true),
+        (&squeeze, &squeeze_name, 1, true),
     ] {
         let series = trajectory(scene, name, &launcher, ranks, newton, &mut verdicts)?;
         divergence.push(Series::new(

@@ -19,7 +19,7 @@ pub struct Deviation {
 }
 
 /// Observables compared, with the thermo columns behind each.
-pub const OBSERVABLES: [(&str, &[&str]); 6] = [
+pub const OBSERVABLES: [(&str, &[&str]); 9] = [
     ("box", &["lx", "ly", "lz", "xy", "xz", "yz"]),
     (
         "stress",
@@ -28,6 +28,29 @@ pub const OBSERVABLES: [(&str, &[&str]); 6] = [
     ("bond energy", &["e_bond"]),
     ("pair energy", &["e_pair"]),
     ("kinetic energy", &["e_kinetic"]),
+    ("external energy", &["e_external"]),
+    (
+        "wall forces",
+        &[
+            "wall0_force",
+            "wall1_force",
+            "wall2_force",
+            "wall3_force",
+            "wall4_force",
+            "wall5_force",
+        ],
+    ),
+    (
+        "wall positions",
+        &[
+            "wall0_position",
+            "wall1_position",
+            "wall2_position",
+            "wall3_position",
+            "wall4_position",
+            "wall5_position",
+        ],
+    ),
     ("time", &["time"]),
 ];
 

@@ -12,7 +12,9 @@ pub mod upstream;
 
 pub use compare::{compare_runs, Deviation};
 pub use engines::{run_native, EngineRun, HarnessError, LammpsLauncher};
-pub use scenes::{as_trajectory, contact_solid, contact_solid_reference, grain_pair};
+pub use scenes::{
+    as_trajectory, contact_solid, contact_solid_reference, grain_pair, grain_squeeze,
+};
 pub use single_point::{
     lammps_single_point, max_relative_deviation, native_single_point, run_lmp_bpm, SinglePoint,
     CHECK_LIMIT_SECONDS,

@@ -164,3 +164,100 @@ pub fn as_trajectory(mut scene: Scene, steps: u64) -> Scene {
     scene.stages = vec![stage];
     scene
 }
+
+/// `scene` restricted to the particles `keep` accepts (bonds among them,
+/// with their reference lengths).
+fn keep_particles(scene: &Scene, keep: impl Fn(usize) -> bool) -> Scene {
+    let n = scene.particles.positions.len();
+    let mut index = vec![usize::MAX; n];
+    let mut out = scene.clone();
+    let kept: Vec<usize> = (0..n).filter(|&i| keep(i)).collect();
+    for (k, &i) in kept.iter().enumerate() {
+        index[i] = k;
+    }
+    fn pick(v: &[[f64; 3]], kept: &[usize]) -> Vec<[f64; 3]> {
+        kept.iter().map(|&i| v[i]).collect()
+    }
+    out.particles.positions = pick(&scene.particles.positions, &kept);
+    out.particles.velocities = scene
+        .particles
+        .velocities
+        .as_deref()
+        .map(|v| pick(v, &kept));
+    out.particles.grain = scene
+        .particles
+        .grain
+        .as_ref()
+        .map(|g| kept.iter().map(|&i| g[i]).collect());
+    let r0 = crate::scene::load::reference_lengths(scene);
+    let bonds: Vec<(usize, [usize; 2])> = scene
+        .bonds
+        .pairs
+        .iter()
+        .enumerate()
+        .filter(|(_, [i, j])| index[*i] != usize::MAX && index[*j] != usize::MAX)
+        .map(|(k, [i, j])| (k, [index[*i], index[*j]]))
+        .collect();
+    out.bonds.pairs = bonds.iter().map(|b| b.1).collect();
+    out.bonds.r0 = Some(bonds.iter().map(|b| r0[b.0]).collect());
+    out
+}
+
+/// One rough grain of radius `radius` between two flat harmonic walls
+/// normal to z (stiffness k, cutoff d) that start 0.2 d clear of it and
+/// close at `speed` each, its centre of mass tethered softly in x and y:
+/// the Hertz squeeze set-up of MODEL.md at test scale. Records every 10
+/// steps (wall forces included) and positions five times over `steps`.
+pub fn grain_squeeze(
+    radius: f64,
+    seed: u64,
+    a_b: f64,
+    speed: f64,
+    steps: u64,
+) -> Result<Scene, SceneError> {
+    let pair = grain_pair(radius, seed, a_b)?;
+    let grain = pair.particles.grain.clone().unwrap_or_default();
+    let mut s = keep_particles(&pair, |i| grain[i] == 0);
+    s.particles.velocities = None;
+    let z: Vec<f64> = s.particles.positions.iter().map(|x| x[2]).collect();
+    let (lo, hi) = z
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| {
+            (a.min(v), b.max(v))
+        });
+    let cutoff = 1.0;
+    let walls = vec![
+        crate::engine::FlatWall {
+            axis: 2,
+            side: crate::engine::WallSide::Lo,
+            position: lo - cutoff - 0.2,
+            velocity: speed,
+            stiffness: 1.0,
+            cutoff,
+        },
+        crate::engine::FlatWall {
+            axis: 2,
+            side: crate::engine::WallSide::Hi,
+            position: hi + cutoff + 0.2,
+            velocity: -speed,
+            stiffness: 1.0,
+            cutoff,
+        },
+    ];
+    let mut stage = StageSpec::hold("squeeze", steps, 0.1);
+    stage.walls = walls;
+    stage.tether = Some(crate::engine::Tether {
+        grain: Some(0),
+        anchor: None,
+        dims: [true, true, false],
+        stiffness: 1e-2,
+    });
+    stage.record.every = 10;
+    stage.record.positions_every = (steps / 5).max(1);
+    s.stages = vec![stage];
+    s.description = format!("rough grain R = {radius} d squeezed between flat walls at {speed} d/tau each, seed {seed}, a_B = {a_b}");
+    s.provenance = serde_json::json!({
+        "builder": "verify::scenes::grain_squeeze", "radius": radius, "seed": seed, "speed": speed, "from": pair.provenance,
+    });
+    Ok(s)
+}
