@@ -415,9 +415,18 @@ fn cube_root_is_within_two_ulp_of_the_library() {
         }
         q *= 7.3;
     }
-    // The fast path near 1 (|q - 1| <= 1/4) and both sides of its edges.
+    // The fast paths near 1 (|q - 1| <= 1/4) and both sides of their edges.
     for k in 0..=200_000 {
         let v = 0.7 + 0.6 * k as f64 / 200_000.0;
+        let (ours, lib) = (cube_root(v), v.cbrt());
+        assert!(
+            (ours - lib).abs() <= 2.0 * f64::EPSILON * lib,
+            "{v}: {ours} vs {lib}"
+        );
+    }
+    // The division-free path (|q - 1| <= 1/32), densely.
+    for k in 0..=200_000 {
+        let v = 1.0 - 1.0 / 32.0 + (1.0 / 16.0) * k as f64 / 200_000.0;
         let (ours, lib) = (cube_root(v), v.cbrt());
         assert!(
             (ours - lib).abs() <= 2.0 * f64::EPSILON * lib,
@@ -431,6 +440,10 @@ fn cube_root_is_within_two_ulp_of_the_library() {
         1.25 + 1e-15,
         1.0,
         1.0 + f64::EPSILON,
+        1.0 - 1.0 / 32.0,
+        1.0 - 1.0 / 32.0 - 1e-16,
+        1.0 + 1.0 / 32.0,
+        1.0 + 1.0 / 32.0 + 2e-16,
     ] {
         assert!((cube_root(v) - v.cbrt()).abs() <= 2.0 * f64::EPSILON, "{v}");
     }
