@@ -95,6 +95,21 @@ fn range(values: impl Iterator<Item = f64>, log: bool) -> (f64, f64) {
     }
 }
 
+/// Tick labels: `1.2e-3` on logarithmic axes (whole numbers such as box
+/// sides stay plain), else up to three decimals without trailing zeros.
+fn tick_label(log: bool) -> impl Fn(&f64) -> String {
+    move |v: &f64| {
+        if log && !(v.fract() == 0.0 && v.abs() < 1e5) {
+            format!("{v:.1e}")
+        } else {
+            format!("{v:.3}")
+                .trim_end_matches('0')
+                .trim_end_matches('.')
+                .to_string()
+        }
+    }
+}
+
 fn draw_panel<DB: DrawingBackend>(area: &DrawingArea<DB, Shift>, p: &Panel) -> Result<(), String>
 where
     DB::ErrorType: 'static,
@@ -116,34 +131,14 @@ where
     macro_rules! finish {
         ($chart:expr) => {{
             let mut chart = $chart;
-            let log_label = |v: &f64| format!("{v:.1e}");
-            let plain_label = |v: &f64| format!("{v}");
-            let x_fmt: &dyn Fn(&f64) -> String = if p.log_x {
-                &plain_label
-            } else {
-                &|v: &f64| {
-                    format!("{v:.3}")
-                        .trim_end_matches('0')
-                        .trim_end_matches('.')
-                        .to_string()
-                }
-            };
-            let y_fmt: &dyn Fn(&f64) -> String = if p.log_y {
-                &log_label
-            } else {
-                &|v: &f64| {
-                    format!("{v:.3}")
-                        .trim_end_matches('0')
-                        .trim_end_matches('.')
-                        .to_string()
-                }
-            };
+            let x_fmt = tick_label(p.log_x);
+            let y_fmt = tick_label(p.log_y);
             chart
                 .configure_mesh()
                 .x_desc(p.x_label.as_str())
                 .y_desc(p.y_label.as_str())
-                .x_label_formatter(x_fmt)
-                .y_label_formatter(y_fmt)
+                .x_label_formatter(&x_fmt)
+                .y_label_formatter(&y_fmt)
                 .y_labels(8)
                 .light_line_style(WHITE.mix(0.0))
                 .draw()

@@ -55,58 +55,20 @@ pub fn dilation(vi: f64, vj: f64, v0i: f64, v0j: f64) -> f64 {
 /// for `|q - 1| <= 1/32` a degree-9 Taylor series of `(1 + x)^(1/3)` is
 /// exact to round-off by itself (no division, a short dependency chain);
 /// for `|q - 1| <= 1/4` a degree-7 series (error below 3e-7) is refined by
-/// one Halley step (cubic convergence: below 1e-19), one division in all. Elsewhere a bit-level guess
-/// (exponent divided by 3, error below 4%) takes two Halley steps and one
-/// Newton step. Non-positive or non-finite `q` goes to `f64::cbrt`.
+/// one Halley step (cubic convergence: below 1e-19), one division in all.
+/// Elsewhere a bit-level guess (exponent divided by 3, error below 4%) takes
+/// two Halley steps and one Newton step. Non-positive or non-finite `q` goes to `f64::cbrt`.
 #[inline(always)]
 pub fn cube_root(q: f64) -> f64 {
     let x = q - 1.0;
     if x.abs() <= 1.0 / 32.0 {
         // The common case (volume strains of a few percent): degree 9,
         // truncation error below 1.1e-17, no division at all.
-        const C: [f64; 10] = [
-            1.0,
-            1.0 / 3.0,
-            -1.0 / 9.0,
-            5.0 / 81.0,
-            -10.0 / 243.0,
-            22.0 / 729.0,
-            -154.0 / 6561.0,
-            374.0 / 19683.0,
-            -935.0 / 59049.0,
-            21505.0 / 1594323.0,
-        ];
-        let x2 = x * x;
-        let x4 = x2 * x2;
-        let x8 = x4 * x4;
-        let p01 = C[0] + C[1] * x;
-        let p23 = C[2] + C[3] * x;
-        let p45 = C[4] + C[5] * x;
-        let p67 = C[6] + C[7] * x;
-        let p89 = C[8] + C[9] * x;
-        return ((p01 + x2 * p23) + x4 * (p45 + x2 * p67)) + x8 * p89;
+        let x4 = (x * x) * (x * x);
+        return series_to_degree_7(x) + (x4 * x4) * (CBRT_SERIES[8] + CBRT_SERIES[9] * x);
     }
     let y = if x.abs() <= 0.25 {
-        // Binomial coefficients C(1/3, n), n = 0 .. 7, evaluated by
-        // Estrin's scheme: independent pairs keep the dependency chain short
-        // (the baseline x86-64 target has no fused multiply-add).
-        const C: [f64; 8] = [
-            1.0,
-            1.0 / 3.0,
-            -1.0 / 9.0,
-            5.0 / 81.0,
-            -10.0 / 243.0,
-            22.0 / 729.0,
-            -154.0 / 6561.0,
-            374.0 / 19683.0,
-        ];
-        let x2 = x * x;
-        let x4 = x2 * x2;
-        let p01 = C[0] + C[1] * x;
-        let p23 = C[2] + C[3] * x;
-        let p45 = C[4] + C[5] * x;
-        let p67 = C[6] + C[7] * x;
-        (p01 + x2 * p23) + x4 * (p45 + x2 * p67)
+        series_to_degree_7(x)
     } else if q > f64::MIN_POSITIVE && q < 1e300 {
         let mut y = f64::from_bits(q.to_bits() / 3 + 0x2A9F_7893_782D_A1CE);
         for _ in 0..2 {
@@ -117,6 +79,35 @@ pub fn cube_root(q: f64) -> f64 {
         return q.cbrt();
     };
     halley_cbrt_step(y, q)
+}
+
+/// Binomial coefficients C(1/3, n), n = 0 .. 9: the series of `(1 + x)^(1/3)`.
+const CBRT_SERIES: [f64; 10] = [
+    1.0,
+    1.0 / 3.0,
+    -1.0 / 9.0,
+    5.0 / 81.0,
+    -10.0 / 243.0,
+    22.0 / 729.0,
+    -154.0 / 6561.0,
+    374.0 / 19683.0,
+    -935.0 / 59049.0,
+    21505.0 / 1594323.0,
+];
+
+/// The series of `(1 + x)^(1/3)` to degree 7 by Estrin's scheme:
+/// independent pairs keep the dependency chain short (the baseline x86-64
+/// target has no fused multiply-add).
+#[inline(always)]
+fn series_to_degree_7(x: f64) -> f64 {
+    let c = &CBRT_SERIES;
+    let x2 = x * x;
+    let x4 = x2 * x2;
+    let p01 = c[0] + c[1] * x;
+    let p23 = c[2] + c[3] * x;
+    let p45 = c[4] + c[5] * x;
+    let p67 = c[6] + c[7] * x;
+    (p01 + x2 * p23) + x4 * (p45 + x2 * p67)
 }
 
 #[inline(always)]

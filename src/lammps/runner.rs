@@ -6,7 +6,7 @@
 //! (`bpm run --engine lammps`, see `verify::engines`).
 
 use super::instance::{Lammps, LammpsError};
-use super::script::{write_driver, DriverLine, ScriptError, StagePlan, RECORDED_COLUMNS};
+use super::script::{write_driver, DriverLine, ScriptError, StagePlan, RECORDED_VALUES};
 use crate::scene::run::{Checkpoint, StageOutput};
 use crate::scene::Scene;
 use std::path::Path;
@@ -116,8 +116,10 @@ fn run_stage(
     }
     let mut rows = Vec::new();
     if let Some(intervals) = plan.steps.checked_div(plan.every) {
-        let columns = RECORDED_COLUMNS.len() + 2 * plan.walls;
+        let columns = RECORDED_VALUES + 2 * plan.walls;
         let recorded = lmp.fix_array("bpm_record", intervals + 1, columns)?;
+        // Box (6) and stress (6) values, then energies and walls; the
+        // native row has the mean pressure between them.
         for (r, values) in recorded.into_iter().enumerate() {
             let k = r as u64 * plan.every;
             let mut row = vec![(step0 + k) as f64, time0 + k as f64 * plan.dt];

@@ -11,7 +11,9 @@
 
 use super::datafile::{write_data_file, write_reference_lengths, ScriptVars};
 use crate::engine::{Deformation, TiltFactor, WallSide};
-use crate::scene::run::{random_velocities, stage_seed, thermo_columns};
+use crate::scene::run::{
+    random_velocities, stage_seed, thermo_columns, BOX_COLUMNS, ENERGY_COLUMNS, STRESS_COLUMNS,
+};
 use crate::scene::{ForceField, Scene, StageSpec};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -66,7 +68,7 @@ pub struct StagePlan {
     pub positions_every: u64,
     /// Thermo columns, as the native engine names them.
     pub columns: Vec<String>,
-    /// Flat walls (two recorded columns each, after [`RECORDED_COLUMNS`]).
+    /// Flat walls (two recorded values each, after [`RECORDED_VALUES`]).
     pub walls: usize,
 }
 
@@ -96,26 +98,11 @@ impl Driver {
     }
 }
 
-/// Columns of `fix bpm_record` (`stage_record.in`), in order, before
-/// each wall's force and position.
-pub const RECORDED_COLUMNS: [&str; 16] = [
-    "lx",
-    "ly",
-    "lz",
-    "xy",
-    "xz",
-    "yz",
-    "pxx",
-    "pyy",
-    "pzz",
-    "pxy",
-    "pxz",
-    "pyz",
-    "e_bond",
-    "e_pair",
-    "e_kinetic",
-    "e_external",
-];
+/// Values per row of `fix bpm_record` (`stage_record.in`) before each
+/// wall's force and position: the box, stress and energy columns of
+/// `scene::run::thermo_columns`, in that order (step, time and the mean
+/// pressure are the harness's).
+pub const RECORDED_VALUES: usize = BOX_COLUMNS.len() + STRESS_COLUMNS.len() + ENERGY_COLUMNS.len();
 
 /// Whether LAMMPS needs a triclinic box for `scene` (tilted, or sheared later).
 pub fn needs_triclinic(scene: &Scene) -> bool {

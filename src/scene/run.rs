@@ -57,32 +57,25 @@ pub struct RunOptions {
     pub progress: bool,
 }
 
-/// The thermo columns recorded for a stage.
+/// Box columns of a thermo row: edge lengths and tilts.
+pub const BOX_COLUMNS: [&str; 6] = ["lx", "ly", "lz", "xy", "xz", "yz"];
+/// Pressure-tensor columns of a thermo row (then their mean, "pressure").
+pub const STRESS_COLUMNS: [&str; 6] = ["pxx", "pyy", "pzz", "pxy", "pxz", "pyz"];
+/// Energy columns of a thermo row.
+pub const ENERGY_COLUMNS: [&str; 4] = ["e_bond", "e_pair", "e_kinetic", "e_external"];
+
+/// The thermo columns recorded for a stage: step, time, box, stress,
+/// pressure, energies, then each wall's force and position and the sphere
+/// wall's force.
 pub fn thermo_columns(stage: &StageSpec) -> Vec<String> {
-    let mut c: Vec<String> = [
-        "step",
-        "time",
-        "lx",
-        "ly",
-        "lz",
-        "xy",
-        "xz",
-        "yz",
-        "pxx",
-        "pyy",
-        "pzz",
-        "pxy",
-        "pxz",
-        "pyz",
-        "pressure",
-        "e_bond",
-        "e_pair",
-        "e_kinetic",
-        "e_external",
-    ]
-    .iter()
-    .map(|s| s.to_string())
-    .collect();
+    let mut c: Vec<String> = ["step", "time"]
+        .iter()
+        .chain(&BOX_COLUMNS)
+        .chain(&STRESS_COLUMNS)
+        .chain(&["pressure"])
+        .chain(&ENERGY_COLUMNS)
+        .map(|s| s.to_string())
+        .collect();
     for w in 0..stage.walls.len() {
         c.push(format!("wall{w}_force"));
         c.push(format!("wall{w}_position"));

@@ -7,7 +7,6 @@
 use crate::scene::run::{run_scene, RunOptions, StageOutput};
 use crate::scene::{build_system, validate, write_scene, Scene};
 use std::path::{Path, PathBuf};
-use std::process::Command;
 
 /// A failure of a harness run.
 #[derive(Debug, thiserror::Error)]
@@ -109,19 +108,7 @@ impl LammpsLauncher {
         write_scene(&scene_path, scene).map_err(|e| io(e.to_string()))?;
         let output = work.join("lammps.out.json");
         let _ = std::fs::remove_file(&output);
-        let mut cmd = Command::new("timeout");
-        cmd.arg(self.limit_seconds.to_string());
-        if ranks > 1 {
-            cmd.args([
-                "mpirun.openmpi",
-                "--allow-run-as-root",
-                "--oversubscribe",
-                "--bind-to",
-                "none",
-                "-np",
-                &ranks.to_string(),
-            ]);
-        }
+        let mut cmd = super::single_point::limited_launch(self.limit_seconds, ranks);
         cmd.arg(&self.bpm)
             .args(["run", "--engine", "lammps", "--newton"])
             .arg(if newton { "on" } else { "off" })
@@ -129,8 +116,7 @@ impl LammpsLauncher {
             .arg(&work)
             .arg(&scene_path)
             .arg("-o")
-            .arg(&output)
-            .env("OMPI_MCA_btl_vader_single_copy_mechanism", "none");
+            .arg(&output);
         let start = std::time::Instant::now();
         let out = cmd
             .output()

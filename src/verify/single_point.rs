@@ -52,25 +52,13 @@ pub fn run_lmp_bpm(
     } else {
         format!("{}/lammps_inputs/{input}", env!("CARGO_MANIFEST_DIR"))
     };
-    let mut cmd = Command::new("timeout");
-    cmd.arg(limit_seconds.to_string());
-    if ranks > 1 {
-        cmd.args([
-            "mpirun.openmpi",
-            "--allow-run-as-root",
-            "--oversubscribe",
-            "--bind-to",
-            "none",
-        ]);
-        cmd.args(["-np", &ranks.to_string()]);
-    }
+    let mut cmd = limited_launch(limit_seconds, ranks);
     cmd.arg(lmp_bpm)
         .args(["-in", &input, "-log", "none"])
         .args(vars.args());
     for (k, v) in extra {
         cmd.args(["-var", k, v]);
     }
-    cmd.env("OMPI_MCA_btl_vader_single_copy_mechanism", "none");
     let out = cmd
         .output()
         .with_context(|| format!("starting {}", lmp_bpm.display()))?;
@@ -83,6 +71,28 @@ pub fn run_lmp_bpm(
         bail!("lmp-bpm ({ranks} ranks) failed on {input}:\n{text}");
     }
     Ok(text)
+}
+
+/// `timeout <limit> [mpirun.openmpi ... -np <ranks>]`, ready for the
+/// program and its arguments: Debian's LAMMPS links Open MPI, so its
+/// `mpirun` (not MPICH's, also installed) starts the ranks; as root, without
+/// binding (two ranks on a shared two-core machine).
+pub fn limited_launch(limit_seconds: u32, ranks: usize) -> Command {
+    let mut cmd = Command::new("timeout");
+    cmd.arg(limit_seconds.to_string());
+    if ranks > 1 {
+        cmd.args([
+            "mpirun.openmpi",
+            "--allow-run-as-root",
+            "--oversubscribe",
+            "--bind-to",
+            "none",
+            "-np",
+            &ranks.to_string(),
+        ]);
+    }
+    cmd.env("OMPI_MCA_btl_vader_single_copy_mechanism", "none");
+    cmd
 }
 
 /// Rows of a LAMMPS custom dump sorted by id, without the id column.
