@@ -286,16 +286,18 @@ pub fn write_driver(
         &write_reference_lengths(scene),
     )?;
     let mut lines = vec![DriverLine::Command(format!(
-        "# Scene `{}` (seed {}) through LAMMPS with bpm's styles; written by bpm {}.\n# By hand: lmp-bpm -in {tag}.in",
+        "# Scene `{}` (seed {}) through LAMMPS with bpm's styles; written by bpm {}.\n# By hand: lmp-bpm -in {tag}.in [-var aB -0.8 ...] (any variable of setup.in)",
         scene.description.replace('\n', " "),
         scene.seed,
         crate::VERSION
     ))];
     let cmd = |lines: &mut Vec<DriverLine>, c: String| lines.push(DriverLine::Command(c));
+    // Index style: a `-var name value` on the command line takes precedence,
+    // so a hand run can change e.g. a_B without editing the script.
     for (name, value) in ScriptVars::of(scene, &data.display().to_string(), newton).vars {
         cmd(
             &mut lines,
-            format!("variable        {name} string \"{value}\""),
+            format!("variable        {name} index \"{value}\""),
         );
     }
     cmd(&mut lines, "include         ${inputs}/setup.in".into());
