@@ -1,7 +1,7 @@
 //! How fast LAMMPS and native trajectories of the same scene drift apart:
 //! the contact solid and the grain pair, damped (the paper's Gamma = 1) and
 //! undamped (Gamma = 0), for `steps` steps (default 20,000; the grains,
-//! which fly apart after their collision, for a sixth of it). Prints the
+//! which fly apart after their collision, for an eighth of it). Prints the
 //! largest relative stress deviation and position deviation (d) every
 //! 10% of the run. The numbers justify `verify::tolerances`.
 //!
@@ -36,7 +36,7 @@ fn main() -> anyhow::Result<()> {
     );
     for (name, base) in scenes {
         let steps = if name.starts_with("grain") {
-            steps / 6
+            steps / 8
         } else {
             steps
         };

@@ -50,7 +50,9 @@ pub fn run_scene_lammps(
 ) -> Result<LammpsRun, LammpsRunError> {
     let driver = write_driver(scene, dir, tag, newton)?;
     let log = dir.join(format!("{tag}.log")).display().to_string();
-    let mut lmp = Lammps::open(&["-log", &log, "-screen", "none"])?;
+    // LAMMPS's screen output stays on: with Debian's LAMMPS an error ends
+    // the process, and its ERROR line on the terminal is the explanation.
+    let mut lmp = Lammps::open(&["-log", &log])?;
     let rank = lmp.setting("world_rank");
     let ranks = lmp.setting("world_size");
     let mut stages = Vec::with_capacity(driver.stages.len());

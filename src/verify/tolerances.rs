@@ -12,9 +12,11 @@
 //! - undamped, Gamma = 0 (same solid): 4.1e-14 at 2,000 steps, then about
 //!   tenfold per 2,000 steps (9.0e-12 at 10,000, 5.5e-7 at 20,000): chaotic
 //!   growth, exponent about 0.012 per tau.
-//! - two rough grains in contact (R = 3, a_B = 0.5): damped 2.9e-14 at 400
-//!   steps, 4.4e-14 at 4,000; undamped 3.2e-13 at 400, 1.4e-12 at 3,600
-//!   (the grains then leave their closed box).
+//! - two rough grains in contact (R = 3, a_B = 0.5): damped 1.6e-14 at 333
+//!   steps, 2.9e-14 at 3,333; undamped 1.7e-13 at 333, 8.2e-13 at 2,666
+//!   (the grains fly apart and leave their closed box near step 3,000).
+//!
+//! Output of that run: results/check/divergence.txt.
 //!
 //! The tolerances below sit two to three decades above the largest value
 //! measured in `bpm check` and hold for damped runs of any length and for
