@@ -12,8 +12,8 @@
 //! - undamped, Gamma = 0 (same solid): 4.1e-14 at 2,000 steps, then about
 //!   tenfold per 2,000 steps (9.0e-12 at 10,000, 5.5e-7 at 20,000): chaotic
 //!   growth, exponent about 0.012 per tau.
-//! - two rough grains in contact (R = 3, a_B = 0.5): damped 1.6e-14 at 333
-//!   steps, 2.9e-14 at 3,333; undamped 1.7e-13 at 333, 8.2e-13 at 2,666
+//! - two rough grains in contact (R = 3, a_B = 0.5): damped 1.4e-14 at 250
+//!   steps, 2.6e-14 at 2,500; undamped 1.7e-13 at 250, 8.2e-13 at 2,500
 //!   (the grains fly apart and leave their closed box near step 3,000).
 //!
 //! Output of that run: results/check/divergence.txt.
