@@ -7,10 +7,10 @@
 //! (2026-11-22; relative stress deviation, position deviation in d):
 //!
 //! - damped, the paper's Gamma = 1 (contact solid L = 8, a_B = -0.5): 3.7e-14
-//!   at 2,000 steps, 4.0e-14 at 20,000; positions 2e-15 to 5.6e-14 d. The
+//!   at 2,000 steps, 4.1e-14 at 20,000; positions 1.8e-15 to 4.5e-14 d. The
 //!   damping contracts perturbations, so differences stay at round-off.
-//! - undamped, Gamma = 0 (same solid): 4.1e-14 at 2,000 steps, then about
-//!   tenfold per 2,000 steps (9.0e-12 at 10,000, 5.5e-7 at 20,000): chaotic
+//! - undamped, Gamma = 0 (same solid): 3.9e-14 at 2,000 steps, then about
+//!   tenfold per 2,000 steps (1.1e-11 at 10,000, 4.0e-7 at 20,000): chaotic
 //!   growth, exponent about 0.012 per tau.
 //! - two rough grains in contact (R = 3, a_B = 0.5): damped 1.4e-14 at 250
 //!   steps, 2.6e-14 at 2,500; undamped 1.7e-13 at 250, 8.2e-13 at 2,500
@@ -60,7 +60,7 @@ pub const TOLERANCES: &[Tolerance] = &[
     Tolerance {
         observable: "trajectory stress",
         tolerance: 1e-11,
-        why: "round-off that damping keeps from growing: measured <= 3e-14 over 500 steps, 4e-14 over 20,000 (see the module doc)",
+        why: "round-off that damping keeps from growing: measured <= 2e-14 over 500 steps, 4.1e-14 over 20,000 (see the module doc)",
     },
     Tolerance {
         observable: "trajectory bond energy",
@@ -95,7 +95,7 @@ pub const TOLERANCES: &[Tolerance] = &[
     Tolerance {
         observable: "trajectory positions",
         tolerance: 1e-11,
-        why: "in d: measured <= 5e-15 over 500 steps, 5.6e-14 over 20,000 damped steps",
+        why: "in d: measured <= 5e-15 over 500 steps, 4.5e-14 over 20,000 damped steps",
     },
     Tolerance {
         observable: "compress stress",
