@@ -247,12 +247,13 @@ pub fn run_style(
     })
 }
 
-/// Tolerances of the comparison with upstream. Step 0: the 1e-10
-/// (measured <= 6.3e-15 in the groundwork). After the run: both codes
-/// integrate the same equations in the same LAMMPS with bond damping
-/// (Gamma = 1), so round-off is not amplified (see `verify::tolerances`);
-/// the measured deviation after 1,000 steps is printed by
-/// `bpm upstream-check` and recorded in results/upstream/.
+/// Tolerances of the comparison with upstream. Step 0: the 1e-10;
+/// measured <= 7.0e-15 (forces) and 2.3e-15 (pressure). After 1,000 steps
+/// both codes have integrated the same equations in the same LAMMPS with
+/// bond damping (Gamma = 1), which does not amplify round-off (see
+/// `verify::tolerances`): measured <= 1.6e-12 (forces, relative to the
+/// then smaller largest force), 4.8e-14 (pressure), 2.5e-15 d (positions);
+/// results/upstream/upstream.txt.
 pub const STEP0_TOLERANCE: f64 = 1e-10;
 /// See [`STEP0_TOLERANCE`].
 pub const TRAJECTORY_TOLERANCE: f64 = 1e-9;
