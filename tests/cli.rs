@@ -1,5 +1,7 @@
 //! The `bpm` command line: it builds, runs, and fails cleanly on bad input.
 
+mod common;
+
 use std::process::Command;
 
 fn bpm() -> Command {
@@ -7,9 +9,7 @@ fn bpm() -> Command {
 }
 
 fn tmp(name: &str) -> std::path::PathBuf {
-    let dir = std::env::temp_dir().join(format!("bpm-cli-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    dir.join(name)
+    common::scratch_dir("cli").join(name)
 }
 
 #[test]

@@ -1,6 +1,8 @@
 //! The cross-check harness: the same scene through LAMMPS (child process,
 //! in-process library) and the native engine, series against series.
 
+mod common;
+
 use bpm::scene::builders::bulk::{build_bulk, BulkParams};
 use bpm::verify::calibration::{measure_moduli, CalibrationEngine, Loading};
 use bpm::verify::tolerances::tolerance;
@@ -11,11 +13,9 @@ use bpm::verify::{
 use std::path::PathBuf;
 
 fn launcher(name: &str) -> LammpsLauncher {
-    let dir = std::env::temp_dir().join(format!("bpm-harness-{name}-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
     LammpsLauncher {
         bpm: PathBuf::from(env!("CARGO_BIN_EXE_bpm")),
-        dir,
+        dir: common::scratch_dir(&format!("harness-{name}")),
         limit_seconds: 300,
     }
 }

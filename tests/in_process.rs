@@ -1,6 +1,8 @@
 //! LAMMPS opened in this process through the bindgen bindings of
 //! `library.h`, with our styles registered by `bpm_register_styles`.
 
+mod common;
+
 use bpm::engine::StageDrivers;
 use bpm::lammps::{write_data_file, write_reference_lengths, Lammps, ScriptVars};
 use bpm::scene::builders::bulk::{build_bulk, BulkParams};
@@ -16,8 +18,7 @@ fn in_process_lammps_gives_the_native_forces() {
         *x = x.map(|c| c * 0.99);
     }
     scene.simbox.lengths = scene.simbox.lengths.map(|l| l * 0.99);
-    let dir = std::env::temp_dir().join(format!("bpm-inproc-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = common::scratch_dir("inproc");
     let data = dir.join("s.data");
     std::fs::write(&data, write_data_file(&scene)).unwrap();
     std::fs::write(

@@ -2,6 +2,8 @@
 //! native engine on identical configurations, under MPI and newton on/off;
 //! restart files; errors on bad input.
 
+mod common;
+
 use bpm::scene::Scene;
 use bpm::verify::{
     contact_solid, lammps_single_point, max_relative_deviation, native_single_point, run_lmp_bpm,
@@ -16,9 +18,7 @@ fn lmp() -> &'static Path {
 }
 
 fn workdir() -> PathBuf {
-    let d = std::env::temp_dir().join(format!("bpm-plugin-{}", std::process::id()));
-    std::fs::create_dir_all(&d).unwrap();
-    d
+    common::scratch_dir("plugin")
 }
 
 /// The built-in contact solid (L = 6 d), built once per test binary.

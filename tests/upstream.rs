@@ -3,6 +3,8 @@
 //! `plugin load`. Needs scripts/build-modern-plugin.sh (scripts/test.sh
 //! runs it).
 
+mod common;
+
 use bpm::verify::upstream::{
     compare_configuration, configurations, ModernLammps, UpstreamRow, STEP0_TOLERANCE,
 };
@@ -13,9 +15,7 @@ fn modern() -> ModernLammps {
 }
 
 fn workdir(name: &str) -> std::path::PathBuf {
-    let d = std::env::temp_dir().join(format!("bpm-upstream-{name}-{}", std::process::id()));
-    std::fs::create_dir_all(&d).unwrap();
-    d
+    common::scratch_dir(&format!("upstream-{name}"))
 }
 
 #[test]

@@ -334,23 +334,15 @@ fn real_main() -> Result<()> {
                     progress,
                 },
             );
-            let report = serde_json::json!({
-                "program": "bpm run",
-                "engine": "native",
-                "version": bpm::VERSION,
-                "scene_file": path.display().to_string(),
-                "scene_fnv1a": format!("{hash:016x}"),
-                "seed": scene.seed,
-                "threads": cli.threads,
-                "particles": sys.len(),
-                "bonds": sys.bonds.len(),
-                "force_field": scene.force_field,
-                "protocol": scene.stages,
-                "provenance": scene.provenance,
-                "wall_seconds": start.elapsed().as_secs_f64(),
-                "error": error.as_ref().map(|e| e.to_string()),
-                "stages": stages,
-            });
+            let report = run_report(
+                serde_json::json!({"engine": "native", "threads": cli.threads}),
+                &path,
+                hash,
+                &scene,
+                start.elapsed().as_secs_f64(),
+                error.as_ref().map(|e| e.to_string()),
+                &stages,
+            );
             std::fs::write(&output, serde_json::to_string(&report)?)
                 .with_context(|| format!("writing {}", output.display()))?;
             if let Some(final_path) = final_scene {
@@ -578,6 +570,39 @@ fn real_main() -> Result<()> {
     Ok(())
 }
 
+/// The report `bpm run` writes for either engine: the engine's own fields
+/// (`engine` is a JSON object), then what ran (scene file and hash, seed,
+/// force field, protocol, provenance) and what it recorded.
+fn run_report(
+    engine: serde_json::Value,
+    path: &Path,
+    hash: u64,
+    scene: &bpm::scene::Scene,
+    wall_seconds: f64,
+    error: Option<String>,
+    stages: &[bpm::scene::StageOutput],
+) -> serde_json::Value {
+    let mut report = serde_json::json!({
+        "program": "bpm run",
+        "version": bpm::VERSION,
+        "scene_file": path.display().to_string(),
+        "scene_fnv1a": format!("{hash:016x}"),
+        "seed": scene.seed,
+        "particles": scene.particles.positions.len(),
+        "bonds": scene.bonds.pairs.len(),
+        "force_field": scene.force_field,
+        "protocol": scene.stages,
+        "provenance": scene.provenance,
+        "wall_seconds": wall_seconds,
+        "error": error,
+        "stages": stages,
+    });
+    if let (Some(all), serde_json::Value::Object(own)) = (report.as_object_mut(), engine) {
+        all.extend(own);
+    }
+    report
+}
+
 /// `bpm run --engine lammps`: the scene in LAMMPS in this process. LAMMPS
 /// errors end the process with LAMMPS's message (Debian's LAMMPS has no
 /// exceptions); `bpm check` runs this as a child process for that reason.
@@ -595,26 +620,21 @@ fn run_lammps(path: &Path, output: &Path, newton: bool, workdir: Option<PathBuf>
     if run.rank != 0 {
         return Ok(());
     }
-    let report = serde_json::json!({
-        "program": "bpm run",
-        "engine": "lammps",
-        "lammps": "Debian 29Sep2021 update 2 + lammps-plugin",
-        "mpi_ranks": run.ranks,
-        "newton": newton,
-        "driver": dir.join("scene.in").display().to_string(),
-        "version": bpm::VERSION,
-        "scene_file": path.display().to_string(),
-        "scene_fnv1a": format!("{hash:016x}"),
-        "seed": scene.seed,
-        "particles": scene.particles.positions.len(),
-        "bonds": scene.bonds.pairs.len(),
-        "force_field": scene.force_field,
-        "protocol": scene.stages,
-        "provenance": scene.provenance,
-        "wall_seconds": start.elapsed().as_secs_f64(),
-        "error": serde_json::Value::Null,
-        "stages": run.stages,
-    });
+    let report = run_report(
+        serde_json::json!({
+            "engine": "lammps",
+            "lammps": "Debian 29Sep2021 update 2 + lammps-plugin",
+            "mpi_ranks": run.ranks,
+            "newton": newton,
+            "driver": dir.join("scene.in").display().to_string(),
+        }),
+        path,
+        hash,
+        &scene,
+        start.elapsed().as_secs_f64(),
+        None,
+        &run.stages,
+    );
     std::fs::write(output, serde_json::to_string(&report)?)
         .with_context(|| format!("writing {}", output.display()))?;
     println!(

@@ -7,7 +7,7 @@
 
 use super::instance::{Lammps, LammpsError};
 use super::script::{write_driver, DriverLine, ScriptError, StagePlan, RECORDED_VALUES};
-use crate::scene::run::{Checkpoint, StageOutput};
+use crate::scene::run::{Checkpoint, StageOutput, BOX_COLUMNS, STRESS_COLUMNS};
 use crate::scene::Scene;
 use std::path::Path;
 
@@ -120,14 +120,16 @@ fn run_stage(
     if let Some(intervals) = plan.steps.checked_div(plan.every) {
         let columns = RECORDED_VALUES + 2 * plan.walls;
         let recorded = lmp.fix_array("bpm_record", intervals + 1, columns)?;
-        // Box (6) and stress (6) values, then energies and walls; the
-        // native row has the mean pressure between them.
+        // Box and stress values, then energies and walls; the native row has
+        // the mean of the diagonal stress between them.
+        let stress = BOX_COLUMNS.len();
+        let energies = stress + STRESS_COLUMNS.len();
         for (r, values) in recorded.into_iter().enumerate() {
             let k = r as u64 * plan.every;
             let mut row = vec![(step0 + k) as f64, time0 + k as f64 * plan.dt];
-            row.extend_from_slice(&values[..12]);
-            row.push((values[6] + values[7] + values[8]) / 3.0);
-            row.extend_from_slice(&values[12..]);
+            row.extend_from_slice(&values[..energies]);
+            row.push(values[stress..stress + 3].iter().sum::<f64>() / 3.0);
+            row.extend_from_slice(&values[energies..]);
             rows.push(row);
         }
     }

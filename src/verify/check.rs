@@ -139,13 +139,7 @@ fn step_zero(opts: &CheckOptions, dir: &Path, out: &mut Vec<Verdict>) -> Result<
             let tag = format!("point-aB{a_b}-np{ranks}-newton{newton}");
             let lammps = lammps_single_point(&opts.lmp_bpm, &scene, newton, ranks, dir, &tag)?;
             let secs = (native_s, t1.elapsed().as_secs_f64());
-            let pscale = native.pressure.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-            let press_dev = lammps
-                .pressure
-                .iter()
-                .zip(&native.pressure)
-                .map(|(a, b)| (a - b).abs() / pscale)
-                .fold(0.0f64, f64::max);
+            let press_dev = max_relative_deviation(&[lammps.pressure], &[native.pressure]);
             let name = format!("contact solid L={} a_B={a_b}", opts.solid_size);
             let how = format!("np{ranks} newton {}", if newton { "on" } else { "off" });
             let force_dev = max_relative_deviation(&lammps.forces, &native.forces);

@@ -1,5 +1,6 @@
 //! Series-against-series comparison of two runs of the same scene.
 
+use super::single_point::nan_max;
 use crate::engine::SimBox;
 use crate::kernels::Separation;
 use crate::scene::run::StageOutput;
@@ -102,7 +103,7 @@ pub fn compare_runs(
                     scale = scale.max(x[k].abs());
                     let d = (x[k] - y[k]).abs();
                     // NaN counts as the worst deviation.
-                    if d.is_nan() || d > worst.0 {
+                    if nan_max(worst.0, d) != worst.0 {
                         worst = (d, step[k] as u64);
                     }
                 }
@@ -140,19 +141,15 @@ pub fn compare_runs(
             // Periodic in every dimension: the two engines may wrap a particle
             // differently (by a box vector), and a deviation far below half
             // the box is unchanged by the minimum image in a closed dimension.
-            let image = SimBox {
+            let simbox = SimBox {
                 lo,
                 lengths,
                 tilt,
                 periodic: [true; 3],
-            }
-            .minimum_image();
-            for (x, y) in p.positions.iter().zip(&q.positions) {
-                let d = image.delta(x, y);
-                let r = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
-                if r.is_nan() || r > worst.0 {
-                    worst = (r, p.step);
-                }
+            };
+            let r = max_position_deviation(&p.positions, &q.positions, &simbox);
+            if r.is_nan() || r > worst.0 {
+                worst = (r, p.step);
             }
         }
     }
@@ -164,6 +161,16 @@ pub fn compare_runs(
         });
     }
     Ok(out)
+}
+
+/// Largest distance (d) between the positions `a[k]` and `b[k]` under the
+/// minimum image of `simbox` (NaN if any position is NaN).
+pub fn max_position_deviation(a: &[[f64; 3]], b: &[[f64; 3]], simbox: &SimBox) -> f64 {
+    let image = simbox.minimum_image();
+    a.iter()
+        .zip(b)
+        .map(|(x, y)| image.distance(x, y))
+        .fold(0.0, nan_max)
 }
 
 /// Per recorded step, the largest deviation over `columns` relative to

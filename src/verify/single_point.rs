@@ -188,17 +188,25 @@ pub fn native_single_point(scene: &Scene) -> SinglePoint {
     }
 }
 
-/// Largest component difference of `a` and `b`, relative to the largest
-/// component of `b`.
-pub fn max_relative_deviation(a: &[[f64; 3]], b: &[[f64; 3]]) -> f64 {
-    let scale = b
-        .iter()
-        .flat_map(|r| r.iter())
-        .fold(0.0f64, |m, v| m.max(v.abs()));
+/// Largest component difference of the rows `a` and `b` (forces: `N = 3`,
+/// a pressure tensor: one row of `N = 6`), relative to the largest
+/// component of `b`. A NaN anywhere makes the result NaN, which fails every
+/// tolerance.
+pub fn max_relative_deviation<const N: usize>(a: &[[f64; N]], b: &[[f64; N]]) -> f64 {
+    let scale = b.iter().flatten().map(|v| v.abs()).fold(0.0, nan_max);
     let dev = a
         .iter()
         .zip(b)
-        .flat_map(|(p, q)| (0..3).map(move |d| (p[d] - q[d]).abs()))
-        .fold(0.0f64, f64::max);
+        .flat_map(|(p, q)| p.iter().zip(q).map(|(x, y)| (x - y).abs()))
+        .fold(0.0, nan_max);
     dev / scale
+}
+
+/// The larger of `m` and `v`, where NaN wins (`f64::max` would drop it).
+pub fn nan_max(m: f64, v: f64) -> f64 {
+    if v.is_nan() || v > m {
+        v
+    } else {
+        m
+    }
 }

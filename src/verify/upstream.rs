@@ -6,8 +6,11 @@
 //! the same data file at the reference state and deform it in LAMMPS
 //! (`lammps_inputs/upstream_compare/`).
 
+use super::compare::max_position_deviation;
 use super::scenes::{contact_solid_reference, grain_pair};
-use super::single_point::read_dump;
+use super::single_point::{max_relative_deviation, read_dump};
+use crate::engine::SimBox;
+use crate::kernels::Separation;
 use crate::lammps::write_data_file;
 use crate::scene::Scene;
 use anyhow::{bail, Context, Result};
@@ -133,6 +136,20 @@ pub struct Configuration {
     pub scene: Scene,
     /// Box scale applied after the reference is taken (1 = none).
     pub squeeze: f64,
+}
+
+impl Configuration {
+    /// The box after the squeeze (`change_box ... scale` keeps the centre;
+    /// a minimum image needs only the edges, tilts and periodicity).
+    pub fn squeezed_box(&self) -> SimBox {
+        let b = &self.scene.simbox;
+        SimBox {
+            lo: b.lo,
+            lengths: b.lengths.map(|l| l * self.squeeze),
+            tilt: b.tilt.map(|t| t * self.squeeze),
+            periodic: b.periodic,
+        }
+    }
 }
 
 /// A periodic contact solid (bonds across periodic faces; two halves in
@@ -277,42 +294,6 @@ pub struct UpstreamRow {
     pub pass: bool,
 }
 
-fn max_rel(a: &[[f64; 3]], b: &[[f64; 3]]) -> f64 {
-    super::max_relative_deviation(a, b)
-}
-
-fn max_rel6(a: &[f64; 6], b: &[f64; 6]) -> f64 {
-    let scale = b.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-    a.iter()
-        .zip(b)
-        .map(|(x, y)| (x - y).abs())
-        .fold(0.0, f64::max)
-        / scale
-}
-
-/// Largest position difference (d), periodic dims folded with `lengths`.
-fn max_position_deviation(
-    a: &[[f64; 3]],
-    b: &[[f64; 3]],
-    lengths: [f64; 3],
-    periodic: [bool; 3],
-) -> f64 {
-    a.iter()
-        .zip(b)
-        .map(|(p, q)| {
-            let mut s = 0.0;
-            for d in 0..3 {
-                let mut x = p[d] - q[d];
-                if periodic[d] {
-                    x -= lengths[d] * (x / lengths[d]).round();
-                }
-                s += x * x;
-            }
-            s.sqrt()
-        })
-        .fold(0.0, f64::max)
-}
-
 /// Compares ours and upstream on `config`; pushes verdict rows.
 pub fn compare_configuration(
     lammps: &ModernLammps,
@@ -325,7 +306,7 @@ pub fn compare_configuration(
 ) -> Result<()> {
     let ours = run_style(lammps, config, true, pair_gamma, steps, ranks, dir)?;
     let upstream = run_style(lammps, config, false, pair_gamma, steps, ranks, dir)?;
-    let lengths = config.scene.simbox.lengths.map(|l| l * config.squeeze);
+    let squeezed_box = config.squeezed_box();
     let judged = pair_gamma == 0.0;
     let mut push = |observable: &str, dev: f64, tol: f64| {
         rows.push(UpstreamRow {
@@ -340,34 +321,29 @@ pub fn compare_configuration(
     };
     push(
         "step-0 forces",
-        max_rel(&ours.forces[0], &upstream.forces[0]),
+        max_relative_deviation(&ours.forces[0], &upstream.forces[0]),
         STEP0_TOLERANCE,
     );
     push(
         "step-0 pressure",
-        max_rel6(&ours.pressure[0], &upstream.pressure[0]),
+        max_relative_deviation(&[ours.pressure[0]], &[upstream.pressure[0]]),
         STEP0_TOLERANCE,
     );
     if steps > 0 {
         let t = format!("step-{steps}");
         push(
             &format!("{t} forces"),
-            max_rel(&ours.forces[1], &upstream.forces[1]),
+            max_relative_deviation(&ours.forces[1], &upstream.forces[1]),
             TRAJECTORY_TOLERANCE,
         );
         push(
             &format!("{t} pressure"),
-            max_rel6(&ours.pressure[1], &upstream.pressure[1]),
+            max_relative_deviation(&[ours.pressure[1]], &[upstream.pressure[1]]),
             TRAJECTORY_TOLERANCE,
         );
         push(
             &format!("{t} positions"),
-            max_position_deviation(
-                &ours.positions[1],
-                &upstream.positions[1],
-                lengths,
-                config.scene.simbox.periodic,
-            ),
+            max_position_deviation(&ours.positions[1], &upstream.positions[1], &squeezed_box),
             TRAJECTORY_TOLERANCE,
         );
     }
@@ -385,9 +361,9 @@ pub fn compare_configuration(
             ranks,
             pair_gamma,
             observable: "step-0 forces, factor applied".into(),
-            max_deviation: max_rel(&corrected, &upstream.forces[0]),
+            max_deviation: max_relative_deviation(&corrected, &upstream.forces[0]),
             tolerance: Some(STEP0_TOLERANCE),
-            pass: max_rel(&corrected, &upstream.forces[0]) <= STEP0_TOLERANCE,
+            pass: max_relative_deviation(&corrected, &upstream.forces[0]) <= STEP0_TOLERANCE,
         });
     }
     Ok(())
@@ -447,8 +423,7 @@ pub fn smoothing_share(
     gamma: f64,
 ) -> Vec<[f64; 3]> {
     let d = config.scene.force_field.pair.map_or(1.0, |p| p.d);
-    let lengths = config.scene.simbox.lengths.map(|l| l * config.squeeze);
-    let periodic = config.scene.simbox.periodic;
+    let image = config.squeezed_box().minimum_image();
     let bonded: std::collections::HashSet<(usize, usize)> = config
         .scene
         .bonds
@@ -462,13 +437,7 @@ pub fn smoothing_share(
             if bonded.contains(&(i, j)) {
                 continue;
             }
-            let mut r = [0.0; 3];
-            for k in 0..3 {
-                r[k] = x[i][k] - x[j][k];
-                if periodic[k] {
-                    r[k] -= lengths[k] * (r[k] / lengths[k]).round();
-                }
-            }
+            let r = image.delta(&x[i], &x[j]);
             let dist = (r[0] * r[0] + r[1] * r[1] + r[2] * r[2]).sqrt();
             if dist >= d || dist == 0.0 {
                 continue;

@@ -65,3 +65,11 @@ pub fn max_abs(rows: &[[f64; 3]]) -> f64 {
         .flat_map(|r| r.iter())
         .fold(0.0f64, |m, v| m.max(v.abs()))
 }
+
+/// The scratch folder `<tmp>/bpm-<name>-<pid>`, created if missing: one per
+/// test binary and name, so parallel tests and runs do not collide.
+pub fn scratch_dir(name: &str) -> std::path::PathBuf {
+    let dir = std::env::temp_dir().join(format!("bpm-{name}-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
