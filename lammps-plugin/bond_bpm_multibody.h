@@ -1,5 +1,5 @@
 /* bond_style bpm/multibody: spring + multibody volume term + damping
- * (paper 1, eqs. 1-3). All physics is in the Rust kernels (bpm_kernels.h);
+ * (docs/model.md). All physics is in the Rust kernels (bpm_kernels.h);
  * this class parses coefficients, keeps the reference lengths (through
  * FixBPMReference) and hands LAMMPS's bond list to the kernels. */
 #ifndef LMP_BOND_BPM_MULTIBODY_H

@@ -1,5 +1,5 @@
 /* pair_style bpm/contact: harmonic + cubic repulsion + damping between
- * non-bonded particles closer than d (paper 1, eq. 4). Physics in the Rust
+ * non-bonded particles closer than d (docs/model.md). Physics in the Rust
  * kernels; bonded pairs are excluded with special_bonds lj 0 1 1. */
 #ifndef LMP_PAIR_BPM_CONTACT_H
 #define LMP_PAIR_BPM_CONTACT_H

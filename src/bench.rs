@@ -27,7 +27,7 @@ pub struct BenchCase {
 }
 
 /// Builds the bulk solid used by the benchmark (the L = 14 d system of
-/// MODEL.md section 3 by default).
+/// docs/reference-numbers.md, "Cost reference points" by default).
 pub fn bench_solid(
     size: f64,
     seed: u64,
@@ -71,7 +71,9 @@ pub fn bench_case(solid: &Scene, a_b: f64, threads: usize, steps: u64) -> BenchC
         a_b,
         threads,
         particles: sys.len(),
-        bonds: sys.bonds.len(),
+        bonds: sys
+            .model_as::<crate::engine::BpmModel>()
+            .map_or(0, |m| m.bonds().len()),
         steps,
         ns_per_particle_step: per(total),
         breakdown: Stage::ALL

@@ -25,10 +25,7 @@ fn solid_with(ff: ForceField, stages: Vec<StageSpec>) -> Scene {
 }
 
 fn opts(threads: usize) -> RunOptions {
-    RunOptions {
-        threads,
-        progress: false,
-    }
+    RunOptions::quiet(threads)
 }
 
 #[test]
@@ -92,7 +89,7 @@ fn damped_multibody_dynamics_conserve_momentum() {
     let (_, err) = run_scene(&mut sys, &scene, &opts(1));
     assert!(err.is_none());
     let mut p = [0.0f64; 3];
-    for v in &sys.v {
+    for v in &sys.particles.v {
         for d in 0..3 {
             p[d] += v[d];
         }
@@ -110,7 +107,7 @@ fn runs_are_bit_for_bit_repeatable_and_thread_counts_agree() {
         let mut sys = build_system(&scene, threads);
         let (_, err) = run_scene(&mut sys, &scene, &opts(threads));
         assert!(err.is_none());
-        sys.x
+        sys.particles.x
     };
     let a = run(2);
     assert_eq!(a, run(2), "same thread count must be bit-identical");
@@ -204,7 +201,10 @@ fn flat_wall_pushes_with_k_times_overlap_and_reports_it() {
     };
     sys.setup(&drivers);
     assert_eq!(sys.report.wall_forces, vec![2.0 * 0.25, 2.0 * 0.25]);
-    assert!(sys.f[0][2].abs() < 1e-15, "symmetric walls cancel");
+    assert!(
+        sys.particles.f[0][2].abs() < 1e-15,
+        "symmetric walls cancel"
+    );
     // Moving the lower wall up by 0.1 raises its force by k * 0.1.
     sys.compute_forces(
         &StageDrivers {
@@ -218,7 +218,7 @@ fn flat_wall_pushes_with_k_times_overlap_and_reports_it() {
         true,
     );
     assert!((sys.report.wall_forces[0] - 2.0 * 0.35).abs() < 1e-14);
-    assert!((sys.f[0][2] - 2.0 * 0.35).abs() < 1e-14);
+    assert!((sys.particles.f[0][2] - 2.0 * 0.35).abs() < 1e-14);
 }
 
 #[test]
@@ -236,8 +236,8 @@ fn tether_pulls_the_centre_of_mass_back_to_its_anchor() {
     let (_, err) = run_scene(&mut sys, &scene, &opts(1));
     assert!(err.is_none());
     // One step of dt 0.1 from rest under F = -0.1 (x - 0.5) = -0.05 (half kicks).
-    assert!((sys.f[0][0] + 0.1 * (sys.x[0][0] - 0.5)).abs() < 1e-12);
-    assert!(sys.v[0][0] < 0.0 && sys.f[0][2] == 0.0);
+    assert!((sys.particles.f[0][0] + 0.1 * (sys.particles.x[0][0] - 0.5)).abs() < 1e-12);
+    assert!(sys.particles.v[0][0] < 0.0 && sys.particles.f[0][2] == 0.0);
 }
 
 #[test]
@@ -307,17 +307,19 @@ fn bond_split_into_interior_and_boundary_matches_minimum_image_after_wraps() {
     sys.compute_forces(&drivers, 0.0, true);
     // Reference: every bond through the minimum image, no split.
     let sep = sys.simbox.minimum_image();
-    let (vol, vol0) = match &sys.model {
-        bpm::engine::ForceModel::Bpm(m) => {
-            let (a, b) = m.volumes();
-            (a.to_vec(), b.to_vec())
-        }
+    let model = sys
+        .model_as::<bpm::engine::BpmModel>()
+        .expect("a bonded-particle scene");
+    let (vol, vol0) = {
+        let (a, b) = model.volumes();
+        (a.to_vec(), b.to_vec())
     };
+    let bonds = model.bonds().clone();
     let mut vol_ref = vec![0.0; n];
     bpm::kernels::accumulate_volumes(
         &sep,
-        &sys.x,
-        &sys.bonds.entries,
+        &sys.particles.x,
+        &bonds.entries,
         Ownership::all(n),
         &mut vol_ref,
     );
@@ -328,10 +330,10 @@ fn bond_split_into_interior_and_boundary_matches_minimum_image_after_wraps() {
     let coeffs = [ff.bond];
     let mut f = vec![[0.0; 3]; n];
     let inputs = BondInputs {
-        x: &sys.x,
-        v: Some(&sys.v),
-        bonds: &sys.bonds.entries,
-        r0: &sys.bonds.r0,
+        x: &sys.particles.x,
+        v: Some(&sys.particles.v),
+        bonds: &bonds.entries,
+        r0: &bonds.r0,
         coeffs: &coeffs,
         volumes: Some((&vol_ref, &vol0)),
         tally: true,
@@ -339,8 +341,8 @@ fn bond_split_into_interior_and_boundary_matches_minimum_image_after_wraps() {
     let tb = bond_forces(&sep, &inputs, Ownership::all(n), &mut f);
     let pcoeffs = [ff.pair.unwrap()];
     let pin = PairInputs {
-        x: &sys.x,
-        v: Some(&sys.v),
+        x: &sys.particles.x,
+        v: Some(&sys.particles.v),
         types: None,
         ntypes: 1,
         coeffs: &pcoeffs,
@@ -357,8 +359,8 @@ fn bond_split_into_interior_and_boundary_matches_minimum_image_after_wraps() {
     // Round-off scale: inside a bond force, terms of size k r0 and a_B D
     // (about 1) cancel to leave about 1e-3, and the split sums volumes and
     // forces in another order, so differences are ulps of these terms.
-    let bond_scale = ff.bond.k * sys.bonds.max_r0() + ff.bond.a.abs();
-    for (a, b) in sys.f.iter().zip(&f) {
+    let bond_scale = ff.bond.k * bonds.max_r0() + ff.bond.a.abs();
+    for (a, b) in sys.particles.f.iter().zip(&f) {
         for d in 0..3 {
             assert!(
                 (a[d] - b[d]).abs() < 1e-13 * bond_scale,
@@ -366,7 +368,7 @@ fn bond_split_into_interior_and_boundary_matches_minimum_image_after_wraps() {
             );
         }
     }
-    let tsys = sys.report.interactions.bonds;
+    let tsys = sys.report.interactions.terms[bpm::engine::bpm::BOND_TERM];
     let vscale = tb.virial.iter().fold(0.0f64, |m, v| m.max(v.abs()));
     for k in 0..6 {
         assert!(

@@ -45,6 +45,7 @@ fn in_process_lammps_gives_the_native_forces() {
         ..Default::default()
     });
     let scale = sys
+        .particles
         .f
         .iter()
         .flat_map(|r| r.iter())
@@ -52,7 +53,7 @@ fn in_process_lammps_gives_the_native_forces() {
     assert!(scale > 1e-3);
     let dev = forces
         .iter()
-        .zip(&sys.f)
+        .zip(&sys.particles.f)
         .flat_map(|(a, b)| (0..3).map(move |d| (a[d] - b[d]).abs()))
         .fold(0.0f64, f64::max);
     assert!(

@@ -179,7 +179,7 @@ fn error_of_edited_setup(tag: &str, replace: &[(&str, &str)], tail: &str) -> Str
 #[test]
 fn bad_input_gets_a_clear_lammps_error() {
     let bond = "bond_coeff      1 ${kB} ${aB} ${gB}";
-    let pair = "pair_coeff      1 1 ${kP} ${d} ${aP} ${gP}";
+    let pair = "pair_coeff      * * ${kP} ${d} ${aP} ${gP}";
     // (name, edits of setup.in, expected words of the error)
     type Case<'a> = (&'a str, Vec<(&'a str, &'a str)>, &'a str);
     let cases: Vec<Case> = vec![

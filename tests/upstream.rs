@@ -68,7 +68,7 @@ fn forces_pressure_and_trajectories_match_upstream_on_one_and_two_ranks() {
 
 #[test]
 fn pair_damping_differs_from_upstream_by_its_smoothing_factor_only() {
-    // Upstream damps contacts with gamma (1 - (r/r_c)^8) (v.n) n; MODEL.md
+    // Upstream damps contacts with gamma (1 - (r/r_c)^8) (v.n) n; docs/model.md
     // and our style with gamma (v.n) n. The difference must be visible
     // (large against round-off) with pair damping on, gone without it, and
     // gone once that factor is applied to our forces.

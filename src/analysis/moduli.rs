@@ -1,5 +1,5 @@
 //! Bulk and shear moduli from recorded compression and shear series
-//! (MODEL.md "Calibration"): least-squares slopes of stress against strain.
+//! (docs/protocols.md, "Calibration"): least-squares slopes of stress against strain.
 
 use super::fit::least_squares_line;
 use crate::scene::run::StageOutput;
@@ -96,8 +96,12 @@ mod tests {
         StageOutput {
             name: "t".into(),
             steps: 0,
-            columns: columns.iter().map(|c| c.to_string()).collect(),
+            columns: columns
+                .iter()
+                .map(|c| crate::scene::observables::standard_column(c).expect("a standard column"))
+                .collect(),
             rows,
+            rows_file: None,
             checkpoints: vec![],
             wall_seconds: 0.0,
             timers: Default::default(),

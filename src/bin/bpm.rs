@@ -2,7 +2,10 @@
 
 use anyhow::{bail, Context, Result};
 use bpm::scene::builders::bulk::{build_bulk, BulkParams};
-use bpm::scene::{build_system, protocols, read_scene, run_scene, write_scene, RunOptions};
+use bpm::scene::{
+    final_scene as final_scene_of, protocols, read_scene, run_native_report, write_scene,
+    DumpOptions, EngineInfo, OutputFiles, RunOptions, RunReport,
+};
 use clap::{Parser, Subcommand, ValueEnum};
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
@@ -49,6 +52,20 @@ enum Command {
         /// only; default: beside the output, named after it).
         #[arg(long)]
         workdir: Option<PathBuf>,
+        /// Stream the thermo rows to this text file as they are recorded
+        /// (they are then not kept in memory or in the report).
+        #[arg(long)]
+        thermo: Option<PathBuf>,
+        /// Write snapshots to this LAMMPS dump file (`id mol type x y z ix
+        /// iy iz vx vy vz`), readable by OVITO and `read_dump`.
+        #[arg(long)]
+        dump: Option<PathBuf>,
+        /// Steps between snapshots (global step count).
+        #[arg(long, default_value_t = 1000)]
+        dump_every: u64,
+        /// Add forces (`fx fy fz`) to the snapshots.
+        #[arg(long)]
+        dump_forces: bool,
     },
     /// Benchmark the native engine on the bulk solid (ns per particle-step).
     Bench {
@@ -96,7 +113,7 @@ enum Command {
         #[arg(long, default_value_t = 1)]
         seed: u64,
     },
-    /// Calibration of K and G against a_B (MODEL.md "Calibration", paper
+    /// Calibration of K and G against a_B (docs/protocols.md "Calibration", paper
     /// Fig. 2): tables against the paper's fits, LAMMPS agreement, a
     /// strain-rate halving check and size convergence, with plots.
     Calibrate {
@@ -203,7 +220,7 @@ enum Protocol {
 
 #[derive(Subcommand)]
 enum BuildWhat {
-    /// The periodic bulk solid of MODEL.md "Bulk solid".
+    /// The periodic bulk solid of docs/protocols.md "Bulk solid".
     Bulk {
         /// Box side L (d).
         #[arg(long, default_value_t = 14.0)]
@@ -306,68 +323,58 @@ fn real_main() -> Result<()> {
             scene: path,
             output,
             final_scene,
-            engine: Engine::Lammps,
+            engine,
             newton,
             workdir,
+            thermo,
+            dump,
+            dump_every,
+            dump_forces,
         } => {
-            if final_scene.is_some() {
-                bail!("--final-scene is only available with --engine native");
+            if dump.is_some() && dump_every == 0 {
+                bail!("--dump-every must be at least 1");
             }
-            run_lammps(&path, &output, newton == "on", workdir)?;
-        }
-        Command::Run {
-            scene: path,
-            output,
-            final_scene,
-            engine: Engine::Native,
-            ..
-        } => {
+            let files = OutputFiles {
+                thermo,
+                dump: dump.map(|path| DumpOptions {
+                    path,
+                    every: dump_every,
+                    forces: dump_forces,
+                }),
+            };
             let (scene, hash) =
                 read_scene(&path).with_context(|| format!("reading scene {}", path.display()))?;
-            let mut sys = build_system(&scene, cli.threads);
-            let start = std::time::Instant::now();
-            let (stages, error) = run_scene(
-                &mut sys,
-                &scene,
-                &RunOptions {
-                    threads: cli.threads,
-                    progress,
-                },
-            );
-            let report = run_report(
-                serde_json::json!({"engine": "native", "threads": cli.threads}),
-                &path,
-                hash,
-                &scene,
-                start.elapsed().as_secs_f64(),
-                error.as_ref().map(|e| e.to_string()),
-                &stages,
-            );
-            std::fs::write(&output, serde_json::to_string(&report)?)
-                .with_context(|| format!("writing {}", output.display()))?;
-            if let Some(final_path) = final_scene {
-                let mut fin = scene.clone();
-                fin.particles.positions = sys.x.clone();
-                fin.particles.velocities = Some(sys.v.clone());
-                fin.simbox.lo = sys.simbox.lo;
-                fin.simbox.lengths = sys.simbox.lengths;
-                fin.simbox.tilt = sys.simbox.tilt;
-                fin.bonds.pairs = sys
-                    .bonds
-                    .entries
-                    .iter()
-                    .map(|b| [b.i as usize, b.j as usize])
-                    .collect();
-                fin.bonds.r0 = Some(sys.bonds.r0.clone());
-                write_scene(&final_path, &fin)?;
+            if engine == Engine::Lammps {
+                if final_scene.is_some() {
+                    bail!("--final-scene is only available with --engine native");
+                }
+                return run_lammps(
+                    &scene,
+                    &path,
+                    hash,
+                    &output,
+                    newton == "on",
+                    workdir,
+                    &files,
+                );
             }
-            for s in &stages {
+            let opts = RunOptions {
+                threads: cli.threads,
+                progress,
+                files,
+            };
+            let (report, sys) = run_native_report(&scene, &path, hash, &opts);
+            report.write(&output)?;
+            if let Some(final_path) = final_scene {
+                write_scene(&final_path, &final_scene_of(&scene, &sys))?;
+            }
+            for s in &report.stages {
                 println!(
                     "stage {:<12} {:>9} steps  {:>8.2} s  neighbour builds {}",
                     s.name, s.steps, s.wall_seconds, s.neighbour_builds
                 );
             }
-            if let Some(e) = error {
+            if let Some(e) = report.error {
                 bail!(
                     "{e} (stages finished before it are saved in {})",
                     output.display()
@@ -570,78 +577,46 @@ fn real_main() -> Result<()> {
     Ok(())
 }
 
-/// The report `bpm run` writes for either engine: the engine's own fields
-/// (`engine` is a JSON object), then what ran (scene file and hash, seed,
-/// force field, protocol, provenance) and what it recorded.
-fn run_report(
-    engine: serde_json::Value,
-    path: &Path,
-    hash: u64,
-    scene: &bpm::scene::Scene,
-    wall_seconds: f64,
-    error: Option<String>,
-    stages: &[bpm::scene::StageOutput],
-) -> serde_json::Value {
-    let mut report = serde_json::json!({
-        "program": "bpm run",
-        "version": bpm::VERSION,
-        "scene_file": path.display().to_string(),
-        "scene_fnv1a": format!("{hash:016x}"),
-        "seed": scene.seed,
-        "particles": scene.particles.positions.len(),
-        "bonds": scene.bonds.pairs.len(),
-        "force_field": scene.force_field,
-        "protocol": scene.stages,
-        "provenance": scene.provenance,
-        "wall_seconds": wall_seconds,
-        "error": error,
-        "stages": stages,
-    });
-    if let (Some(all), serde_json::Value::Object(own)) = (report.as_object_mut(), engine) {
-        all.extend(own);
-    }
-    report
-}
-
 /// `bpm run --engine lammps`: the scene in LAMMPS in this process. LAMMPS
 /// errors end the process with LAMMPS's message (Debian's LAMMPS has no
 /// exceptions); `bpm check` runs this as a child process for that reason.
-fn run_lammps(path: &Path, output: &Path, newton: bool, workdir: Option<PathBuf>) -> Result<()> {
-    let (scene, hash) =
-        read_scene(path).with_context(|| format!("reading scene {}", path.display()))?;
+fn run_lammps(
+    scene: &bpm::scene::Scene,
+    path: &Path,
+    hash: u64,
+    output: &Path,
+    newton: bool,
+    workdir: Option<PathBuf>,
+    files: &OutputFiles,
+) -> Result<()> {
     let stem = output
         .file_stem()
         .map_or("run".into(), |s| s.to_string_lossy().to_string());
     let dir = workdir.unwrap_or_else(|| output.with_file_name(format!("{stem}.lammps")));
     std::fs::create_dir_all(&dir).with_context(|| format!("creating {}", dir.display()))?;
     let start = std::time::Instant::now();
-    let run = bpm::lammps::run_scene_lammps(&scene, &dir, "scene", newton)?;
+    let run = bpm::lammps::run_scene_lammps(scene, &dir, "scene", newton, files)?;
     bpm::lammps::finalize_mpi();
     if run.rank != 0 {
         return Ok(());
     }
-    let report = run_report(
-        serde_json::json!({
-            "engine": "lammps",
-            "lammps": "Debian 29Sep2021 update 2 + lammps-plugin",
-            "mpi_ranks": run.ranks,
-            "newton": newton,
-            "driver": dir.join("scene.in").display().to_string(),
-        }),
+    let driver = dir.join("scene.in").display().to_string();
+    let mut report = RunReport::new(
+        EngineInfo::Lammps {
+            lammps: run.version.clone(),
+            mpi_ranks: run.ranks,
+            newton,
+            driver: driver.clone(),
+        },
         path,
         hash,
-        &scene,
-        start.elapsed().as_secs_f64(),
-        None,
-        &run.stages,
+        scene,
     );
-    std::fs::write(output, serde_json::to_string(&report)?)
-        .with_context(|| format!("writing {}", output.display()))?;
-    println!(
-        "wrote {} (LAMMPS driver {})",
-        output.display(),
-        dir.join("scene.in").display()
-    );
+    report.wall_seconds = start.elapsed().as_secs_f64();
+    report.files = files.paths();
+    report.stages = run.stages;
+    report.write(output)?;
+    println!("wrote {} (LAMMPS driver {driver})", output.display());
     Ok(())
 }
 
@@ -788,7 +763,7 @@ fn upstream_check(
         }
     }
     // Pair damping: upstream multiplies it by 1 - (r/r_c)^8, we do not
-    // (MODEL.md's damping is the plain gamma (v_ij . n) n).
+    // (docs/model.md's damping is the plain gamma (v_ij . n) n).
     for config in configurations(size, grain_radius, seed, -0.5)? {
         compare_configuration(&lammps, &config, 1.0, 0, 1, &work, &mut rows)?;
         flush(&rows, &mut print_from);

@@ -1,28 +1,39 @@
-//! The native engine: box, bonds, neighbour list, integrator and drivers.
+//! The native engine: box, pair list, integrator, particle models and the
+//! drivers a protocol stage adds.
 //!
-//! The layout follows the parts of a step: [`simbox`] and [`neighbor`] for
-//! geometry, [`topology`] for bonds, [`bpm`] for the interaction model,
-//! [`external`] and [`deform`] for what a protocol stage adds, [`system`]
-//! for the state and the velocity-Verlet step.
+//! - geometry: [`simbox`] (box, minimum image), [`neighbor`] (cell-list
+//!   Verlet list and exclusions);
+//! - state: [`particles`] (structure of arrays), [`system`] (one run's
+//!   state and the velocity-Verlet step), [`integrator`];
+//! - models: [`model`] (the contract), [`bpm`] (the bonded particle model);
+//!   a new model is a folder beside `bpm/` implementing
+//!   [`ParticleModel`];
+//! - drivers: [`external`] (walls, tether, viscous damping), [`deform`]
+//!   (box deformation, barostat);
+//! - [`parallel`] and [`timers`]: threads and per-part timing.
 
 pub mod bpm;
 pub mod deform;
 pub mod external;
+pub mod integrator;
+pub mod model;
 pub mod neighbor;
 pub mod parallel;
+pub mod particles;
 pub mod simbox;
 pub mod system;
 pub mod timers;
-pub mod topology;
 
-pub use bpm::{BpmModel, BpmTerms, InteractionTally};
+pub use bpm::{BondTopology, BpmModel, BpmTerms};
 pub use deform::{Barostat, Deformation, TiltFactor};
 pub use external::{ActiveTether, FlatWall, SphereWall, Tether, WallSide};
-pub use neighbor::NeighbourList;
+pub use integrator::Integrator;
+pub use model::{EnergyTerm, ForceInput, ForceOutput, ModelTally, ParticleModel, MAX_ENERGY_TERMS};
+pub use neighbor::{Exclusions, NeighbourList};
+pub use particles::{Particles, Rotation};
 pub use simbox::{MinimumImage, SimBox};
-pub use system::{ForceModel, StageDrivers, StepReport, System};
+pub use system::{StageDrivers, StepReport, System};
 pub use timers::{Stage, Timers};
-pub use topology::BondTopology;
 
 /// Failures of a running simulation.
 #[derive(Debug, thiserror::Error)]
@@ -44,6 +55,12 @@ pub enum EngineError {
         particle: usize,
         /// Dimension (0 = x).
         dimension: usize,
+    },
+    /// The stage asks the model for something it does not have.
+    #[error("the particle model does not support {what}")]
+    Unsupported {
+        /// What was asked.
+        what: &'static str,
     },
     /// The barostat asked for a non-positive box scale.
     #[error("barostat at step {step}: pressure {pressure:e} with this gain would invert the box (reduce the gain)")]

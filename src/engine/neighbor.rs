@@ -6,8 +6,53 @@
 //! boxes of one or two bins per dimension correct under the minimum image.
 
 use super::simbox::SimBox;
-use super::topology::BondTopology;
 use crate::kernels::Separation;
+
+/// Pairs a pair list leaves out: for each particle its sorted partners
+/// (both directions), in CSR form. The bonded particle model excludes its
+/// bonded pairs, as LAMMPS's `special_bonds lj 0 ...` does.
+#[derive(Clone, Debug, Default)]
+pub struct Exclusions {
+    offsets: Vec<usize>,
+    partners: Vec<u32>,
+}
+
+impl Exclusions {
+    /// Exclusions of the pairs `(i, j)` on `n` particles; indices must be
+    /// below `n`.
+    pub fn from_pairs(n: usize, pairs: impl Iterator<Item = (usize, usize)> + Clone) -> Self {
+        let mut offsets = vec![0usize; n + 1];
+        for (i, j) in pairs.clone() {
+            offsets[i + 1] += 1;
+            offsets[j + 1] += 1;
+        }
+        for i in 0..n {
+            offsets[i + 1] += offsets[i];
+        }
+        let mut cursor = offsets.clone();
+        let mut partners = vec![0u32; offsets[n]];
+        for (i, j) in pairs {
+            partners[cursor[i]] = j as u32;
+            cursor[i] += 1;
+            partners[cursor[j]] = i as u32;
+            cursor[j] += 1;
+        }
+        for i in 0..n {
+            partners[offsets[i]..offsets[i + 1]].sort_unstable();
+        }
+        Self { offsets, partners }
+    }
+
+    /// Sorted excluded partners of particle `i`.
+    pub fn partners(&self, i: usize) -> &[u32] {
+        &self.partners[self.offsets[i]..self.offsets[i + 1]]
+    }
+
+    /// Whether the pair `(i, j)` is excluded.
+    pub fn excludes(&self, i: usize, j: usize) -> bool {
+        self.partners(i).binary_search(&(j as u32)).is_ok()
+    }
+}
 
 /// A half neighbour list (`j > i`) in CSR form.
 #[derive(Clone, Debug, Default)]
@@ -55,15 +100,15 @@ impl NeighbourList {
         2.0 * max_sq.sqrt() + simbox.periodic_drift(old_box) > skin
     }
 
-    /// Rebuilds the list for `cutoff + skin`, leaving out bonded pairs when
-    /// `exclude` is given. Positions must already be wrapped.
+    /// Rebuilds the list for `cutoff + skin`, leaving out the pairs of
+    /// `exclude`. Positions must already be wrapped.
     pub fn build(
         &mut self,
         simbox: &SimBox,
         x: &[[f64; 3]],
         cutoff: f64,
         skin: f64,
-        exclude: Option<&BondTopology>,
+        exclude: Option<&Exclusions>,
     ) {
         let list_cut = cutoff + skin;
         let cut_sq = list_cut * list_cut;
@@ -160,7 +205,7 @@ impl NeighbourList {
                     }
                     let d = simbox.delta(&x[i], &x[j]);
                     if d[0] * d[0] + d[1] * d[1] + d[2] * d[2] < cut_sq
-                        && !exclude.is_some_and(|t| t.bonded(i, j))
+                        && !exclude.is_some_and(|e| e.excludes(i, j))
                     {
                         self.neighbours.push(j as i32);
                     }
@@ -241,7 +286,7 @@ mod tests {
             periodic: [true; 3],
         };
         let x = vec![[0.5, 0.5, 0.5], [1.2, 0.5, 0.5], [0.5, 1.2, 0.5]];
-        let bonds = BondTopology::new(3, &[(0, 1, 0.7)]);
+        let bonds = Exclusions::from_pairs(3, [(0, 1)].into_iter());
         let mut list = NeighbourList::default();
         list.build(&simbox, &x, 1.0, 0.2, Some(&bonds));
         assert_eq!(listed(&list, 3), vec![(0, 2), (1, 2)]);

@@ -4,31 +4,16 @@
 //! step: half kick and drift, neighbour check, forces (model, then external),
 //! half kick, then box changes (deformation, barostat) with affine remap.
 
-use super::bpm::{BpmModel, InteractionTally};
 use super::deform::{Barostat, Deformation};
 use super::external::{apply_viscous, ActiveTether, FlatWall, SphereWall};
+use super::integrator::Integrator;
+use super::model::{ForceInput, ForceOutput, ModelTally, ParticleModel};
 use super::neighbor::NeighbourList;
+use super::particles::Particles;
 use super::simbox::SimBox;
 use super::timers::{Stage, Timers};
-use super::topology::BondTopology;
 use super::EngineError;
 use crate::kernels::Tally;
-
-/// The interaction model of a system. A second model (DEM spheres with
-/// rotation) becomes a second variant; dispatch happens once per step.
-#[derive(Debug)]
-pub enum ForceModel {
-    /// Bonded particle model with the multibody volume term.
-    Bpm(BpmModel),
-}
-
-impl ForceModel {
-    fn pair_cutoff(&self) -> Option<f64> {
-        match self {
-            ForceModel::Bpm(m) => m.pair_cutoff(),
-        }
-    }
-}
 
 /// Everything a stage adds on top of the interaction model.
 #[derive(Debug, Default)]
@@ -61,8 +46,8 @@ impl StageDrivers {
 /// Observables of the last force evaluation.
 #[derive(Clone, Debug, Default)]
 pub struct StepReport {
-    /// Bond and pair energy and virial.
-    pub interactions: InteractionTally,
+    /// Energy per model term and virial.
+    pub interactions: ModelTally,
     /// Normal force on each flat wall (k d units, >= 0).
     pub wall_forces: Vec<f64>,
     /// Position of each flat wall.
@@ -76,27 +61,17 @@ pub struct StepReport {
     pub tallied: bool,
 }
 
-/// Particles, bonds, box and model, with the state of a run.
+/// Particles, box and model, with the state of a run.
 #[derive(Debug)]
 pub struct System {
     /// The box.
     pub simbox: SimBox,
-    /// Positions (wrapped into the box along periodic dimensions).
-    pub x: Vec<[f64; 3]>,
-    /// Velocities.
-    pub v: Vec<[f64; 3]>,
-    /// Forces of the last evaluation.
-    pub f: Vec<[f64; 3]>,
-    /// Periodic image counters: unwrapped = x + box image vector.
-    pub image: Vec<[i32; 3]>,
-    /// Grain id per particle.
-    pub grain: Vec<u32>,
-    /// Particle mass (uniform).
-    pub mass: f64,
-    /// The bonds.
-    pub bonds: BondTopology,
-    /// The interaction model.
-    pub model: ForceModel,
+    /// The particles.
+    pub particles: Particles,
+    /// The particle model (bonded particles, DEM spheres, ...).
+    pub model: Box<dyn ParticleModel>,
+    /// How particles move: translational, or with rotation.
+    pub integrator: Integrator,
     /// The pair neighbour list.
     pub neighbours: NeighbourList,
     /// Neighbour skin (d units).
@@ -116,28 +91,59 @@ pub struct System {
 }
 
 impl System {
-    /// Kinetic energy.
+    /// A system of `particles` in `simbox` with `model`; rotational
+    /// models get angular velocities and the rotational integrator.
+    pub fn new(
+        simbox: SimBox,
+        mut particles: Particles,
+        model: Box<dyn ParticleModel>,
+        skin: f64,
+        threads: usize,
+    ) -> Self {
+        if model.rotational() {
+            particles.enable_rotation();
+        }
+        Self {
+            simbox,
+            integrator: Integrator::for_particles(&particles),
+            particles,
+            model,
+            neighbours: NeighbourList::default(),
+            skin,
+            threads: threads.max(1),
+            step: 0,
+            time: 0.0,
+            timers: Timers::default(),
+            report: StepReport::default(),
+            wraps: 0,
+        }
+    }
+
+    /// The model as its concrete type, if it is one.
+    pub fn model_as<M: ParticleModel>(&self) -> Option<&M> {
+        self.model.as_any().downcast_ref::<M>()
+    }
+
+    /// Mutable [`System::model_as`].
+    pub fn model_as_mut<M: ParticleModel>(&mut self) -> Option<&mut M> {
+        self.model.as_any_mut().downcast_mut::<M>()
+    }
+
+    /// Positions.
+    pub fn x(&self) -> &[[f64; 3]] {
+        &self.particles.x
+    }
+
+    /// Translational kinetic energy.
     pub fn kinetic_energy(&self) -> f64 {
-        0.5 * self.mass
-            * self
-                .v
-                .iter()
-                .map(|v| v[0] * v[0] + v[1] * v[1] + v[2] * v[2])
-                .sum::<f64>()
+        self.particles.kinetic_energy()
     }
 
     /// Pressure tensor `[xx, yy, zz, xy, xz, yz]` from kinetic and virial
     /// parts, positive in compression (LAMMPS `compute pressure`).
     pub fn pressure_tensor(&self) -> [f64; 6] {
         let mut p = self.interaction_tally().virial;
-        for v in &self.v {
-            p[0] += self.mass * v[0] * v[0];
-            p[1] += self.mass * v[1] * v[1];
-            p[2] += self.mass * v[2] * v[2];
-            p[3] += self.mass * v[0] * v[1];
-            p[4] += self.mass * v[0] * v[2];
-            p[5] += self.mass * v[1] * v[2];
-        }
+        self.particles.add_kinetic_tensor(&mut p);
         let inv = 1.0 / self.simbox.volume();
         p.map(|c| c * inv)
     }
@@ -158,37 +164,46 @@ impl System {
         if force
             || self
                 .neighbours
-                .needs_rebuild(&self.simbox, &self.x, self.skin)
+                .needs_rebuild(&self.simbox, &self.particles.x, self.skin)
         {
-            for (x, n) in self.x.iter_mut().zip(self.image.iter_mut()) {
-                self.simbox.wrap(x, n);
-            }
+            self.particles.wrap(&self.simbox);
             self.wraps += 1;
-            self.neighbours
-                .build(&self.simbox, &self.x, cutoff, self.skin, Some(&self.bonds));
+            self.neighbours.build(
+                &self.simbox,
+                &self.particles.x,
+                cutoff,
+                self.skin,
+                self.model.exclusions(),
+            );
         }
     }
 
     /// Zeroes and recomputes all forces for the stage's drivers at
     /// `elapsed` time into the stage.
     pub fn compute_forces(&mut self, drivers: &StageDrivers, elapsed: f64, tally: bool) {
-        for f in &mut self.f {
-            *f = [0.0; 3];
-        }
-        let interactions = match &mut self.model {
-            ForceModel::Bpm(m) => m.compute(
-                self.wraps,
-                &self.simbox,
-                &self.x,
-                &self.v,
-                &self.bonds,
-                &self.neighbours,
-                self.threads,
-                tally,
-                &mut self.timers,
-                &mut self.f,
-            ),
+        self.particles.clear_forces();
+        let p = &mut self.particles;
+        let (omega, torque) = match &mut p.rotation {
+            Some(r) => (Some(&r.omega[..]), Some(&mut r.torque[..])),
+            None => (None, None),
         };
+        let input = ForceInput {
+            simbox: &self.simbox,
+            x: &p.x,
+            v: &p.v,
+            omega,
+            radius: &p.radius,
+            neighbours: &self.neighbours,
+            wraps: self.wraps,
+            threads: self.threads,
+            tally,
+        };
+        let mut output = ForceOutput {
+            f: &mut p.f,
+            torque,
+            timers: &mut self.timers,
+        };
+        let interactions = self.model.compute(&input, &mut output);
         let _t = self.timers.start(Stage::External);
         let mut report = StepReport {
             interactions,
@@ -196,21 +211,21 @@ impl System {
             ..StepReport::default()
         };
         for wall in &drivers.walls {
-            let (force, energy) = wall.apply(elapsed, &self.x, &mut self.f);
+            let (force, energy) = wall.apply(elapsed, &p.x, &mut p.f);
             report.wall_forces.push(force);
             report.wall_positions.push(wall.position_at(elapsed));
             report.external_energy += energy;
         }
         if let Some(sphere) = &drivers.sphere_wall {
-            let (force, energy) = sphere.apply(elapsed, &self.x, &mut self.f);
+            let (force, energy) = sphere.apply(elapsed, &p.x, &mut p.f);
             report.sphere_wall_force = force;
             report.external_energy += energy;
         }
         if let Some(tether) = &drivers.tether {
-            report.external_energy += tether.apply(&self.simbox, &self.x, &self.image, &mut self.f);
+            report.external_energy += tether.apply(&self.simbox, &p.x, &p.image, &mut p.f);
         }
         if drivers.viscous != 0.0 {
-            apply_viscous(drivers.viscous, &self.v, &mut self.f);
+            apply_viscous(drivers.viscous, &p.v, &mut p.f);
         }
         self.report = report;
     }
@@ -230,26 +245,16 @@ impl System {
         stage_box: &SimBox,
     ) -> Result<(), EngineError> {
         let dt = drivers.dt;
-        let half = 0.5 * dt / self.mass;
         {
             let _t = self.timers.start(Stage::Integrate);
-            for ((x, v), f) in self.x.iter_mut().zip(self.v.iter_mut()).zip(&self.f) {
-                for d in 0..3 {
-                    v[d] += half * f[d];
-                    x[d] += dt * v[d];
-                }
-            }
+            self.integrator.initial(&mut self.particles, dt);
         }
         self.update_neighbours(false);
         let elapsed = stage_step as f64 * dt;
         self.compute_forces(drivers, elapsed, drivers.tally_at(stage_step));
         {
             let _t = self.timers.start(Stage::Integrate);
-            for (v, f) in self.v.iter_mut().zip(&self.f) {
-                for d in 0..3 {
-                    v[d] += half * f[d];
-                }
-            }
+            self.integrator.final_half(&mut self.particles, dt);
         }
         self.step += 1;
         self.time += dt;
@@ -274,7 +279,7 @@ impl System {
     /// Changes the box and maps positions affinely into it.
     pub fn remap_into(&mut self, new_box: SimBox) {
         let _t = self.timers.start(Stage::Integrate);
-        for x in &mut self.x {
+        for x in &mut self.particles.x {
             new_box.remap_from(&self.simbox, x);
         }
         self.simbox = new_box;
@@ -284,10 +289,8 @@ impl System {
     /// particle left a closed dimension of the box.
     pub fn check_finite(&self) -> Result<(), EngineError> {
         let bad = |a: &[[f64; 3]]| a.iter().position(|r| !r.iter().all(|c| c.is_finite()));
-        if let Some(i) = bad(&self.x)
-            .or_else(|| bad(&self.v))
-            .or_else(|| bad(&self.f))
-        {
+        let p = &self.particles;
+        if let Some(i) = bad(&p.x).or_else(|| bad(&p.v)).or_else(|| bad(&p.f)) {
             return Err(EngineError::NonFinite {
                 step: self.step,
                 particle: i,
@@ -296,7 +299,7 @@ impl System {
         // A closed dimension confines particles, as LAMMPS's fixed boundary
         // does (it loses atoms that leave): same scene, same verdict.
         if !self.simbox.periodic.iter().all(|&p| p) {
-            for (i, x) in self.x.iter().enumerate() {
+            for (i, x) in p.x.iter().enumerate() {
                 let s = self.simbox.to_fractional(x);
                 if let Some(d) =
                     (0..3).find(|&d| !self.simbox.periodic[d] && !(0.0..=1.0).contains(&s[d]))
@@ -314,28 +317,16 @@ impl System {
 
     /// Number of particles.
     pub fn len(&self) -> usize {
-        self.x.len()
+        self.particles.len()
     }
 
     /// Whether the system has no particles.
     pub fn is_empty(&self) -> bool {
-        self.x.is_empty()
+        self.particles.is_empty()
     }
 
-    /// Sets every bond's reference length to its current length.
-    pub fn reset_bond_reference(&mut self) {
-        self.bonds.reset_reference(&self.simbox, &self.x);
-        let n = self.x.len();
-        match &mut self.model {
-            ForceModel::Bpm(m) => m.set_reference(n, &self.bonds),
-        }
-    }
-
-    /// Energy and virial of bonds and pairs together.
+    /// Energy and virial of every model term together.
     pub fn interaction_tally(&self) -> Tally {
-        self.report
-            .interactions
-            .bonds
-            .merged(&self.report.interactions.pairs)
+        self.report.interactions.total()
     }
 }

@@ -1,4 +1,4 @@
-//! Bond force: spring, multibody volume term and damping (paper 1, eqs. 1 and 3).
+//! Bond force: spring, multibody volume term and damping (docs/model.md).
 //!
 //! `F = k (r0 - r) + a (D_ij - r / r0) - gamma (n . dv)` with
 //! `D_ij = ((V_i + V_j) / (V0_i + V0_j))^(1/3)`; positive `F` pushes the

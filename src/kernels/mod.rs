@@ -5,7 +5,7 @@
 //! called by [`crate::engine`] and, through [`crate::ffi`], by the C++ shim in
 //! `lammps-plugin/`, so a fix here reaches both engines.
 //!
-//! Conventions (MODEL.md section 1): for a pair `i, j`, `r_ij = x_i - x_j`,
+//! Conventions (docs/model.md): for a pair `i, j`, `r_ij = x_i - x_j`,
 //! `n = r_ij / r`, `dv = v_i - v_j`; a force magnitude `F` acts on `i` along
 //! `+n` (positive is repulsive) and on `j` along `-n`.
 

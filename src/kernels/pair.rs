@@ -1,4 +1,4 @@
-//! Contact force between non-bonded particles (paper 1, eq. 4).
+//! Contact force between non-bonded particles (docs/model.md).
 //!
 //! For `r < d`: `F = k (d - r) + a (d - r)^3 - gamma (n . dv)`, repulsive
 //! when positive. The conservative part derives from

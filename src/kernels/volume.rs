@@ -1,4 +1,4 @@
-//! Per-atom volume proxies `V_i = sum_bonds r_ij^3` (paper 1, eq. 2).
+//! Per-atom volume proxies `V_i = sum_bonds r_ij^3` (docs/model.md).
 //!
 //! Only ratios of volumes enter the force, so the constant prefactor of a
 //! sphere's volume is dropped. With `newton` on, a bond adds to both atoms

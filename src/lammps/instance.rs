@@ -132,6 +132,27 @@ impl Lammps {
         (lo, hi, [xy, xz, yz])
     }
 
+    /// Whether each dimension of the box is periodic.
+    pub fn periodicity(&self) -> [bool; 3] {
+        let (mut lo, mut hi) = ([0.0; 3], [0.0; 3]);
+        let (mut xy, mut yz, mut xz) = (0.0, 0.0, 0.0);
+        let (mut periodic, mut changed) = ([0i32; 3], 0i32);
+        // SAFETY: live handle; every pointer is to a local of the right size.
+        unsafe {
+            sys::lammps_extract_box(
+                self.handle,
+                lo.as_mut_ptr(),
+                hi.as_mut_ptr(),
+                &mut xy,
+                &mut yz,
+                &mut xz,
+                periodic.as_mut_ptr(),
+                &mut changed,
+            )
+        };
+        periodic.map(|p| p != 0)
+    }
+
     /// The first `rows` rows of a fix's global array (e.g. `fix vector`).
     pub fn fix_array(
         &self,
@@ -191,6 +212,61 @@ impl Lammps {
         match self.last_error() {
             Some(message) => Err(LammpsError::Command {
                 command: format!("gather {name}"),
+                message,
+            }),
+            None => Ok(data),
+        }
+    }
+
+    /// LAMMPS's version as the date number it reports (e.g. 20210929).
+    pub fn version(&self) -> i32 {
+        // SAFETY: live handle.
+        unsafe { sys::lammps_version(self.handle) }
+    }
+
+    /// Per-atom integers of every atom, by atom id (`mol`, `type`).
+    pub fn gather_ints(&self, name: &str) -> Result<Vec<i32>, LammpsError> {
+        let n = self.natoms();
+        let mut data = vec![0i32; n];
+        let c = CString::new(name).map_err(|_| LammpsError::Nul)?;
+        // SAFETY: live handle; data holds n ints; type 0 = int.
+        unsafe {
+            sys::lammps_gather_atoms(
+                self.handle,
+                c.as_ptr() as *mut c_char,
+                0,
+                1,
+                data.as_mut_ptr() as *mut c_void,
+            )
+        };
+        match self.last_error() {
+            Some(message) => Err(LammpsError::Command {
+                command: format!("gather {name}"),
+                message,
+            }),
+            None => Ok(data),
+        }
+    }
+
+    /// Image flags of every atom, by atom id (LAMMPS unpacks its packed
+    /// image integers when three values per atom are asked for).
+    pub fn gather_images(&self) -> Result<Vec<[i32; 3]>, LammpsError> {
+        let n = self.natoms();
+        let mut data = vec![[0i32; 3]; n];
+        let c = CString::new("image").map_err(|_| LammpsError::Nul)?;
+        // SAFETY: live handle; data holds 3 n ints; type 0 = int.
+        unsafe {
+            sys::lammps_gather_atoms(
+                self.handle,
+                c.as_ptr() as *mut c_char,
+                0,
+                3,
+                data.as_mut_ptr() as *mut c_void,
+            )
+        };
+        match self.last_error() {
+            Some(message) => Err(LammpsError::Command {
+                command: "gather image".into(),
                 message,
             }),
             None => Ok(data),

@@ -6,8 +6,11 @@
 //! (`bpm run --engine lammps`, see `verify::engines`).
 
 use super::instance::{Lammps, LammpsError};
-use super::script::{write_driver, DriverLine, ScriptError, StagePlan, RECORDED_VALUES};
-use crate::scene::run::{Checkpoint, StageOutput, BOX_COLUMNS, STRESS_COLUMNS};
+use super::script::{write_driver, DriverLine, ScriptError, StagePlan};
+use crate::scene::observables::column_names;
+use crate::scene::observables::Quantity;
+use crate::scene::run::{Checkpoint, OutputFiles, Recorders, StageOutput};
+use crate::scene::trajectory::{Frame, TrajectoryError};
 use crate::scene::Scene;
 use std::path::Path;
 
@@ -20,6 +23,9 @@ pub enum LammpsRunError {
     /// LAMMPS reported an error (only with a LAMMPS built with exceptions).
     #[error(transparent)]
     Lammps(#[from] LammpsError),
+    /// A trajectory or thermo file could not be written.
+    #[error(transparent)]
+    Output(#[from] TrajectoryError),
     /// LAMMPS produced non-finite observables.
     #[error("stage `{stage}`: LAMMPS produced a non-finite {what}")]
     NotFinite {
@@ -38,15 +44,20 @@ pub struct LammpsRun {
     pub rank: i32,
     /// MPI ranks of the run.
     pub ranks: i32,
+    /// LAMMPS's version, as the instance reports it.
+    pub version: String,
 }
 
 /// Runs `scene` in LAMMPS: writes `<dir>/<tag>.{in,data,data.r0,log}` and
-/// returns the observables. `newton` sets LAMMPS's `newton` (bond and pair).
+/// returns the observables. `newton` sets LAMMPS's `newton` (bond and
+/// pair). Thermo rows and snapshots go to `files` (on rank 0) through the
+/// same writers as the native engine's.
 pub fn run_scene_lammps(
     scene: &Scene,
     dir: &Path,
     tag: &str,
     newton: bool,
+    files: &OutputFiles,
 ) -> Result<LammpsRun, LammpsRunError> {
     let driver = write_driver(scene, dir, tag, newton)?;
     let log = dir.join(format!("{tag}.log")).display().to_string();
@@ -55,6 +66,13 @@ pub fn run_scene_lammps(
     let mut lmp = Lammps::open(&["-log", &log])?;
     let rank = lmp.setting("world_rank");
     let ranks = lmp.setting("world_size");
+    let version = format!("LAMMPS {} + bpm lammps-plugin", lmp.version());
+    let mut recorders = if rank == 0 {
+        Recorders::open(files)?
+    } else {
+        Recorders::default()
+    };
+    let mut stage_index = 0;
     let mut stages = Vec::with_capacity(driver.stages.len());
     let mut step0 = 0u64;
     let mut time0 = 0.0;
@@ -63,7 +81,17 @@ pub fn run_scene_lammps(
             DriverLine::Command(c) => lmp.commands(c)?,
             DriverLine::Run { stage } => {
                 let plan = &driver.stages[*stage];
-                let out = run_stage(&mut lmp, plan, step0, time0)?;
+                let mut out = run_stage(&mut lmp, plan, step0, time0, &mut recorders)?;
+                if let Some(t) = recorders.thermo() {
+                    t.begin_stage(stage_index, &plan.name, &column_names(&plan.columns))?;
+                    for row in &out.rows {
+                        t.row(row)?;
+                    }
+                    t.flush()?;
+                    out.rows_file = Some(t.path().to_path_buf());
+                    out.rows.clear();
+                }
+                stage_index += 1;
                 step0 += plan.steps;
                 time0 += plan.steps as f64 * plan.dt;
                 stages.push(out);
@@ -74,62 +102,123 @@ pub fn run_scene_lammps(
         stages,
         rank,
         ranks,
+        version,
     })
 }
 
-/// Runs one stage in chunks that end at the position checkpoints; `run
-/// ... start 0 stop <steps>` keeps `fix deform` and `fix vector` anchored at
-/// the stage start across chunks, as in one run.
+/// Runs one stage in chunks that end at the position checkpoints and the
+/// dump steps; `run ... start 0 stop <steps>` keeps `fix deform` and `fix
+/// vector` anchored at the stage start across chunks, as in one run.
 fn run_stage(
     lmp: &mut Lammps,
     plan: &StagePlan,
     step0: u64,
     time0: f64,
+    recorders: &mut Recorders,
 ) -> Result<StageOutput, LammpsRunError> {
     let start = std::time::Instant::now();
     let mut checkpoints = Vec::new();
-    let mut checkpoint = |lmp: &Lammps, k: u64| -> Result<(), LammpsRunError> {
-        let (lo, hi, tilt) = lmp.box_geometry();
-        checkpoints.push(Checkpoint {
-            step: step0 + k,
-            simbox: [lo, [hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]], tilt],
-            positions: lmp.gather_vectors("x")?,
-        });
-        Ok(())
+    let dump = recorders.dump_schedule();
+    // Stage steps (0..=steps) where something is gathered.
+    let wanted = |k: u64| {
+        (plan.positions_every > 0 && k % plan.positions_every == 0)
+            || dump.is_some_and(|(every, _)| (step0 + k) % every == 0)
     };
-    let chunk = if plan.positions_every > 0 {
-        checkpoint(lmp, 0)?;
-        plan.positions_every.min(plan.steps.max(1))
-    } else {
-        plan.steps
-    };
+    let mut gather =
+        |lmp: &Lammps, k: u64, recorders: &mut Recorders| -> Result<(), LammpsRunError> {
+            let (lo, hi, tilt) = lmp.box_geometry();
+            let lengths = [hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]];
+            if plan.positions_every > 0 && k % plan.positions_every == 0 {
+                checkpoints.push(Checkpoint {
+                    step: step0 + k,
+                    simbox: [lo, lengths, tilt],
+                    positions: lmp.gather_vectors("x")?,
+                    images: lmp.gather_images()?,
+                });
+            }
+            if let Some((every, forces)) = dump {
+                if (step0 + k) % every == 0 {
+                    let frame = Frame {
+                        step: step0 + k,
+                        simbox: crate::engine::SimBox {
+                            lo,
+                            lengths,
+                            tilt,
+                            periodic: lmp.periodicity(),
+                        },
+                        grain: lmp
+                            .gather_ints("molecule")?
+                            .into_iter()
+                            .map(|m| m.max(1) as u32 - 1)
+                            .collect(),
+                        kind: lmp
+                            .gather_ints("type")?
+                            .into_iter()
+                            .map(|t| t as u32)
+                            .collect(),
+                        x: lmp.gather_vectors("x")?,
+                        image: lmp.gather_images()?,
+                        v: lmp.gather_vectors("v")?,
+                        f: if forces {
+                            Some(lmp.gather_vectors("f")?)
+                        } else {
+                            None
+                        },
+                    };
+                    recorders.write_frame(&frame)?;
+                }
+            }
+            Ok(())
+        };
+    // Before the stage's first run, as the native engine records its
+    // stage start (forces in a frame there are the last evaluation's).
+    if wanted(0) {
+        gather(lmp, 0, recorders)?;
+    }
     let mut done = 0;
-    loop {
-        let n = chunk.min(plan.steps - done);
+    while done < plan.steps {
+        let mut n = 1;
+        while done + n < plan.steps && !wanted(done + n) {
+            n += 1;
+        }
         let tail = if done == 0 { "" } else { " pre no post no" };
         lmp.commands(&format!("run {n} start 0 stop {}{tail}", plan.steps))?;
         done += n;
-        if plan.positions_every > 0 && done > 0 && done % plan.positions_every == 0 {
-            checkpoint(lmp, done)?;
-        }
-        if done >= plan.steps {
-            break;
+        if wanted(done) {
+            gather(lmp, done, recorders)?;
         }
     }
-    let mut rows = Vec::new();
+    let mut rows: Vec<Vec<f64>> = Vec::new();
     if let Some(intervals) = plan.steps.checked_div(plan.every) {
-        let columns = RECORDED_VALUES + 2 * plan.walls;
-        let recorded = lmp.fix_array("bpm_record", intervals + 1, columns)?;
-        // Box and stress values, then energies and walls; the native row has
-        // the mean of the diagonal stress between them.
-        let stress = BOX_COLUMNS.len();
-        let energies = stress + STRESS_COLUMNS.len();
-        for (r, values) in recorded.into_iter().enumerate() {
+        let recorded = plan.columns.iter().filter(|c| c.lammps.is_some()).count();
+        let values = lmp.fix_array("bpm_record", intervals + 1, recorded)?;
+        let stress: Vec<usize> = (0..3)
+            .filter_map(|k| {
+                plan.columns
+                    .iter()
+                    .filter(|c| c.lammps.is_some())
+                    .position(|c| c.quantity == Quantity::Stress(k))
+            })
+            .collect();
+        for (r, values) in values.into_iter().enumerate() {
             let k = r as u64 * plan.every;
-            let mut row = vec![(step0 + k) as f64, time0 + k as f64 * plan.dt];
-            row.extend_from_slice(&values[..energies]);
-            row.push(values[stress..stress + 3].iter().sum::<f64>() / 3.0);
-            row.extend_from_slice(&values[energies..]);
+            let mut next = values.iter();
+            let row = plan
+                .columns
+                .iter()
+                .map(|c| match (c.quantity, &c.lammps) {
+                    (_, Some(_)) => next.next().copied().unwrap_or(f64::NAN),
+                    (Quantity::Step, None) => (step0 + k) as f64,
+                    (Quantity::Time, None) => time0 + k as f64 * plan.dt,
+                    // The mean of the recorded diagonal, as the native
+                    // engine's (LAMMPS's scalar counts 3N - 3 kinetic
+                    // degrees of freedom).
+                    (Quantity::Pressure, None) if stress.len() == 3 => {
+                        stress.iter().map(|&i| values[i]).sum::<f64>() / 3.0
+                    }
+                    _ => f64::NAN,
+                })
+                .collect();
             rows.push(row);
         }
     }
@@ -152,6 +241,7 @@ fn run_stage(
         steps: plan.steps,
         columns: plan.columns.clone(),
         rows,
+        rows_file: None,
         checkpoints,
         wall_seconds: start.elapsed().as_secs_f64(),
         timers: Default::default(),

@@ -11,9 +11,8 @@
 
 use super::datafile::{write_data_file, write_reference_lengths, ScriptVars};
 use crate::engine::{Deformation, TiltFactor, WallSide};
-use crate::scene::run::{
-    random_velocities, stage_seed, thermo_columns, BOX_COLUMNS, ENERGY_COLUMNS, STRESS_COLUMNS,
-};
+use crate::scene::observables::{energy_terms, lammps_energy_compute, stage_columns, Column};
+use crate::scene::run::{random_velocities, stage_seed};
 use crate::scene::{ForceField, Scene, StageSpec};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -66,10 +65,9 @@ pub struct StagePlan {
     pub every: u64,
     /// Steps between position checkpoints (0 = none).
     pub positions_every: u64,
-    /// Thermo columns, as the native engine names them.
-    pub columns: Vec<String>,
-    /// Flat walls (two recorded values each, after [`RECORDED_VALUES`]).
-    pub walls: usize,
+    /// The recorded columns; those with a LAMMPS expression are the
+    /// values of `fix bpm_record`, in order.
+    pub columns: Vec<Column>,
 }
 
 /// The driver script of a scene and the plan of its stages.
@@ -98,11 +96,30 @@ impl Driver {
     }
 }
 
-/// Values per row of `fix bpm_record` (`stage_record.in`) before each
-/// wall's force and position: the box, stress and energy columns of
-/// `scene::run::thermo_columns`, in that order (step, time and the mean
-/// pressure are the harness's).
-pub const RECORDED_VALUES: usize = BOX_COLUMNS.len() + STRESS_COLUMNS.len() + ENERGY_COLUMNS.len();
+/// LAMMPS variable that records column `name`.
+fn record_variable(name: &str) -> String {
+    format!("bpm_rec_{name}")
+}
+
+/// The `fix bpm_record` inputs of a stage's columns: one equal-style
+/// variable per column LAMMPS records (`fix vector` takes only intensive
+/// or only extensive values, and variables are intensive), and the list.
+fn record_commands(columns: &[Column]) -> Vec<String> {
+    let mut c = Vec::new();
+    let mut names = Vec::new();
+    for col in columns {
+        if let Some(expr) = &col.lammps {
+            let var = record_variable(&col.name);
+            c.push(format!("variable        {var} equal {expr}"));
+            names.push(format!("v_{var}"));
+        }
+    }
+    c.push(format!(
+        "variable        recorded string \"{}\"",
+        names.join(" ")
+    ));
+    c
+}
 
 /// Whether LAMMPS needs a triclinic box for `scene` (tilted, or sheared later).
 pub fn needs_triclinic(scene: &Scene) -> bool {
@@ -128,6 +145,11 @@ fn check_supported(index: usize, stage: &StageSpec, scene: &Scene) -> Result<(),
     }
     if stage.barostat.is_some() {
         return Err(unsupported("a barostat"));
+    }
+    if super::datafile::type_masses(scene).is_none() {
+        return Err(unsupported(
+            "masses that differ within a particle type (LAMMPS's atom_style bond has one mass per type)",
+        ));
     }
     if matches!(stage.deformation, Some(Deformation::Isotropic { .. }))
         && !scene.simbox.periodic.iter().all(|&p| p)
@@ -177,7 +199,7 @@ fn force_field_commands(ff: &ForceField) -> Vec<String> {
             g(ff.bond.gamma)
         ),
         format!(
-            "pair_coeff      1 1 {} {} {} {}",
+            "pair_coeff      * * {} {} {} {}",
             g(pair.k),
             g(pair.d),
             g(pair.a),
@@ -200,7 +222,6 @@ fn external_commands(stage: &StageSpec) -> ExternalCommands {
     let mut begin = Vec::new();
     let mut end = Vec::new();
     let mut energies = vec!["0".to_string()];
-    let mut recorded = Vec::new();
     for (w, wall) in stage.walls.iter().enumerate() {
         let (face, sign) = match wall.side {
             WallSide::Lo => ("lo", -1),
@@ -221,7 +242,6 @@ fn external_commands(stage: &StageSpec) -> ExternalCommands {
         begin.push("include         ${inputs}/wall.in".into());
         end.push(format!("unfix           bpm_wall{w}"));
         energies.push(format!("v_bpm_wall{w}_energy"));
-        recorded.push(format!("v_bpm_wall{w}_force v_bpm_wall{w}_position"));
     }
     if let Some(t) = &stage.tether {
         begin.push(match t.grain {
@@ -249,13 +269,10 @@ fn external_commands(stage: &StageSpec) -> ExternalCommands {
         end.push("group           bpm_tether delete".into());
         energies.push("v_bpm_tether_energy".into());
     }
-    let variables = vec![
-        format!("variable        bpm_eext equal {}", energies.join("+")),
-        format!(
-            "variable        walls_recorded string \"{}\"",
-            recorded.join(" ")
-        ),
-    ];
+    let variables = vec![format!(
+        "variable        bpm_eext equal {}",
+        energies.join("+")
+    )];
     ExternalCommands {
         variables,
         begin,
@@ -301,6 +318,21 @@ pub fn write_driver(
         );
     }
     cmd(&mut lines, "include         ${inputs}/setup.in".into());
+    cmd(
+        &mut lines,
+        "# What the recorded columns measure (declared in src/scene/observables.rs)".into(),
+    );
+    for term in energy_terms(scene.model) {
+        cmd(
+            &mut lines,
+            format!(
+                "compute         {} all {}",
+                lammps_energy_compute(term.column),
+                term.lammps_compute
+            ),
+        );
+    }
+    cmd(&mut lines, "compute         bpm_ke all ke".into());
     let triclinic = needs_triclinic(scene);
     let n = scene.particles.positions.len();
     let mut stages = Vec::with_capacity(scene.stages.len());
@@ -348,6 +380,7 @@ pub fn write_driver(
         }
         let external = external_commands(stage);
         lines.extend(external.variables.into_iter().map(DriverLine::Command));
+        let columns = stage_columns(energy_terms(scene.model), stage);
         let template = match &stage.deformation {
             None => "stage_hold.in",
             Some(Deformation::Isotropic { true_strain_rate }) => {
@@ -380,6 +413,11 @@ pub fn write_driver(
             format!("include         ${{inputs}}/{template}"),
         );
         lines.extend(external.begin.into_iter().map(DriverLine::Command));
+        lines.extend(
+            record_commands(&columns)
+                .into_iter()
+                .map(DriverLine::Command),
+        );
         cmd(
             &mut lines,
             "include         ${inputs}/stage_record.in".into(),
@@ -396,8 +434,7 @@ pub fn write_driver(
             dt: stage.dt,
             every,
             positions_every: stage.record.positions_every,
-            columns: thermo_columns(stage),
-            walls: stage.walls.len(),
+            columns,
         });
     }
     let driver = Driver { lines, stages };

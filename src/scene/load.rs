@@ -1,10 +1,8 @@
 //! Reading a scene and turning it into an engine system.
 
-use super::model::{ForceField, Scene};
+use super::model::{ModelKind, Scene};
 use super::validate::{simbox_of, validate, SceneError};
-use crate::engine::{
-    BondTopology, BpmModel, ForceModel, NeighbourList, StepReport, System, Timers,
-};
+use crate::engine::{BondTopology, BpmModel, ParticleModel, Particles, System};
 use crate::kernels::Separation;
 use std::path::Path;
 
@@ -36,9 +34,45 @@ pub fn fnv1a(bytes: &[u8]) -> u64 {
     })
 }
 
-/// The engine model for a force field over the given bonds.
-pub fn model_of(ff: &ForceField, n: usize, bonds: &BondTopology) -> ForceModel {
-    ForceModel::Bpm(BpmModel::new(ff.bond, ff.pair, n, bonds))
+/// The engine model of a validated scene, with its own state (for the
+/// bonded particle model: the bonds and their reference lengths).
+pub fn model_of(scene: &Scene) -> Box<dyn ParticleModel> {
+    let n = scene.particles.positions.len();
+    match scene.model {
+        ModelKind::Bpm => {
+            let triples: Vec<(usize, usize, f64)> = scene
+                .bonds
+                .pairs
+                .iter()
+                .zip(reference_lengths(scene))
+                .map(|(&[i, j], r0)| (i, j, r0))
+                .collect();
+            let bonds = BondTopology::new(n, &triples);
+            let ff = &scene.force_field;
+            Box::new(BpmModel::new(ff.bond, ff.pair, n, bonds))
+        }
+    }
+}
+
+/// The particle arrays of a validated scene, defaults filled in.
+pub fn particles_of(scene: &Scene) -> Particles {
+    let pa = &scene.particles;
+    let n = pa.positions.len();
+    let mut p = Particles::at_rest(pa.positions.clone());
+    if let Some(v) = &pa.velocities {
+        p.v = v.clone();
+    }
+    if let Some(g) = &pa.grain {
+        p.grain = g.clone();
+    }
+    if let Some(t) = &pa.kind {
+        p.kind = t.clone();
+    }
+    if let Some(r) = &pa.radius {
+        p.radius = r.clone();
+    }
+    p.mass = pa.mass.values(n);
+    p
 }
 
 /// The reference length of every bond of a validated scene, in scene order:
@@ -58,37 +92,35 @@ pub fn reference_lengths(scene: &Scene) -> Vec<f64> {
         .collect()
 }
 
+/// `scene` with the state of `sys` after a run: positions, velocities,
+/// box, bonds with their reference lengths; stages as before.
+pub fn final_scene(scene: &Scene, sys: &System) -> Scene {
+    let mut fin = scene.clone();
+    fin.version = super::SCENE_VERSION;
+    fin.particles.positions = sys.particles.x.clone();
+    fin.particles.velocities = Some(sys.particles.v.clone());
+    fin.simbox.lo = sys.simbox.lo;
+    fin.simbox.lengths = sys.simbox.lengths;
+    fin.simbox.tilt = sys.simbox.tilt;
+    if let Some(bpm) = sys.model_as::<BpmModel>() {
+        let bonds = bpm.bonds();
+        fin.bonds.pairs = bonds
+            .entries
+            .iter()
+            .map(|b| [b.i as usize, b.j as usize])
+            .collect();
+        fin.bonds.r0 = Some(bonds.r0.clone());
+    }
+    fin
+}
+
 /// Builds the engine system of a validated scene.
 pub fn build_system(scene: &Scene, threads: usize) -> System {
-    let simbox = simbox_of(scene);
-    let pa = &scene.particles;
-    let n = pa.positions.len();
-    let triples: Vec<(usize, usize, f64)> = scene
-        .bonds
-        .pairs
-        .iter()
-        .zip(reference_lengths(scene))
-        .map(|(&[i, j], r0)| (i, j, r0))
-        .collect();
-    let bonds = BondTopology::new(n, &triples);
-    let model = model_of(&scene.force_field, n, &bonds);
-    System {
-        simbox,
-        x: pa.positions.clone(),
-        v: pa.velocities.clone().unwrap_or_else(|| vec![[0.0; 3]; n]),
-        f: vec![[0.0; 3]; n],
-        image: vec![[0; 3]; n],
-        grain: pa.grain.clone().unwrap_or_else(|| vec![0; n]),
-        mass: pa.mass,
-        bonds,
-        model,
-        neighbours: NeighbourList::default(),
-        skin: scene.force_field.skin,
-        threads: threads.max(1),
-        step: 0,
-        time: 0.0,
-        timers: Timers::default(),
-        report: StepReport::default(),
-        wraps: 0,
-    }
+    System::new(
+        simbox_of(scene),
+        particles_of(scene),
+        model_of(scene),
+        scene.force_field.skin,
+        threads,
+    )
 }

@@ -1,14 +1,22 @@
-//! Scenes and protocols: the JSON scene, its validation, builders and the
-//! stage runner of the native engine.
+//! Scenes and protocols: the JSON scene, its validation, builders, the
+//! stage runner of the native engine, the recorded columns, trajectories
+//! and the run report.
 
 pub mod builders;
 pub mod load;
 pub mod model;
+pub mod observables;
 pub mod protocols;
+pub mod report;
 pub mod run;
+pub mod trajectory;
 pub mod validate;
 
-pub use load::{build_system, read_scene, write_scene};
-pub use model::{Bonds, BoxSpec, ForceField, Particles, Record, Scene, StageSpec, VelocityInit};
-pub use run::{run_scene, run_stage, RunOptions, StageOutput};
+pub use load::{build_system, final_scene, read_scene, write_scene};
+pub use model::{
+    Bonds, BoxSpec, ForceField, Mass, ModelKind, Particles, Record, Scene, StageSpec, VelocityInit,
+    SCENE_VERSION,
+};
+pub use report::{run_native_report, EngineInfo, RunReport};
+pub use run::{run_scene, run_stage, DumpOptions, OutputFiles, RunError, RunOptions, StageOutput};
 pub use validate::{validate, SceneError};

@@ -7,10 +7,34 @@ use crate::engine::{Barostat, Deformation, FlatWall, SphereWall, Tether};
 use crate::kernels::{BondCoeffs, PairCoeffs};
 use serde::{Deserialize, Serialize};
 
+/// The scene format this build writes. Version 1 (files without a
+/// `version` field) is version 2 without `model` and the per-particle
+/// `radius`, `type` and mass arrays, so it loads unchanged.
+pub const SCENE_VERSION: u32 = 2;
+
+fn version_one() -> u32 {
+    1
+}
+
+/// The particle model a scene is written for.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum ModelKind {
+    /// Bonded particle model with the multibody volume term.
+    #[default]
+    Bpm,
+}
+
 /// A complete run: particles, bonds, box, force field, protocol, seed.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Scene {
+    /// Scene format version ([`SCENE_VERSION`]); absent means 1.
+    #[serde(default = "version_one")]
+    pub version: u32,
+    /// The particle model; default `bpm`.
+    #[serde(default)]
+    pub model: ModelKind,
     /// Free text.
     #[serde(default)]
     pub description: String,
@@ -60,13 +84,44 @@ pub struct Particles {
     /// Grain id per particle; default all 0.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub grain: Option<Vec<u32>>,
-    /// Mass of every particle (m units); default 1.
-    #[serde(default = "one")]
-    pub mass: f64,
+    /// Mass (m units): one number for every particle, or one per particle;
+    /// default 1.
+    #[serde(default)]
+    pub mass: Mass,
+    /// Radius per particle (d units); default 1/2. Bonded particles touch
+    /// at the pair coefficient `d`, so the BPM ignores this; DEM spheres
+    /// use it.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub radius: Option<Vec<f64>>,
+    /// Type per particle, from 1 (LAMMPS atom types); default all 1.
+    #[serde(default, rename = "type", skip_serializing_if = "Option::is_none")]
+    pub kind: Option<Vec<u32>>,
 }
 
-fn one() -> f64 {
-    1.0
+/// Particle masses: one value for all, or one per particle.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(untagged)]
+pub enum Mass {
+    /// Every particle has this mass.
+    Uniform(f64),
+    /// One mass per particle, in particle order.
+    PerParticle(Vec<f64>),
+}
+
+impl Default for Mass {
+    fn default() -> Self {
+        Mass::Uniform(1.0)
+    }
+}
+
+impl Mass {
+    /// The masses of `n` particles.
+    pub fn values(&self, n: usize) -> Vec<f64> {
+        match self {
+            Mass::Uniform(m) => vec![*m; n],
+            Mass::PerParticle(m) => m.clone(),
+        }
+    }
 }
 
 /// Bonds as index pairs with optional reference lengths.

@@ -1,4 +1,4 @@
-//! Ready-made protocol stages (MODEL.md section 2).
+//! Ready-made protocol stages (docs/protocols.md).
 
 use super::model::{Record, StageSpec};
 use crate::engine::{Deformation, TiltFactor};

@@ -1,11 +1,13 @@
 //! Runs a scene's stages on the native engine and records observables.
 
-use super::load::model_of;
 use super::model::{Scene, StageSpec, VelocityInit};
-use crate::engine::{ActiveTether, EngineError, Stage, StageDrivers, System};
+use super::observables::{column_names, native_row, stage_columns, Column};
+use super::trajectory::{DumpWriter, Frame, ThermoWriter, TrajectoryError};
+use crate::engine::{ActiveTether, BpmModel, EngineError, Stage, StageDrivers, System};
 use indicatif::{ProgressBar, ProgressStyle};
 use rand::{Rng, SeedableRng};
 use serde::{Deserialize, Serialize};
+use std::path::PathBuf;
 
 /// Observables of one stage.
 #[derive(Clone, Debug, Serialize, Deserialize)]
@@ -14,10 +16,15 @@ pub struct StageOutput {
     pub name: String,
     /// Steps run.
     pub steps: u64,
-    /// Column names of `rows`.
-    pub columns: Vec<String>,
-    /// One row per recorded step.
+    /// The recorded columns (names, what they measure, how LAMMPS records
+    /// them).
+    pub columns: Vec<Column>,
+    /// One row per recorded step; empty when rows were streamed to
+    /// `rows_file`.
     pub rows: Vec<Vec<f64>>,
+    /// The thermo file the rows were streamed to, if any.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub rows_file: Option<PathBuf>,
     /// Position checkpoints.
     pub checkpoints: Vec<Checkpoint>,
     /// Wall-clock time of the stage (s).
@@ -31,7 +38,7 @@ pub struct StageOutput {
 impl StageOutput {
     /// The recorded series of column `name`.
     pub fn column(&self, name: &str) -> Option<Vec<f64>> {
-        let k = self.columns.iter().position(|c| c == name)?;
+        let k = self.columns.iter().position(|c| c.name == name)?;
         Some(self.rows.iter().map(|r| r[k]).collect())
     }
 }
@@ -46,6 +53,43 @@ pub struct Checkpoint {
     /// Positions; wrapped into the box at the last neighbour-list build, so
     /// compare them through the minimum image.
     pub positions: Vec<[f64; 3]>,
+    /// Periodic image flags: `positions + images . box vectors` are the
+    /// unwrapped positions, so grains crossing periodic faces come out
+    /// whole.
+    #[serde(default)]
+    pub images: Vec<[i32; 3]>,
+}
+
+/// Where a run streams its trajectory and thermo rows.
+#[derive(Clone, Debug, Default)]
+pub struct OutputFiles {
+    /// Thermo rows go here as they are recorded (and are not kept in
+    /// memory).
+    pub thermo: Option<PathBuf>,
+    /// Snapshots in LAMMPS dump format.
+    pub dump: Option<DumpOptions>,
+}
+
+impl OutputFiles {
+    /// The files, as text for reports.
+    pub fn paths(&self) -> Vec<String> {
+        self.thermo
+            .iter()
+            .chain(self.dump.iter().map(|d| &d.path))
+            .map(|p| p.display().to_string())
+            .collect()
+    }
+}
+
+/// A trajectory dump.
+#[derive(Clone, Debug)]
+pub struct DumpOptions {
+    /// The dump file.
+    pub path: PathBuf,
+    /// Global steps between snapshots (step 0 included).
+    pub every: u64,
+    /// Also write forces (`fx fy fz`).
+    pub forces: bool,
 }
 
 /// Options of a run that are not part of the physics.
@@ -55,73 +99,89 @@ pub struct RunOptions {
     pub threads: usize,
     /// Show progress bars (on a terminal).
     pub progress: bool,
+    /// Files the run streams to.
+    pub files: OutputFiles,
 }
 
-/// Box columns of a thermo row: edge lengths and tilts.
-pub const BOX_COLUMNS: [&str; 6] = ["lx", "ly", "lz", "xy", "xz", "yz"];
-/// Pressure-tensor columns of a thermo row (then their mean, "pressure").
-pub const STRESS_COLUMNS: [&str; 6] = ["pxx", "pyy", "pzz", "pxy", "pxz", "pyz"];
-/// Energy columns of a thermo row.
-pub const ENERGY_COLUMNS: [&str; 4] = ["e_bond", "e_pair", "e_kinetic", "e_external"];
-
-/// The thermo columns recorded for a stage: step, time, box, stress,
-/// pressure, energies, then each wall's force and position and the sphere
-/// wall's force.
-pub fn thermo_columns(stage: &StageSpec) -> Vec<String> {
-    let mut c: Vec<String> = ["step", "time"]
-        .iter()
-        .chain(&BOX_COLUMNS)
-        .chain(&STRESS_COLUMNS)
-        .chain(&["pressure"])
-        .chain(&ENERGY_COLUMNS)
-        .map(|s| s.to_string())
-        .collect();
-    for w in 0..stage.walls.len() {
-        c.push(format!("wall{w}_force"));
-        c.push(format!("wall{w}_position"));
+impl RunOptions {
+    /// `threads` threads, no progress bars, nothing streamed.
+    pub fn quiet(threads: usize) -> Self {
+        Self {
+            threads,
+            progress: false,
+            files: OutputFiles::default(),
+        }
     }
-    if stage.sphere_wall.is_some() {
-        c.push("sphere_wall_force".into());
-    }
-    c
 }
 
-/// One row of the columns of [`columns`] for `stage`.
-fn thermo_row(sys: &System, stage: &StageSpec) -> Vec<f64> {
-    let b = &sys.simbox;
-    let p = sys.pressure_tensor();
-    let it = &sys.report.interactions;
-    let mut row = vec![
-        sys.step as f64,
-        sys.time,
-        b.lengths[0],
-        b.lengths[1],
-        b.lengths[2],
-        b.tilt[0],
-        b.tilt[1],
-        b.tilt[2],
-    ];
-    row.extend_from_slice(&p);
-    row.push((p[0] + p[1] + p[2]) / 3.0);
-    row.extend_from_slice(&[
-        it.bonds.energy,
-        it.pairs.energy,
-        sys.kinetic_energy(),
-        sys.report.external_energy,
-    ]);
-    for (f, x) in sys
-        .report
-        .wall_forces
-        .iter()
-        .zip(&sys.report.wall_positions)
-    {
-        row.push(*f);
-        row.push(*x);
+/// Why a native run stopped.
+#[derive(Debug, thiserror::Error)]
+pub enum RunError {
+    /// The simulation failed (blow-up, particle lost, ...).
+    #[error(transparent)]
+    Engine(#[from] EngineError),
+    /// A trajectory or thermo file could not be written.
+    #[error(transparent)]
+    Output(#[from] TrajectoryError),
+}
+
+/// The open output files of a run.
+#[derive(Debug, Default)]
+pub struct Recorders {
+    thermo: Option<ThermoWriter>,
+    dump: Option<(DumpWriter, u64, bool)>,
+}
+
+impl Recorders {
+    /// Opens the files of `files`.
+    pub fn open(files: &OutputFiles) -> Result<Self, TrajectoryError> {
+        Ok(Self {
+            thermo: files
+                .thermo
+                .as_deref()
+                .map(ThermoWriter::create)
+                .transpose()?,
+            dump: match &files.dump {
+                Some(d) if d.every > 0 => Some((DumpWriter::create(&d.path)?, d.every, d.forces)),
+                _ => None,
+            },
+        })
     }
-    if stage.sphere_wall.is_some() {
-        row.push(sys.report.sphere_wall_force);
+
+    /// The thermo writer, if rows are streamed.
+    pub fn thermo(&mut self) -> Option<&mut ThermoWriter> {
+        self.thermo.as_mut()
     }
-    row
+
+    /// Steps between dump frames and whether they carry forces.
+    pub fn dump_schedule(&self) -> Option<(u64, bool)> {
+        self.dump
+            .as_ref()
+            .map(|(_, every, forces)| (*every, *forces))
+    }
+
+    /// Writes `frame` to the dump.
+    pub fn write_frame(&mut self, frame: &Frame) -> Result<(), TrajectoryError> {
+        match &mut self.dump {
+            Some((w, _, _)) => w.write(frame),
+            None => Ok(()),
+        }
+    }
+}
+
+/// The native system's current state as a dump frame.
+pub fn frame_of(sys: &System, forces: bool) -> Frame {
+    let p = &sys.particles;
+    Frame {
+        step: sys.step,
+        simbox: sys.simbox.clone(),
+        grain: p.grain.clone(),
+        kind: p.kind.clone(),
+        x: p.x.clone(),
+        image: p.image.clone(),
+        v: p.v.clone(),
+        f: forces.then(|| p.f.clone()),
+    }
 }
 
 /// Seeded uniform velocity components for `n` particles, zero net
@@ -171,34 +231,47 @@ pub fn stage_seed(seed: u64, index: usize) -> u64 {
     seed ^ (0x9E37_79B9_7F4A_7C15u64.wrapping_mul(index as u64 + 1))
 }
 
-/// Runs one stage on `sys`.
+/// Runs one stage on `sys`, recording into `out_files`.
 pub fn run_stage(
     sys: &mut System,
     spec: &StageSpec,
     index: usize,
     seed: u64,
     opts: &RunOptions,
-) -> Result<StageOutput, EngineError> {
+    out_files: &mut Recorders,
+) -> Result<StageOutput, RunError> {
     let start = std::time::Instant::now();
     let timers_before = sys.timers.clone();
     let builds_before = sys.neighbours.builds;
+    let n = sys.len();
     if let Some(ff) = &spec.force_field {
-        sys.model = model_of(ff, sys.len(), &sys.bonds);
+        let bpm = sys
+            .model_as_mut::<BpmModel>()
+            .ok_or(EngineError::Unsupported {
+                what: "a force-field change of a model other than bpm",
+            })?;
+        bpm.set_coefficients(ff.bond, ff.pair, n);
         sys.skin = ff.skin;
     }
     if spec.reset_reference {
-        sys.reset_bond_reference();
+        let (simbox, x) = (sys.simbox.clone(), sys.particles.x.clone());
+        sys.model_as_mut::<BpmModel>()
+            .ok_or(EngineError::Unsupported {
+                what: "a reference reset of a model without bonds",
+            })?
+            .reset_reference(&simbox, &x);
     }
     if spec.zero_velocities {
-        sys.v.iter_mut().for_each(|v| *v = [0.0; 3]);
+        sys.particles.v.fill([0.0; 3]);
     }
     if let Some(init) = &spec.set_velocities {
-        sys.v = random_velocities(sys.len(), init, stage_seed(seed, index));
+        sys.particles.v = random_velocities(n, init, stage_seed(seed, index));
     }
+    let p = &sys.particles;
     let tether = spec
         .tether
         .as_ref()
-        .map(|t| ActiveTether::new(t, &sys.grain, &sys.simbox, &sys.x, &sys.image));
+        .map(|t| ActiveTether::new(t, &p.grain, &sys.simbox, &p.x, &p.image));
     let drivers = StageDrivers {
         dt: spec.dt,
         walls: spec.walls.clone(),
@@ -211,30 +284,51 @@ pub fn run_stage(
     };
     let stage_box = sys.simbox.clone();
     sys.setup(&drivers);
+    let columns = stage_columns(sys.model.energy_terms(), spec);
+    if let Some(t) = out_files.thermo() {
+        t.begin_stage(index, &spec.name, &column_names(&columns))?;
+    }
     let mut out = StageOutput {
         name: spec.name.clone(),
         steps: spec.steps,
-        columns: thermo_columns(spec),
+        rows_file: out_files.thermo().map(|t| t.path().to_path_buf()),
+        columns,
         rows: Vec::new(),
         checkpoints: Vec::new(),
         wall_seconds: 0.0,
         timers: Default::default(),
         neighbour_builds: 0,
     };
-    let record = |sys: &System, out: &mut StageOutput, k: u64| {
+    let dump = out_files.dump_schedule();
+    let record = |sys: &System,
+                  out: &mut StageOutput,
+                  files: &mut Recorders,
+                  k: u64|
+     -> Result<(), TrajectoryError> {
         if spec.record.every > 0 && k % spec.record.every == 0 {
-            out.rows.push(thermo_row(sys, spec));
+            let row = native_row(&out.columns, sys);
+            match files.thermo() {
+                Some(t) => t.row(&row)?,
+                None => out.rows.push(row),
+            }
         }
         if spec.record.positions_every > 0 && k % spec.record.positions_every == 0 {
             let b = &sys.simbox;
             out.checkpoints.push(Checkpoint {
                 step: sys.step,
                 simbox: [b.lo, b.lengths, b.tilt],
-                positions: sys.x.clone(),
+                positions: sys.particles.x.clone(),
+                images: sys.particles.image.clone(),
             });
         }
+        if let Some((every, forces)) = dump {
+            if sys.step % every == 0 {
+                files.write_frame(&frame_of(sys, forces))?;
+            }
+        }
+        Ok(())
     };
-    record(sys, &mut out, 0);
+    record(sys, &mut out, out_files, 0)?;
     let bar = if opts.progress && spec.steps >= 1000 {
         let bar = ProgressBar::new(spec.steps);
         bar.set_style(
@@ -251,13 +345,16 @@ pub fn run_stage(
     };
     for k in 1..=spec.steps {
         sys.step(&drivers, k, &stage_box)?;
-        record(sys, &mut out, k);
+        record(sys, &mut out, out_files, k)?;
         if k % 256 == 0 {
             sys.check_finite()?;
             bar.set_position(k);
         }
     }
     sys.check_finite()?;
+    if let Some(t) = out_files.thermo() {
+        t.flush()?;
+    }
     bar.finish_and_clear();
     out.wall_seconds = start.elapsed().as_secs_f64();
     for s in Stage::ALL {
@@ -274,10 +371,14 @@ pub fn run_scene(
     sys: &mut System,
     scene: &Scene,
     opts: &RunOptions,
-) -> (Vec<StageOutput>, Option<EngineError>) {
+) -> (Vec<StageOutput>, Option<RunError>) {
+    let mut files = match Recorders::open(&opts.files) {
+        Ok(f) => f,
+        Err(e) => return (Vec::new(), Some(e.into())),
+    };
     let mut done = Vec::with_capacity(scene.stages.len());
     for (i, stage) in scene.stages.iter().enumerate() {
-        match run_stage(sys, stage, i, scene.seed, opts) {
+        match run_stage(sys, stage, i, scene.seed, opts, &mut files) {
             Ok(out) => done.push(out),
             Err(e) => return (done, Some(e)),
         }

@@ -1,6 +1,6 @@
 //! Checks a scene once, at load, with errors that name the field.
 
-use super::model::{ForceField, Scene, StageSpec};
+use super::model::{ForceField, Mass, Scene, StageSpec, SCENE_VERSION};
 use crate::engine::SimBox;
 use crate::kernels::Separation;
 
@@ -186,6 +186,16 @@ fn check_stage(i: usize, stage: &StageSpec, simbox: &SimBox, n: usize) -> Result
 
 /// Checks every field of `scene`; returns the first problem found.
 pub fn validate(scene: &Scene) -> Result<(), SceneError> {
+    if scene.version == 0 || scene.version > SCENE_VERSION {
+        return Err(invalid(
+            "version",
+            format!(
+                "scene format {} is not one this bpm {} reads (1 to {SCENE_VERSION}); a newer bpm wrote it",
+                scene.version,
+                crate::VERSION
+            ),
+        ));
+    }
     let b = &scene.simbox;
     finite_rows("box.lo", &[b.lo])?;
     for d in 0..3 {
@@ -211,7 +221,41 @@ pub fn validate(scene: &Scene) -> Result<(), SceneError> {
         return Err(invalid("particles.positions", "is empty"));
     }
     finite_rows("particles.positions", &pa.positions)?;
-    positive("particles.mass", pa.mass)?;
+    let per_particle = |field: &str, len: usize| -> Result<(), SceneError> {
+        if len != n {
+            return Err(invalid(
+                field,
+                format!("has {len} entries for {n} particles"),
+            ));
+        }
+        Ok(())
+    };
+    match &pa.mass {
+        Mass::Uniform(m) => {
+            positive("particles.mass", *m)?;
+        }
+        Mass::PerParticle(m) => {
+            per_particle("particles.mass", m.len())?;
+            for (i, &m) in m.iter().enumerate() {
+                positive(&format!("particles.mass[{i}]"), m)?;
+            }
+        }
+    }
+    if let Some(r) = &pa.radius {
+        per_particle("particles.radius", r.len())?;
+        for (i, &r) in r.iter().enumerate() {
+            positive(&format!("particles.radius[{i}]"), r)?;
+        }
+    }
+    if let Some(t) = &pa.kind {
+        per_particle("particles.type", t.len())?;
+        if let Some(i) = t.iter().position(|&t| t == 0) {
+            return Err(invalid(
+                format!("particles.type[{i}]"),
+                "types count from 1 (as LAMMPS atom types)",
+            ));
+        }
+    }
     if let Some(v) = &pa.velocities {
         if v.len() != n {
             return Err(invalid(
@@ -222,12 +266,7 @@ pub fn validate(scene: &Scene) -> Result<(), SceneError> {
         finite_rows("particles.velocities", v)?;
     }
     if let Some(g) = &pa.grain {
-        if g.len() != n {
-            return Err(invalid(
-                "particles.grain",
-                format!("has {} entries for {n} particles", g.len()),
-            ));
-        }
+        per_particle("particles.grain", g.len())?;
     }
     check_force_field("force_field", &scene.force_field)?;
 

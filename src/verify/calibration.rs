@@ -1,4 +1,4 @@
-//! Calibration runs: K and G of a bulk solid at one `a_B` (MODEL.md
+//! Calibration runs: K and G of a bulk solid at one `a_B` (docs/protocols.md
 //! "Calibration"), on either engine.
 
 use super::engines::{run_native, EngineRun, HarnessError, LammpsLauncher};
@@ -22,7 +22,7 @@ pub struct Loading {
 }
 
 impl Default for Loading {
-    /// 0.5% strain at 1e-5 / tau, dt 0.1, 50 rows (MODEL.md "Calibration").
+    /// 0.5% strain at 1e-5 / tau, dt 0.1, 50 rows (docs/protocols.md "Calibration").
     fn default() -> Self {
         Self {
             strain: 0.005,

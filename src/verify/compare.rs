@@ -10,50 +10,14 @@ use serde::Serialize;
 /// checkpoint) of every stage.
 #[derive(Clone, Debug, Serialize)]
 pub struct Deviation {
-    /// Observable name (a key of [`Tolerances::of`]).
-    pub observable: &'static str,
+    /// Observable name (a key of the tolerance table).
+    pub observable: String,
     /// Largest deviation: relative to the observable's largest magnitude in
     /// the reference series, or in d for positions.
     pub max_deviation: f64,
     /// Step of the largest deviation.
     pub at_step: u64,
 }
-
-/// Observables compared, with the thermo columns behind each.
-pub const OBSERVABLES: [(&str, &[&str]); 9] = [
-    ("box", &["lx", "ly", "lz", "xy", "xz", "yz"]),
-    (
-        "stress",
-        &["pxx", "pyy", "pzz", "pxy", "pxz", "pyz", "pressure"],
-    ),
-    ("bond energy", &["e_bond"]),
-    ("pair energy", &["e_pair"]),
-    ("kinetic energy", &["e_kinetic"]),
-    ("external energy", &["e_external"]),
-    (
-        "wall forces",
-        &[
-            "wall0_force",
-            "wall1_force",
-            "wall2_force",
-            "wall3_force",
-            "wall4_force",
-            "wall5_force",
-        ],
-    ),
-    (
-        "wall positions",
-        &[
-            "wall0_position",
-            "wall1_position",
-            "wall2_position",
-            "wall3_position",
-            "wall4_position",
-            "wall5_position",
-        ],
-    ),
-    ("time", &["time"]),
-];
 
 /// Why two runs cannot be compared.
 #[derive(Debug, thiserror::Error)]
@@ -76,8 +40,18 @@ pub fn compare_runs(
             run.len()
         )));
     }
+    // Every observable the reference records, in the order its columns
+    // are declared; `step` is the key the rows are matched on.
+    let mut observables: Vec<&str> = Vec::new();
+    for stage in reference {
+        for c in &stage.columns {
+            if c.observable != "step" && !observables.contains(&c.observable.as_str()) {
+                observables.push(&c.observable);
+            }
+        }
+    }
     let mut out = Vec::new();
-    for (observable, columns) in OBSERVABLES {
+    for observable in observables {
         let mut scale = 0.0f64;
         let mut worst = (0.0f64, 0u64);
         let mut any = false;
@@ -94,9 +68,12 @@ pub fn compare_runs(
             if step != b.column("step").unwrap_or_default() {
                 return Err(shape(format!("stage `{}`: recorded steps differ", a.name)));
             }
-            for c in columns.iter() {
-                let (Some(x), Some(y)) = (a.column(c), b.column(c)) else {
-                    continue;
+            for c in a.columns.iter().filter(|c| c.observable == observable) {
+                let (Some(x), Some(y)) = (a.column(&c.name), b.column(&c.name)) else {
+                    return Err(shape(format!(
+                        "stage `{}`: column `{}` is missing from the compared run",
+                        a.name, c.name
+                    )));
                 };
                 any = true;
                 for k in 0..x.len() {
@@ -111,7 +88,7 @@ pub fn compare_runs(
         }
         if any {
             out.push(Deviation {
-                observable,
+                observable: observable.to_string(),
                 max_deviation: if scale > 0.0 {
                     worst.0 / scale
                 } else {
@@ -155,7 +132,7 @@ pub fn compare_runs(
     }
     if any {
         out.push(Deviation {
-            observable: "positions",
+            observable: "positions".to_string(),
             max_deviation: worst.0,
             at_step: worst.1,
         });
@@ -188,8 +165,8 @@ pub fn deviation_series(
             let mut worst = 0.0f64;
             for c in columns {
                 if let (Some(i), Some(j)) = (
-                    a.columns.iter().position(|n| n == c),
-                    b.columns.iter().position(|n| n == c),
+                    a.columns.iter().position(|n| n.name == *c),
+                    b.columns.iter().position(|n| n.name == *c),
                 ) {
                     scale = scale.max(ra[i].abs());
                     worst = worst.max((ra[i] - rb[j]).abs());

@@ -5,7 +5,7 @@
 //! harness must turn that into an error value with LAMMPS's message.
 
 use crate::scene::run::{run_scene, RunOptions, StageOutput};
-use crate::scene::{build_system, validate, write_scene, Scene};
+use crate::scene::{build_system, validate, write_scene, RunReport, Scene};
 use std::path::{Path, PathBuf};
 
 /// A failure of a harness run.
@@ -61,14 +61,7 @@ pub fn run_native(scene: &Scene, tag: &str, threads: usize) -> Result<EngineRun,
     })?;
     let start = std::time::Instant::now();
     let mut sys = build_system(scene, threads);
-    let (stages, error) = run_scene(
-        &mut sys,
-        scene,
-        &RunOptions {
-            threads,
-            progress: false,
-        },
-    );
+    let (stages, error) = run_scene(&mut sys, scene, &RunOptions::quiet(threads));
     if let Some(e) = error {
         return Err(HarnessError::Native {
             scene: tag.into(),
@@ -135,13 +128,12 @@ impl LammpsLauncher {
                 self.limit_seconds,
             )));
         }
-        let text = std::fs::read_to_string(&output)
-            .map_err(|e| fail(format!("no output {}: {e}", output.display())))?;
-        let report: serde_json::Value =
-            serde_json::from_str(&text).map_err(|e| fail(format!("bad output: {e}")))?;
-        let stages: Vec<StageOutput> = serde_json::from_value(report["stages"].clone())
-            .map_err(|e| fail(format!("bad output stages: {e}")))?;
-        Ok(EngineRun { stages, seconds })
+        let report =
+            RunReport::read(&output).map_err(|e| fail(format!("reading the run report: {e}")))?;
+        Ok(EngineRun {
+            stages: report.stages,
+            seconds,
+        })
     }
 }
 

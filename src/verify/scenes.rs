@@ -58,7 +58,7 @@ pub fn contact_solid(size: f64, seed: u64, a_b: f64) -> Result<Scene, SceneError
 }
 
 /// Two rough grains of radius `radius` (spheres cut from a quick bulk
-/// solid at two places, MODEL.md "Grains"), side by side along x in a
+/// solid at two places, docs/protocols.md "Grains"), side by side along x in a
 /// closed box, their closest particles overlapping by 0.3 d, approaching
 /// at 0.02 d / tau each: bonds, multibody volumes and grain-grain
 /// contacts all act, without periodic images.
@@ -126,6 +126,8 @@ pub fn grain_pair(radius: f64, seed: u64, a_b: f64) -> Result<Scene, SceneError>
         }
     }
     Ok(Scene {
+        version: crate::scene::SCENE_VERSION,
+        model: crate::scene::ModelKind::Bpm,
         description: format!(
             "two rough grains R = {radius} d in contact, seed {seed}, a_B = {a_b}"
         ),
@@ -140,7 +142,9 @@ pub fn grain_pair(radius: f64, seed: u64, a_b: f64) -> Result<Scene, SceneError>
             positions,
             velocities: Some(velocities),
             grain: Some(grain),
-            mass: 1.0,
+            mass: crate::scene::Mass::Uniform(1.0),
+            radius: None,
+            kind: None,
         },
         bonds: crate::scene::Bonds {
             pairs,
@@ -206,7 +210,7 @@ fn keep_particles(scene: &Scene, keep: impl Fn(usize) -> bool) -> Scene {
 /// One rough grain of radius `radius` between two flat harmonic walls
 /// normal to z (stiffness k, cutoff d) that start 0.2 d clear of it and
 /// close at `speed` each, its centre of mass tethered softly in x and y:
-/// the Hertz squeeze set-up of MODEL.md at test scale. Records every 10
+/// the Hertz squeeze set-up of docs/protocols.md at test scale. Records every 10
 /// steps (wall forces included) and positions five times over `steps`.
 pub fn grain_squeeze(
     radius: f64,

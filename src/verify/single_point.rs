@@ -179,11 +179,11 @@ pub fn native_single_point(scene: &Scene) -> SinglePoint {
         ..Default::default()
     });
     SinglePoint {
-        forces: sys.f.clone(),
+        forces: sys.particles.f.clone(),
         pressure: sys.pressure_tensor(),
         energies: [
-            sys.report.interactions.bonds.energy,
-            sys.report.interactions.pairs.energy,
+            sys.report.interactions.terms[crate::engine::bpm::BOND_TERM].energy,
+            sys.report.interactions.terms[crate::engine::bpm::PAIR_TERM].energy,
         ],
     }
 }

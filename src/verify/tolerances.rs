@@ -93,6 +93,16 @@ pub const TOLERANCES: &[Tolerance] = &[
         why: "p0 + v t in closed form in both engines: measured <= 1.7e-16",
     },
     Tolerance {
+        observable: "trajectory velocities",
+        tolerance: 1e-12,
+        why: "dump frames of both engines (tests/trajectory.rs, 200 damped steps of a contact solid drifting across its periodic faces): measured <= 3.2e-15 relative to the largest speed",
+    },
+    Tolerance {
+        observable: "trajectory forces",
+        tolerance: 1e-12,
+        why: "dump frames, as the velocities, in k d (a net force is a near-cancelling sum of bond forces of order k d, so a relative measure would divide by a force near zero): measured <= 3.1e-15 k d",
+    },
+    Tolerance {
         observable: "trajectory positions",
         tolerance: 1e-11,
         why: "in d: measured <= 5e-15 over 500 steps, 4.5e-14 over 20,000 damped steps",

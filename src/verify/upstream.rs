@@ -412,7 +412,7 @@ pub fn speed(
 
 /// Per atom, the part of our contact damping that upstream's smoothing
 /// factor removes: upstream damps a contact with `gamma (1 - (r/r_c)^8)
-/// (v_ij . n) n`, MODEL.md (and we) with `gamma (v_ij . n) n`, so ours
+/// (v_ij . n) n`, docs/model.md (and we) with `gamma (v_ij . n) n`, so ours
 /// minus upstream's is `-gamma (r/r_c)^8 (v_ij . n) n` on `i` (and the
 /// opposite on `j`), over unbonded pairs closer than `d`. All-pairs search:
 /// for the small comparison scenes only.

@@ -1,4 +1,4 @@
-//! The periodic bulk solid of paper 1, section 2.3 (MODEL.md "Bulk solid").
+//! The periodic bulk solid (docs/protocols.md, "Bulk solid").
 //!
 //! Random fill at volume fraction 0.64, overlap removal by overdamped
 //! dynamics (`a_P = 0`, viscous damping), an undamped thermal run at rms
@@ -144,6 +144,8 @@ pub fn build_bulk(
         ..params.force_field.clone()
     });
     let mut scene = Scene {
+        version: crate::scene::SCENE_VERSION,
+        model: crate::scene::ModelKind::Bpm,
         description: format!("bulk solid, L = {l} d, seed {}", params.seed),
         seed: params.seed,
         simbox: BoxSpec {
@@ -156,7 +158,9 @@ pub fn build_bulk(
             positions,
             velocities: None,
             grain: None,
-            mass: 1.0,
+            mass: crate::scene::Mass::Uniform(1.0),
+            radius: None,
+            kind: None,
         },
         bonds: Bonds::default(),
         force_field: soft,
@@ -165,21 +169,22 @@ pub fn build_bulk(
     };
     crate::scene::validate::validate(&scene)?;
     let mut sys = build_system(&scene, threads);
-    let (_, err) = run_scene(&mut sys, &scene, &RunOptions { threads, progress });
+    let opts = RunOptions {
+        progress,
+        ..RunOptions::quiet(threads)
+    };
+    let (_, err) = run_scene(&mut sys, &scene, &opts);
     if let Some(e) = err {
         return Err(SceneError::Invalid {
             field: "bulk builder".into(),
             reason: e.to_string(),
         });
     }
-    for (x, n) in sys.x.iter_mut().zip(sys.image.iter_mut()) {
-        sys.simbox.wrap(x, n);
-    }
-    sys.wraps += 1;
-    sort_spatially(&mut sys.x, &sys.simbox, 2.0 * pair.d);
+    sys.particles.wrap(&sys.simbox);
+    sort_spatially(&mut sys.particles.x, &sys.simbox, 2.0 * pair.d);
     let max_overlap = max_overlap(&sys, pair.d);
     let bonds = bond_within(&sys, params.bond_cutoff);
-    scene.particles.positions = sys.x.clone();
+    scene.particles.positions = sys.particles.x.clone();
     scene.bonds = Bonds {
         pairs: bonds
             .entries
@@ -235,12 +240,13 @@ pub fn sort_spatially(x: &mut [[f64; 3]], simbox: &crate::engine::SimBox, cell: 
 /// Every pair of `sys` closer than `cutoff`, with its distance.
 fn pairs_within(sys: &System, cutoff: f64) -> Vec<(usize, usize, f64)> {
     let mut list = NeighbourList::default();
-    list.build(&sys.simbox, &sys.x, cutoff, 0.0, None);
+    let x = &sys.particles.x;
+    list.build(&sys.simbox, x, cutoff, 0.0, None);
     let mut pairs = Vec::new();
     for i in 0..sys.len() {
         for &j in list.of(i) {
             let j = j as usize;
-            pairs.push((i, j, sys.simbox.distance(&sys.x[i], &sys.x[j])));
+            pairs.push((i, j, sys.simbox.distance(&x[i], &x[j])));
         }
     }
     pairs

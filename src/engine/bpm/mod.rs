@@ -1,18 +1,44 @@
-//! The bonded particle model as an interaction model of the engine.
+//! The bonded particle model as a particle model of the engine: point
+//! particles joined by bonds (spring + multibody volume term + damping),
+//! with harmonic-plus-cubic contacts between unbonded particles.
 //!
-//! Terms that a scene cannot use are removed at load: no volume pass when
-//! `a_B` is 0, no velocity terms when `Gamma` is 0, no pair list when there
-//! is no pair style or it has no stiffness.
+//! The model owns its bonds, their reference lengths and the per-particle
+//! volume proxies. Terms that a scene cannot use are removed at load: no
+//! volume pass when `a_B` is 0, no velocity terms when `Gamma` is 0, no pair
+//! list when there is no pair style or it has no stiffness.
 
-use super::neighbor::NeighbourList;
+mod topology;
+
+pub use topology::BondTopology;
+
+use super::model::{EnergyTerm, ForceInput, ForceOutput, ModelTally, ParticleModel};
+use super::neighbor::Exclusions;
 use super::parallel::{as_rows, as_vec3, chunk_range, Scratch, Vec3};
 use super::simbox::SimBox;
-use super::timers::{Stage, Timers};
-use super::topology::BondTopology;
+use super::timers::Stage;
 use crate::kernels::{
     accumulate_reference_volumes, accumulate_volumes, bond_forces, pair_forces, BondCoeffs,
     BondEntry, BondInputs, Ownership, PairCoeffs, PairInputs, Separation, Tally, Unwrapped,
 };
+
+/// Index of the bond term in [`ModelTally::terms`].
+pub const BOND_TERM: usize = 0;
+/// Index of the pair term in [`ModelTally::terms`].
+pub const PAIR_TERM: usize = 1;
+/// The model's energy terms: the bond spring proxy `k (r - r0)^2 / 2` (the
+/// multibody term has no energy) and the contact energy.
+pub const ENERGY_TERMS: [EnergyTerm; 2] = [
+    EnergyTerm {
+        column: "e_bond",
+        observable: "bond energy",
+        lammps_compute: "pe bond",
+    },
+    EnergyTerm {
+        column: "e_pair",
+        observable: "pair energy",
+        lammps_compute: "pe pair",
+    },
+];
 
 /// Which terms of the model are live for this scene.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -27,13 +53,24 @@ pub struct BpmTerms {
     pub pair_damping: bool,
 }
 
-/// Bond and pair coefficients plus the per-atom volume scratch.
+impl BpmTerms {
+    fn of(bond: &BondCoeffs, pair: Option<&PairCoeffs>, no_bonds: bool) -> Self {
+        let pairs = pair.is_some_and(|p| p.k != 0.0 || p.a != 0.0);
+        Self {
+            multibody: bond.a != 0.0 && !no_bonds,
+            bond_damping: bond.gamma != 0.0,
+            pairs,
+            pair_damping: pairs && pair.is_some_and(|p| p.gamma != 0.0),
+        }
+    }
+}
+
+/// The bonds, bond and pair coefficients, and the per-particle volumes.
 #[derive(Debug)]
 pub struct BpmModel {
-    /// Bond coefficients (one bond type).
-    pub bond: BondCoeffs,
-    /// Pair coefficients (one atom type), if contacts are modelled.
-    pub pair: Option<PairCoeffs>,
+    bond: BondCoeffs,
+    pair: Option<PairCoeffs>,
+    bonds: BondTopology,
     terms: BpmTerms,
     volume: Vec<f64>,
     reference_volume: Vec<f64>,
@@ -85,37 +122,46 @@ impl BondPartition {
     }
 }
 
-/// Energies and virials of one force evaluation.
-#[derive(Clone, Copy, Debug, Default)]
-pub struct InteractionTally {
-    /// Bonds: spring-proxy energy and virial.
-    pub bonds: Tally,
-    /// Pairs: contact energy and virial.
-    pub pairs: Tally,
-}
-
 impl BpmModel {
-    /// A model for `bonds` on `n` atoms; `V0` is computed here once.
-    pub fn new(bond: BondCoeffs, pair: Option<PairCoeffs>, n: usize, bonds: &BondTopology) -> Self {
-        let pairs = pair.is_some_and(|p| p.k != 0.0 || p.a != 0.0);
-        let terms = BpmTerms {
-            multibody: bond.a != 0.0 && !bonds.is_empty(),
-            bond_damping: bond.gamma != 0.0,
-            pairs,
-            pair_damping: pairs && pair.is_some_and(|p| p.gamma != 0.0),
-        };
+    /// A model of `bonds` on `n` particles; `V0` is computed here once.
+    pub fn new(bond: BondCoeffs, pair: Option<PairCoeffs>, n: usize, bonds: BondTopology) -> Self {
         let mut model = Self {
             bond,
             pair,
-            terms,
+            bonds,
+            terms: BpmTerms::of(&bond, pair.as_ref(), false),
             volume: Vec::new(),
             reference_volume: Vec::new(),
             force_scratch: Scratch::default(),
             volume_scratch: Scratch::default(),
             partition: BondPartition::default(),
         };
-        model.set_reference(n, bonds);
+        model.set_coefficients(bond, pair, n);
         model
+    }
+
+    /// Replaces the coefficients (a stage's force-field change) and
+    /// re-derives the live terms and `V0`.
+    pub fn set_coefficients(&mut self, bond: BondCoeffs, pair: Option<PairCoeffs>, n: usize) {
+        self.bond = bond;
+        self.pair = pair;
+        self.terms = BpmTerms::of(&bond, pair.as_ref(), self.bonds.is_empty());
+        self.update_reference_volumes(n);
+    }
+
+    /// Bond coefficients.
+    pub fn bond_coeffs(&self) -> BondCoeffs {
+        self.bond
+    }
+
+    /// Pair coefficients, if contacts are modelled.
+    pub fn pair_coeffs(&self) -> Option<PairCoeffs> {
+        self.pair
+    }
+
+    /// The bonds and their reference lengths.
+    pub fn bonds(&self) -> &BondTopology {
+        &self.bonds
     }
 
     /// The live terms.
@@ -123,24 +169,25 @@ impl BpmModel {
         self.terms
     }
 
-    /// Recomputes `V0` after the reference lengths changed.
-    pub fn set_reference(&mut self, n: usize, bonds: &BondTopology) {
+    /// Makes every bond's current length its reference length (the
+    /// stress-free reset of the compaction protocol) and recomputes `V0`.
+    pub fn reset_reference(&mut self, simbox: &SimBox, x: &[[f64; 3]]) {
+        self.bonds.reset_reference(simbox, x);
+        self.update_reference_volumes(x.len());
+    }
+
+    fn update_reference_volumes(&mut self, n: usize) {
         self.partition.generation = None;
         if self.terms.multibody {
             self.volume = vec![0.0; n];
             self.reference_volume = vec![0.0; n];
             accumulate_reference_volumes(
-                &bonds.entries,
-                &bonds.r0,
+                &self.bonds.entries,
+                &self.bonds.r0,
                 Ownership::all(n),
                 &mut self.reference_volume,
             );
         }
-    }
-
-    /// The range of interaction beyond which no pair force acts.
-    pub fn pair_cutoff(&self) -> Option<f64> {
-        self.terms.pairs.then(|| self.pair.map_or(0.0, |p| p.d))
     }
 
     /// Current volume proxies `V_i` (empty when the multibody term is off).
@@ -148,22 +195,21 @@ impl BpmModel {
         (&self.volume, &self.reference_volume)
     }
 
-    /// Adds all bond and pair forces to `f`. `wraps` counts how often the
-    /// positions were wrapped into the box (it invalidates the bond split).
-    #[allow(clippy::too_many_arguments)]
-    pub fn compute(
-        &mut self,
-        wraps: u64,
-        simbox: &SimBox,
-        x: &[[f64; 3]],
-        v: &[[f64; 3]],
-        bonds: &BondTopology,
-        neighbours: &NeighbourList,
-        threads: usize,
-        tally: bool,
-        timers: &mut Timers,
-        f: &mut [[f64; 3]],
-    ) -> InteractionTally {
+    /// Adds all bond and pair forces to `out.f`.
+    fn compute_forces(&mut self, input: &ForceInput<'_>, out: &mut ForceOutput<'_>) -> ModelTally {
+        let ForceInput {
+            simbox,
+            x,
+            v,
+            neighbours,
+            wraps,
+            threads,
+            tally,
+            ..
+        } = *input;
+        let timers = &mut *out.timers;
+        let f = &mut *out.f;
+        let bonds = &self.bonds;
         let n = x.len();
         let own = Ownership::all(n);
         let chunks = threads.max(1);
@@ -245,9 +291,39 @@ impl BpmModel {
             }
             _ => Tally::default(),
         };
-        InteractionTally {
-            bonds: bond_tally,
-            pairs: pair_tally,
-        }
+        let mut result = ModelTally::default();
+        result.terms[BOND_TERM] = bond_tally;
+        result.terms[PAIR_TERM] = pair_tally;
+        result
+    }
+}
+
+impl ParticleModel for BpmModel {
+    fn name(&self) -> &'static str {
+        "bpm"
+    }
+
+    fn pair_cutoff(&self) -> Option<f64> {
+        self.terms.pairs.then(|| self.pair.map_or(0.0, |p| p.d))
+    }
+
+    fn exclusions(&self) -> Option<&Exclusions> {
+        Some(self.bonds.exclusions())
+    }
+
+    fn energy_terms(&self) -> &'static [EnergyTerm] {
+        &ENERGY_TERMS
+    }
+
+    fn compute(&mut self, input: &ForceInput<'_>, out: &mut ForceOutput<'_>) -> ModelTally {
+        self.compute_forces(input, out)
+    }
+
+    fn as_any(&self) -> &dyn std::any::Any {
+        self
+    }
+
+    fn as_any_mut(&mut self) -> &mut dyn std::any::Any {
+        self
     }
 }

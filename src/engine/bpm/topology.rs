@@ -1,5 +1,6 @@
 //! Bonds in CSR order, with their reference lengths.
 
+use crate::engine::neighbor::Exclusions;
 use crate::kernels::{BondEntry, Separation};
 
 /// The bond network: each bond stored once with `i < j`, sorted by `i`
@@ -12,9 +13,8 @@ pub struct BondTopology {
     pub r0: Vec<f64>,
     /// `offsets[i]..offsets[i + 1]` are the bonds whose first atom is `i`.
     pub offsets: Vec<usize>,
-    /// Both-direction adjacency (sorted partners per atom), for exclusions.
-    partner_offsets: Vec<usize>,
-    partners: Vec<u32>,
+    /// Bonded pairs, left out of the pair list.
+    exclusions: Exclusions,
 }
 
 impl BondTopology {
@@ -34,26 +34,7 @@ impl BondTopology {
         for i in 0..n {
             offsets[i + 1] += offsets[i];
         }
-        let mut degree = vec![0usize; n + 1];
-        for &(i, j, _) in &sorted {
-            degree[i + 1] += 1;
-            degree[j + 1] += 1;
-        }
-        for i in 0..n {
-            degree[i + 1] += degree[i];
-        }
-        let partner_offsets = degree.clone();
-        let mut cursor = degree;
-        let mut partners = vec![0u32; 2 * sorted.len()];
-        for &(i, j, _) in &sorted {
-            partners[cursor[i]] = j as u32;
-            cursor[i] += 1;
-            partners[cursor[j]] = i as u32;
-            cursor[j] += 1;
-        }
-        for i in 0..n {
-            partners[partner_offsets[i]..partner_offsets[i + 1]].sort_unstable();
-        }
+        let exclusions = Exclusions::from_pairs(n, sorted.iter().map(|&(i, j, _)| (i, j)));
         Self {
             entries: sorted
                 .iter()
@@ -65,8 +46,7 @@ impl BondTopology {
                 .collect(),
             r0: sorted.iter().map(|b| b.2).collect(),
             offsets,
-            partner_offsets,
-            partners,
+            exclusions,
         }
     }
 
@@ -82,12 +62,17 @@ impl BondTopology {
 
     /// Sorted bonded partners of atom `i`.
     pub fn partners(&self, i: usize) -> &[u32] {
-        &self.partners[self.partner_offsets[i]..self.partner_offsets[i + 1]]
+        self.exclusions.partners(i)
     }
 
     /// Whether `i` and `j` are bonded.
     pub fn bonded(&self, i: usize, j: usize) -> bool {
-        self.partners(i).binary_search(&(j as u32)).is_ok()
+        self.exclusions.excludes(i, j)
+    }
+
+    /// The bonded pairs as pair-list exclusions.
+    pub fn exclusions(&self) -> &Exclusions {
+        &self.exclusions
     }
 
     /// Sets every reference length to the current distance (the stress-free

@@ -1,0 +1,116 @@
+//! The contract between the engine and a particle model.
+//!
+//! A model (the bonded particle model in [`super::bpm`], DEM spheres later)
+//! owns its own state (bonds, reference lengths and volumes; radii, contact
+//! history) and adds its forces to the particles. The engine owns what every
+//! model shares: positions, velocities, forces, masses, the box, the pair
+//! list, the integrator and the external drivers. The engine calls a model
+//! through this trait once per step, never per interaction, so the hot
+//! loops stay monomorphic inside the model.
+
+use super::neighbor::{Exclusions, NeighbourList};
+use super::simbox::SimBox;
+use super::timers::Timers;
+use crate::kernels::Tally;
+use std::any::Any;
+
+/// Most energy terms a model may report (bond and pair for the BPM; normal,
+/// tangential, rolling, twisting for DEM).
+pub const MAX_ENERGY_TERMS: usize = 4;
+
+/// One energy term a model reports, and how each engine measures it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct EnergyTerm {
+    /// Column name in recorded rows, e.g. `e_bond`.
+    pub column: &'static str,
+    /// The compared observable (tolerance key), e.g. `bond energy`.
+    pub observable: &'static str,
+    /// Arguments of the LAMMPS `compute` that measures it, e.g. `pe bond`.
+    pub lammps_compute: &'static str,
+}
+
+/// Energy per term and the summed virial of one force evaluation.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct ModelTally {
+    /// Energy and virial per term, in the order of
+    /// [`ParticleModel::energy_terms`]; unused entries are zero.
+    pub terms: [Tally; MAX_ENERGY_TERMS],
+}
+
+impl ModelTally {
+    /// Energy and virial of every term together (terms merged in order).
+    pub fn total(&self) -> Tally {
+        self.terms[1..]
+            .iter()
+            .fold(self.terms[0], |acc, t| acc.merged(t))
+    }
+}
+
+/// What a model reads in a force evaluation.
+#[derive(Clone, Copy, Debug)]
+pub struct ForceInput<'a> {
+    /// The box.
+    pub simbox: &'a SimBox,
+    /// Positions.
+    pub x: &'a [[f64; 3]],
+    /// Velocities.
+    pub v: &'a [[f64; 3]],
+    /// Angular velocities (rotational models only).
+    pub omega: Option<&'a [[f64; 3]]>,
+    /// Particle radii (d).
+    pub radius: &'a [f64],
+    /// The pair list (empty when the model has no pair cutoff).
+    pub neighbours: &'a NeighbourList,
+    /// How many times positions were wrapped into the box; a change
+    /// invalidates anything cached on the stored positions.
+    pub wraps: u64,
+    /// Threads of the force passes (1 = serial).
+    pub threads: usize,
+    /// Whether to sum energies and virials in this evaluation.
+    pub tally: bool,
+}
+
+/// Where a model adds its forces (and torques).
+#[derive(Debug)]
+pub struct ForceOutput<'a> {
+    /// Forces, added to.
+    pub f: &'a mut [[f64; 3]],
+    /// Torques, added to (rotational models only).
+    pub torque: Option<&'a mut [[f64; 3]]>,
+    /// Per-part wall-clock timers.
+    pub timers: &'a mut Timers,
+}
+
+/// A particle model: its state, its forces, its observables.
+pub trait ParticleModel: std::fmt::Debug + Send + Any {
+    /// The model's name in scenes and reports (`"bpm"`).
+    fn name(&self) -> &'static str;
+
+    /// Range of the pair interaction (d) beyond which no non-excluded pair
+    /// interacts, or `None` when the model has no pair forces (then the
+    /// engine builds no pair list at all).
+    fn pair_cutoff(&self) -> Option<f64>;
+
+    /// Pairs the pair list leaves out (for the BPM, bonded pairs).
+    fn exclusions(&self) -> Option<&Exclusions>;
+
+    /// Whether particles carry angular velocity and torque (integrated as
+    /// solid spheres).
+    fn rotational(&self) -> bool {
+        false
+    }
+
+    /// The energy terms of [`ModelTally::terms`], in order; these are the
+    /// model's recorded columns.
+    fn energy_terms(&self) -> &'static [EnergyTerm];
+
+    /// Adds the model's forces for the state in `input` to `out`.
+    fn compute(&mut self, input: &ForceInput<'_>, out: &mut ForceOutput<'_>) -> ModelTally;
+
+    /// The model as [`Any`], to reach model-specific state (e.g. a stage
+    /// that resets bond reference lengths).
+    fn as_any(&self) -> &dyn Any;
+
+    /// Mutable [`ParticleModel::as_any`].
+    fn as_any_mut(&mut self) -> &mut dyn Any;
+}

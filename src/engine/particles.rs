@@ -1,0 +1,148 @@
+//! Per-particle state, structure of arrays.
+
+use super::simbox::SimBox;
+
+/// Moment-of-inertia factor of a solid sphere, `I = 0.4 m r^2` (as LAMMPS's
+/// `fix nve/sphere`).
+pub const SPHERE_INERTIA: f64 = 0.4;
+
+/// Positions, velocities, forces and per-particle properties.
+#[derive(Clone, Debug, Default)]
+pub struct Particles {
+    /// Positions (d), wrapped into the box along periodic dimensions at
+    /// every pair-list build.
+    pub x: Vec<[f64; 3]>,
+    /// Velocities (d / tau).
+    pub v: Vec<[f64; 3]>,
+    /// Forces of the last evaluation (k d).
+    pub f: Vec<[f64; 3]>,
+    /// Periodic image counters: the unwrapped position is
+    /// `x + simbox.image_vector(image)`.
+    pub image: Vec<[i32; 3]>,
+    /// Grain (molecule) id.
+    pub grain: Vec<u32>,
+    /// Particle type, from 1 (as LAMMPS's atom types).
+    pub kind: Vec<u32>,
+    /// Mass (m).
+    pub mass: Vec<f64>,
+    /// Radius (d); the bonded particle model's contacts use its pair
+    /// coefficient `d` instead, DEM spheres use this.
+    pub radius: Vec<f64>,
+    /// Angular velocity and torque, for models whose particles rotate.
+    pub rotation: Option<Rotation>,
+}
+
+/// Rotational state of spheres.
+#[derive(Clone, Debug, Default)]
+pub struct Rotation {
+    /// Angular velocity (1 / tau).
+    pub omega: Vec<[f64; 3]>,
+    /// Torque of the last evaluation (k d).
+    pub torque: Vec<[f64; 3]>,
+}
+
+impl Particles {
+    /// `n` particles at `x`, at rest, mass 1, radius 1/2, type 1, grain 0.
+    pub fn at_rest(x: Vec<[f64; 3]>) -> Self {
+        let n = x.len();
+        Self {
+            x,
+            v: vec![[0.0; 3]; n],
+            f: vec![[0.0; 3]; n],
+            image: vec![[0; 3]; n],
+            grain: vec![0; n],
+            kind: vec![1; n],
+            mass: vec![1.0; n],
+            radius: vec![0.5; n],
+            rotation: None,
+        }
+    }
+
+    /// Number of particles.
+    pub fn len(&self) -> usize {
+        self.x.len()
+    }
+
+    /// Whether there are none.
+    pub fn is_empty(&self) -> bool {
+        self.x.is_empty()
+    }
+
+    /// Gives the particles angular velocities (zero) and torques, if they
+    /// have none yet.
+    pub fn enable_rotation(&mut self) {
+        if self.rotation.is_none() {
+            let n = self.len();
+            self.rotation = Some(Rotation {
+                omega: vec![[0.0; 3]; n],
+                torque: vec![[0.0; 3]; n],
+            });
+        }
+    }
+
+    /// Translational kinetic energy `sum m |v|^2 / 2` (LAMMPS `compute ke`).
+    pub fn kinetic_energy(&self) -> f64 {
+        0.5 * self
+            .v
+            .iter()
+            .zip(&self.mass)
+            .map(|(v, m)| (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]) * m)
+            .sum::<f64>()
+    }
+
+    /// Rotational kinetic energy of solid spheres, `sum I |omega|^2 / 2`
+    /// (LAMMPS `compute erotate/sphere`); 0 without rotation.
+    pub fn rotational_energy(&self) -> f64 {
+        let Some(rot) = &self.rotation else {
+            return 0.0;
+        };
+        0.5 * SPHERE_INERTIA
+            * rot
+                .omega
+                .iter()
+                .zip(self.mass.iter().zip(&self.radius))
+                .map(|(w, (m, r))| (w[0] * w[0] + w[1] * w[1] + w[2] * w[2]) * m * r * r)
+                .sum::<f64>()
+    }
+
+    /// Adds the kinetic part of the pressure-tensor numerator,
+    /// `sum m v_a v_b` in the order `[xx, yy, zz, xy, xz, yz]`, to `p`.
+    pub fn add_kinetic_tensor(&self, p: &mut [f64; 6]) {
+        for (v, &m) in self.v.iter().zip(&self.mass) {
+            p[0] += m * v[0] * v[0];
+            p[1] += m * v[1] * v[1];
+            p[2] += m * v[2] * v[2];
+            p[3] += m * v[0] * v[1];
+            p[4] += m * v[0] * v[2];
+            p[5] += m * v[1] * v[2];
+        }
+    }
+
+    /// Positions with the periodic images added back: grains that cross
+    /// periodic faces come out whole.
+    pub fn unwrapped(&self, simbox: &SimBox) -> Vec<[f64; 3]> {
+        self.x
+            .iter()
+            .zip(&self.image)
+            .map(|(x, n)| {
+                let s = simbox.image_vector(n);
+                [x[0] + s[0], x[1] + s[1], x[2] + s[2]]
+            })
+            .collect()
+    }
+
+    /// Wraps every position into the box, updating the image counters.
+    pub fn wrap(&mut self, simbox: &SimBox) {
+        for (x, n) in self.x.iter_mut().zip(self.image.iter_mut()) {
+            simbox.wrap(x, n);
+        }
+    }
+
+    /// Zeroes forces and torques.
+    pub fn clear_forces(&mut self) {
+        self.f.fill([0.0; 3]);
+        if let Some(rot) = &mut self.rotation {
+            rot.torque.fill([0.0; 3]);
+        }
+    }
+}

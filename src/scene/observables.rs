@@ -1,0 +1,191 @@
+//! The recorded columns of a stage, declared once.
+//!
+//! A stage's thermo row is the list of [`Column`]s that [`stage_columns`]
+//! derives from the particle model (its energy terms) and the stage (its
+//! walls, sphere wall). The native engine fills a row with
+//! [`Column::native_value`]; the LAMMPS driver records each column through
+//! its [`Column::lammps`] expression; the comparison groups columns by
+//! [`Column::observable`], the key of the tolerance table. Nothing else
+//! lists column names.
+
+use super::model::StageSpec;
+use crate::engine::{EnergyTerm, System};
+use serde::{Deserialize, Serialize};
+
+/// What a column measures.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Quantity {
+    /// Global step.
+    Step,
+    /// Simulated time (tau).
+    Time,
+    /// Box edge length or tilt: 0..3 = lx, ly, lz; 3..6 = xy, xz, yz (d).
+    Box(usize),
+    /// Pressure-tensor component `[xx, yy, zz, xy, xz, yz]` (k / d^2 in
+    /// 3D reduced units), positive in compression.
+    Stress(usize),
+    /// Mean of the diagonal of the pressure tensor.
+    Pressure,
+    /// Energy of the model's term with this index (k d^2).
+    ModelEnergy(usize),
+    /// Translational kinetic energy.
+    Kinetic,
+    /// Energy of walls and tether.
+    External,
+    /// Normal force on flat wall `w` (k d), >= 0.
+    WallForce(usize),
+    /// Position of flat wall `w` (d).
+    WallPosition(usize),
+    /// Summed force magnitude on the spherical wall (k d).
+    SphereWallForce,
+}
+
+/// One recorded column.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Column {
+    /// Name in reports and thermo files.
+    pub name: String,
+    /// What it measures.
+    pub quantity: Quantity,
+    /// The compared observable it belongs to (a key of the tolerance table).
+    pub observable: String,
+    /// LAMMPS equal-style expression that records it, or `None` when the
+    /// harness derives it (step, time, mean pressure) or LAMMPS cannot.
+    pub lammps: Option<String>,
+}
+
+const BOX_NAMES: [&str; 6] = ["lx", "ly", "lz", "xy", "xz", "yz"];
+const STRESS_NAMES: [&str; 6] = ["pxx", "pyy", "pzz", "pxy", "pxz", "pyz"];
+
+/// LAMMPS compute id of model energy term `column`.
+pub fn lammps_energy_compute(column: &str) -> String {
+    format!("bpm_{column}")
+}
+
+/// The columns of a stage of a model with energy terms `terms`: step,
+/// time, box, stress, pressure, the model's energies, kinetic and external
+/// energy, then each flat wall's force and position and the sphere wall's
+/// force.
+pub fn stage_columns(terms: &[EnergyTerm], stage: &StageSpec) -> Vec<Column> {
+    let col = |name: &str, quantity, observable: &str, lammps: Option<String>| Column {
+        name: name.to_string(),
+        quantity,
+        observable: observable.to_string(),
+        lammps,
+    };
+    let mut c = vec![
+        col("step", Quantity::Step, "step", None),
+        col("time", Quantity::Time, "time", None),
+    ];
+    for (k, name) in BOX_NAMES.iter().enumerate() {
+        c.push(col(name, Quantity::Box(k), "box", Some(name.to_string())));
+    }
+    for (k, name) in STRESS_NAMES.iter().enumerate() {
+        let expr = format!("c_thermo_press[{}]", k + 1);
+        c.push(col(name, Quantity::Stress(k), "stress", Some(expr)));
+    }
+    // The harness takes the mean of the recorded diagonal: LAMMPS's scalar
+    // pressure counts 3N - 3 kinetic degrees of freedom.
+    c.push(col("pressure", Quantity::Pressure, "stress", None));
+    for (k, term) in terms.iter().enumerate() {
+        let expr = format!("c_{}", lammps_energy_compute(term.column));
+        c.push(col(
+            term.column,
+            Quantity::ModelEnergy(k),
+            term.observable,
+            Some(expr),
+        ));
+    }
+    c.push(col(
+        "e_kinetic",
+        Quantity::Kinetic,
+        "kinetic energy",
+        Some("c_bpm_ke".into()),
+    ));
+    c.push(col(
+        "e_external",
+        Quantity::External,
+        "external energy",
+        Some("v_bpm_eext".into()),
+    ));
+    for w in 0..stage.walls.len() {
+        c.push(col(
+            &format!("wall{w}_force"),
+            Quantity::WallForce(w),
+            "wall forces",
+            Some(format!("v_bpm_wall{w}_force")),
+        ));
+        c.push(col(
+            &format!("wall{w}_position"),
+            Quantity::WallPosition(w),
+            "wall positions",
+            Some(format!("v_bpm_wall{w}_position")),
+        ));
+    }
+    if stage.sphere_wall.is_some() {
+        c.push(col(
+            "sphere_wall_force",
+            Quantity::SphereWallForce,
+            "sphere wall force",
+            None,
+        ));
+    }
+    c
+}
+
+/// The declaration of a column every bonded-particle stage records (box,
+/// stress, pressure, energies, step, time), by name.
+pub fn standard_column(name: &str) -> Option<Column> {
+    let plain = StageSpec::hold("", 0, 0.1);
+    stage_columns(&crate::engine::bpm::ENERGY_TERMS, &plain)
+        .into_iter()
+        .find(|c| c.name == name)
+}
+
+/// The names of `columns`.
+pub fn column_names(columns: &[Column]) -> Vec<String> {
+    columns.iter().map(|c| c.name.clone()).collect()
+}
+
+impl Column {
+    /// The column's value for the native engine's current state.
+    pub fn native_value(&self, sys: &System, pressure: &[f64; 6]) -> f64 {
+        let b = &sys.simbox;
+        let r = &sys.report;
+        match self.quantity {
+            Quantity::Step => sys.step as f64,
+            Quantity::Time => sys.time,
+            Quantity::Box(k) if k < 3 => b.lengths[k],
+            Quantity::Box(k) => b.tilt[k - 3],
+            Quantity::Stress(k) => pressure[k],
+            Quantity::Pressure => (pressure[0] + pressure[1] + pressure[2]) / 3.0,
+            Quantity::ModelEnergy(k) => r.interactions.terms[k].energy,
+            Quantity::Kinetic => sys.kinetic_energy(),
+            Quantity::External => r.external_energy,
+            Quantity::WallForce(w) => r.wall_forces[w],
+            Quantity::WallPosition(w) => r.wall_positions[w],
+            Quantity::SphereWallForce => r.sphere_wall_force,
+        }
+    }
+
+    /// Whether LAMMPS records the column (else the harness derives it).
+    pub fn recorded_by_lammps(&self) -> bool {
+        self.lammps.is_some()
+    }
+}
+
+/// One row of `columns` for the native engine's current state.
+pub fn native_row(columns: &[Column], sys: &System) -> Vec<f64> {
+    let p = sys.pressure_tensor();
+    columns.iter().map(|c| c.native_value(sys, &p)).collect()
+}
+
+/// The energy terms of a scene's model (what its
+/// [`crate::engine::ParticleModel::energy_terms`] returns), without
+/// building the model.
+pub fn energy_terms(model: super::model::ModelKind) -> &'static [EnergyTerm] {
+    match model {
+        super::model::ModelKind::Bpm => &crate::engine::bpm::ENERGY_TERMS,
+    }
+}
