@@ -4,14 +4,15 @@
 //!
 //! Upstream takes reference lengths at the first run, so both inputs read
 //! the same data file at the reference state and deform it in LAMMPS
-//! (`lammps_inputs/upstream_compare/`).
+//! (`lammps_inputs/upstream_compare/`, run from the embedded copy written
+//! into the work folder).
 
 use super::compare::max_position_deviation;
 use super::scenes::{contact_solid_reference, grain_pair};
 use super::single_point::{max_relative_deviation, read_dump};
 use crate::engine::SimBox;
 use crate::kernels::Separation;
-use crate::lammps::write_data_file;
+use crate::lammps::{write_data_file, write_templates};
 use crate::scene::Scene;
 use anyhow::{bail, Context, Result};
 use serde::Serialize;
@@ -209,8 +210,8 @@ pub fn run_style(
     let data = dir.join(format!("{tag}.data"));
     std::fs::write(&data, write_data_file(&config.scene))?;
     let dump = dir.join(format!("{tag}.dump"));
-    let inputs = concat!(env!("CARGO_MANIFEST_DIR"), "/lammps_inputs");
-    let input = Path::new(inputs).join(if ours {
+    let inputs = write_templates(dir)?;
+    let input = inputs.join(if ours {
         "upstream_compare/ours.in"
     } else {
         "upstream_compare/upstream.in"
@@ -224,7 +225,7 @@ pub fn run_style(
         .map(|&p| if p { "p" } else { "f" })
         .collect();
     let vars = [
-        ("inputs", inputs.to_string()),
+        ("inputs", inputs.display().to_string()),
         ("data", data.display().to_string()),
         ("plugin", lammps.plugin.display().to_string()),
         ("boundary", boundary.join(" ")),
