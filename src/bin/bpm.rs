@@ -749,7 +749,7 @@ fn upstream_check(
     use bpm::verify::upstream::{
         compare_configuration, configurations, speed, Configuration, ModernLammps,
     };
-    let lammps = ModernLammps::locate(Path::new(env!("CARGO_MANIFEST_DIR")))?;
+    let lammps = ModernLammps::locate()?;
     let work = output.join("lammps");
     std::fs::create_dir_all(&work).with_context(|| format!("creating {}", work.display()))?;
     println!(
