@@ -623,7 +623,8 @@ fn run_lammps(path: &Path, output: &Path, newton: bool, workdir: Option<PathBuf>
     let report = run_report(
         serde_json::json!({
             "engine": "lammps",
-            "lammps": "Debian 29Sep2021 update 2 + lammps-plugin",
+            "lammps_version": run.lammps_version,
+            "lammps": format!("{} + lammps-plugin", run.lammps_version),
             "mpi_ranks": run.ranks,
             "newton": newton,
             "driver": dir.join("scene.in").display().to_string(),

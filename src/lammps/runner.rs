@@ -5,7 +5,7 @@
 //! survive a rejected input run this in a child process
 //! (`bpm run --engine lammps`, see `verify::engines`).
 
-use super::instance::{Lammps, LammpsError};
+use super::instance::{Lammps, LammpsError, LammpsVersion};
 use super::script::{write_driver, DriverLine, ScriptError, StagePlan, RECORDED_VALUES};
 use crate::scene::run::{Checkpoint, StageOutput, BOX_COLUMNS, STRESS_COLUMNS};
 use crate::scene::Scene;
@@ -38,6 +38,8 @@ pub struct LammpsRun {
     pub rank: i32,
     /// MPI ranks of the run.
     pub ranks: i32,
+    /// The LAMMPS that ran it (`lammps_version()`).
+    pub lammps_version: LammpsVersion,
 }
 
 /// Runs `scene` in LAMMPS: writes `<dir>/<tag>.{in,data,data.r0,log}` and
@@ -55,6 +57,7 @@ pub fn run_scene_lammps(
     let mut lmp = Lammps::open(&["-log", &log])?;
     let rank = lmp.setting("world_rank");
     let ranks = lmp.setting("world_size");
+    let lammps_version = lmp.version();
     let mut stages = Vec::with_capacity(driver.stages.len());
     let mut step0 = 0u64;
     let mut time0 = 0.0;
@@ -74,6 +77,7 @@ pub fn run_scene_lammps(
         stages,
         rank,
         ranks,
+        lammps_version,
     })
 }
 

@@ -51,6 +51,8 @@ pub struct EngineRun {
     pub stages: Vec<StageOutput>,
     /// Wall-clock seconds, process start included for LAMMPS.
     pub seconds: f64,
+    /// The LAMMPS that ran it, from the run's report (`None`: native).
+    pub lammps_version: Option<crate::lammps::LammpsVersion>,
 }
 
 /// Runs `scene` on the native engine with `threads` threads.
@@ -78,6 +80,7 @@ pub fn run_native(scene: &Scene, tag: &str, threads: usize) -> Result<EngineRun,
     Ok(EngineRun {
         stages,
         seconds: start.elapsed().as_secs_f64(),
+        lammps_version: None,
     })
 }
 
@@ -141,7 +144,12 @@ impl LammpsLauncher {
             serde_json::from_str(&text).map_err(|e| fail(format!("bad output: {e}")))?;
         let stages: Vec<StageOutput> = serde_json::from_value(report["stages"].clone())
             .map_err(|e| fail(format!("bad output stages: {e}")))?;
-        Ok(EngineRun { stages, seconds })
+        let lammps_version = serde_json::from_value(report["lammps_version"].clone()).ok();
+        Ok(EngineRun {
+            stages,
+            seconds,
+            lammps_version,
+        })
     }
 }
 
