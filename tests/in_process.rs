@@ -4,7 +4,7 @@
 mod common;
 
 use bpm::engine::StageDrivers;
-use bpm::lammps::{write_data_file, write_reference_lengths, Lammps, ScriptVars};
+use bpm::lammps::{write_data_file, write_reference_lengths, write_templates, Lammps, ScriptVars};
 use bpm::scene::builders::bulk::{build_bulk, BulkParams};
 use bpm::scene::{build_system, ForceField};
 
@@ -26,16 +26,14 @@ fn in_process_lammps_gives_the_native_forces() {
         write_reference_lengths(&scene),
     )
     .unwrap();
-    let vars = ScriptVars::of(&scene, data.to_str().unwrap(), true);
+    let inputs = write_templates(&dir).unwrap();
+    let vars = ScriptVars::of(&scene, data.to_str().unwrap(), true, &inputs);
     let mut lmp = Lammps::open(&["-log", "none", "-screen", "none"]).unwrap();
     let mut script = String::new();
     for (k, v) in &vars.vars {
         script.push_str(&format!("variable {k} string \"{v}\"\n"));
     }
-    script.push_str(&format!(
-        "include {}/lammps_inputs/setup.in\nthermo_style custom step pe pxx pyy pzz\nrun 0\n",
-        env!("CARGO_MANIFEST_DIR")
-    ));
+    script.push_str("include ${inputs}/setup.in\nthermo_style custom step pe pxx pyy pzz\nrun 0\n");
     lmp.commands(&script).unwrap();
     let forces = lmp.gather_vectors("f").unwrap();
 

@@ -148,11 +148,9 @@ fn a_restart_keeps_every_bond_reference_length() {
 
 /// Runs `setup.in` with `replace` applied plus `tail`; returns the error text.
 fn error_of_edited_setup(tag: &str, replace: &[(&str, &str)], tail: &str) -> String {
-    let mut text = std::fs::read_to_string(concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/lammps_inputs/setup.in"
-    ))
-    .unwrap();
+    let mut text = bpm::lammps::templates::template("setup.in")
+        .unwrap()
+        .to_string();
     for (from, to) in replace {
         assert!(text.contains(from), "setup.in has no `{from}`");
         text = text.replace(from, to);

@@ -11,7 +11,8 @@ use bpm::verify::upstream::{
 use std::path::Path;
 
 fn modern() -> ModernLammps {
-    ModernLammps::locate(Path::new(env!("CARGO_MANIFEST_DIR"))).unwrap_or_else(|e| panic!("{e:#}"))
+    ModernLammps::locate_from(Path::new(env!("CARGO_MANIFEST_DIR")))
+        .unwrap_or_else(|e| panic!("{e:#}"))
 }
 
 fn workdir(name: &str) -> std::path::PathBuf {

@@ -603,7 +603,8 @@ fn run_lammps(
     let driver = dir.join("scene.in").display().to_string();
     let mut report = RunReport::new(
         EngineInfo::Lammps {
-            lammps: run.version.clone(),
+            lammps_version: run.lammps_version.0,
+            lammps: format!("{} + lammps-plugin", run.lammps_version),
             mpi_ranks: run.ranks,
             newton,
             driver: driver.clone(),
@@ -724,7 +725,7 @@ fn upstream_check(
     use bpm::verify::upstream::{
         compare_configuration, configurations, speed, Configuration, ModernLammps,
     };
-    let lammps = ModernLammps::locate(Path::new(env!("CARGO_MANIFEST_DIR")))?;
+    let lammps = ModernLammps::locate()?;
     let work = output.join("lammps");
     std::fs::create_dir_all(&work).with_context(|| format!("creating {}", work.display()))?;
     println!(

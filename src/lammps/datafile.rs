@@ -1,9 +1,11 @@
 //! Writes a scene as a LAMMPS data file (`atom_style bond`) plus the
-//! `-var` values of the input templates in `lammps_inputs/`.
+//! `-var` values of the input templates in `lammps_inputs/` (embedded in
+//! the binary, written next to each run by [`super::templates`]).
 
 use crate::scene::load::reference_lengths;
 use crate::scene::Scene;
 use std::fmt::Write as _;
+use std::path::Path;
 
 /// Input-script variables derived from a scene.
 #[derive(Clone, Debug)]
@@ -14,8 +16,10 @@ pub struct ScriptVars {
 
 impl ScriptVars {
     /// The variables of `scene` for a data file at `data` (reference lengths
-    /// at `data.r0`, see [`write_reference_lengths`]) and `newton` setting.
-    pub fn of(scene: &Scene, data: &str, newton: bool) -> Self {
+    /// at `data.r0`, see [`write_reference_lengths`]), `newton` setting and
+    /// the templates in `inputs` (the folder
+    /// [`write_templates`](super::templates::write_templates) returns).
+    pub fn of(scene: &Scene, data: &str, newton: bool, inputs: &Path) -> Self {
         let ff = &scene.force_field;
         let pair = ff.pair.unwrap_or(crate::kernels::PairCoeffs {
             k: 0.0,
@@ -34,10 +38,7 @@ impl ScriptVars {
         let comm_cutoff = (max_r0 * 1.2).max(pair.d) + ff.skin;
         let g = |v: f64| format!("{v:.17e}");
         let vars = [
-            (
-                "inputs",
-                concat!(env!("CARGO_MANIFEST_DIR"), "/lammps_inputs").to_string(),
-            ),
+            ("inputs", inputs.display().to_string()),
             ("data", data.to_string()),
             ("lengths", format!("{data}.r0")),
             ("boundary", boundary.join(" ")),

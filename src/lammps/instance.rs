@@ -1,6 +1,7 @@
 //! A LAMMPS instance in this process, with our styles registered.
 
 use super::sys;
+use serde::{Deserialize, Serialize};
 use std::ffi::{c_char, c_void, CString};
 
 /// A LAMMPS error surfaced to Rust.
@@ -20,6 +21,26 @@ pub enum LammpsError {
     /// A string passed to LAMMPS contained a NUL byte.
     #[error("a LAMMPS command contains a NUL byte")]
     Nul,
+}
+
+/// A LAMMPS version as `lammps_version()` reports it: the release date as
+/// the number `YYYYMMDD` (20210929 for Debian's 29 Sep 2021). Displayed as
+/// LAMMPS prints it, e.g. `LAMMPS 29 Sep 2021`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Serialize, Deserialize)]
+#[serde(transparent)]
+pub struct LammpsVersion(pub i32);
+
+impl std::fmt::Display for LammpsVersion {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        const MONTHS: [&str; 12] = [
+            "Jan", "Feb", "Mar", "Apr", "May", "Jun", "Jul", "Aug", "Sep", "Oct", "Nov", "Dec",
+        ];
+        let (year, month, day) = (self.0 / 10000, self.0 / 100 % 100, self.0 % 100);
+        match MONTHS.get((month as usize).wrapping_sub(1)) {
+            Some(name) if (1..=31).contains(&day) => write!(f, "LAMMPS {day} {name} {year}"),
+            _ => write!(f, "LAMMPS version {}", self.0),
+        }
+    }
 }
 
 /// An open LAMMPS instance (closed on drop).
@@ -109,6 +130,12 @@ impl Lammps {
         let c = CString::new(name).unwrap_or_default();
         // SAFETY: live handle, valid C string.
         unsafe { sys::lammps_extract_setting(self.handle, c.as_ptr()) }
+    }
+
+    /// This LAMMPS's version, from `lammps_version()`.
+    pub fn version(&self) -> LammpsVersion {
+        // SAFETY: live handle.
+        LammpsVersion(unsafe { sys::lammps_version(self.handle) })
     }
 
     /// Box lower corner, upper corner and tilts `xy xz yz`.
@@ -216,12 +243,6 @@ impl Lammps {
             }),
             None => Ok(data),
         }
-    }
-
-    /// LAMMPS's version as the date number it reports (e.g. 20210929).
-    pub fn version(&self) -> i32 {
-        // SAFETY: live handle.
-        unsafe { sys::lammps_version(self.handle) }
     }
 
     /// Per-atom integers of every atom, by atom id (`mol`, `type`).

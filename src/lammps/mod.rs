@@ -1,16 +1,19 @@
-//! The LAMMPS bridge: scene to data file and input variables, and the
-//! registration of our styles (`lammps-plugin/`) in a LAMMPS instance.
+//! The LAMMPS bridge: scene to data file and input variables, the input
+//! templates (embedded), and the registration of our styles
+//! (`lammps-plugin/`) in a LAMMPS instance.
 
 pub mod datafile;
 pub mod instance;
 pub mod runner;
 pub mod script;
 pub mod sys;
+pub mod templates;
 
 pub use datafile::{write_data_file, write_reference_lengths, ScriptVars};
-pub use instance::{Lammps, LammpsError};
+pub use instance::{Lammps, LammpsError, LammpsVersion};
 pub use runner::{run_scene_lammps, LammpsRun, LammpsRunError};
 pub use script::{write_driver, Driver, ScriptError};
+pub use templates::write_templates;
 
 extern "C" {
     /// Registers `bond_style bpm/multibody`, `pair_style bpm/contact` and

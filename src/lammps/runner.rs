@@ -5,7 +5,7 @@
 //! survive a rejected input run this in a child process
 //! (`bpm run --engine lammps`, see `verify::engines`).
 
-use super::instance::{Lammps, LammpsError};
+use super::instance::{Lammps, LammpsError, LammpsVersion};
 use super::script::{write_driver, DriverLine, ScriptError, StagePlan};
 use crate::scene::observables::column_names;
 use crate::scene::observables::Quantity;
@@ -44,8 +44,8 @@ pub struct LammpsRun {
     pub rank: i32,
     /// MPI ranks of the run.
     pub ranks: i32,
-    /// LAMMPS's version, as the instance reports it.
-    pub version: String,
+    /// The LAMMPS that ran it (`lammps_version()`).
+    pub lammps_version: LammpsVersion,
 }
 
 /// Runs `scene` in LAMMPS: writes `<dir>/<tag>.{in,data,data.r0,log}` and
@@ -66,7 +66,7 @@ pub fn run_scene_lammps(
     let mut lmp = Lammps::open(&["-log", &log])?;
     let rank = lmp.setting("world_rank");
     let ranks = lmp.setting("world_size");
-    let version = format!("LAMMPS {} + bpm lammps-plugin", lmp.version());
+    let lammps_version = lmp.version();
     let mut recorders = if rank == 0 {
         Recorders::open(files)?
     } else {
@@ -102,7 +102,7 @@ pub fn run_scene_lammps(
         stages,
         rank,
         ranks,
-        version,
+        lammps_version,
     })
 }
 

@@ -10,6 +10,7 @@
 //! checkpoints) and reads the recorded rows back after each.
 
 use super::datafile::{write_data_file, write_reference_lengths, ScriptVars};
+use super::templates::{write_templates, FOLDER as TEMPLATE_FOLDER};
 use crate::engine::{Deformation, TiltFactor, WallSide};
 use crate::scene::observables::{energy_terms, lammps_energy_compute, stage_columns, Column};
 use crate::scene::run::{random_velocities, stage_seed};
@@ -281,7 +282,8 @@ fn external_commands(stage: &StageSpec) -> ExternalCommands {
 }
 
 /// Writes the data file, reference lengths, velocity files and the driver
-/// script `<dir>/<tag>.in` of `scene`; returns the driver.
+/// script `<dir>/<tag>.in` of `scene`, and the input templates into
+/// `<dir>/inputs/` (`${inputs}` of the driver); returns the driver.
 pub fn write_driver(
     scene: &Scene,
     dir: &Path,
@@ -294,6 +296,10 @@ pub fn write_driver(
     // Absolute paths, so the script runs by hand from any folder.
     let dir = &dir.canonicalize().map_err(|source| ScriptError::Io {
         path: dir.to_path_buf(),
+        source,
+    })?;
+    let inputs = write_templates(dir).map_err(|source| ScriptError::Io {
+        path: dir.join(TEMPLATE_FOLDER),
         source,
     })?;
     let data = dir.join(format!("{tag}.data"));
@@ -311,7 +317,7 @@ pub fn write_driver(
     let cmd = |lines: &mut Vec<DriverLine>, c: String| lines.push(DriverLine::Command(c));
     // Index style: a `-var name value` on the command line takes precedence,
     // so a hand run can change e.g. a_B without editing the script.
-    for (name, value) in ScriptVars::of(scene, &data.display().to_string(), newton).vars {
+    for (name, value) in ScriptVars::of(scene, &data.display().to_string(), newton, &inputs).vars {
         cmd(
             &mut lines,
             format!("variable        {name} index \"{value}\""),

@@ -17,7 +17,9 @@ pub enum EngineInfo {
     },
     /// LAMMPS with this project's styles.
     Lammps {
-        /// LAMMPS's version, as the instance reports it.
+        /// LAMMPS's version date as the instance reports it (e.g. 20210929).
+        lammps_version: i32,
+        /// The same, readable, with what was loaded into it.
         lammps: String,
         /// MPI ranks.
         mpi_ranks: i32,

