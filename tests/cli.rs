@@ -96,3 +96,27 @@ fn a_missing_file_and_bad_options_fail_cleanly() {
     assert!(!st.status.success());
     assert!(!String::from_utf8_lossy(&st.stderr).contains("panicked"));
 }
+
+#[test]
+fn each_error_is_printed_once() {
+    // A missing file and a malformed scene: the cause appears once, not
+    // once in the message and again from the error chain.
+    let bad = tmp("truncated.json");
+    std::fs::write(&bad, "{\"seed\": 1").unwrap();
+    for (scene, cause) in [
+        (
+            std::path::PathBuf::from("/nonexistent/scene.json"),
+            "os error 2",
+        ),
+        (bad, "EOF while parsing"),
+    ] {
+        let out = bpm()
+            .args(["run", scene.to_str().unwrap(), "-o"])
+            .arg(tmp("never.json"))
+            .output()
+            .unwrap();
+        assert_eq!(out.status.code(), Some(1));
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(stderr.matches(cause).count(), 1, "{stderr}");
+    }
+}

@@ -32,12 +32,12 @@ pub enum ScriptError {
         what: &'static str,
     },
     /// Writing an input file failed.
-    #[error("writing {path}: {source}")]
+    #[error("writing {path}: {cause}")]
     Io {
         /// The file.
         path: PathBuf,
-        /// The error.
-        source: std::io::Error,
+        /// The cause (in the message, not chained, so it prints once).
+        cause: std::io::Error,
     },
 }
 
@@ -167,9 +167,9 @@ fn g(v: f64) -> String {
 }
 
 fn write(path: &Path, text: &str) -> Result<(), ScriptError> {
-    std::fs::write(path, text).map_err(|source| ScriptError::Io {
+    std::fs::write(path, text).map_err(|cause| ScriptError::Io {
         path: path.to_path_buf(),
-        source,
+        cause,
     })
 }
 
@@ -294,13 +294,13 @@ pub fn write_driver(
         check_supported(i, stage, scene)?;
     }
     // Absolute paths, so the script runs by hand from any folder.
-    let dir = &dir.canonicalize().map_err(|source| ScriptError::Io {
+    let dir = &dir.canonicalize().map_err(|cause| ScriptError::Io {
         path: dir.to_path_buf(),
-        source,
+        cause,
     })?;
-    let inputs = write_templates(dir).map_err(|source| ScriptError::Io {
+    let inputs = write_templates(dir).map_err(|cause| ScriptError::Io {
         path: dir.join(TEMPLATE_FOLDER),
-        source,
+        cause,
     })?;
     let data = dir.join(format!("{tag}.data"));
     write(&data, &write_data_file(scene))?;

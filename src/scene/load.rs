@@ -8,9 +8,9 @@ use std::path::Path;
 
 /// Reads and validates a scene file.
 pub fn read_scene(path: &Path) -> Result<(Scene, u64), SceneError> {
-    let bytes = std::fs::read(path).map_err(|source| SceneError::Io {
+    let bytes = std::fs::read(path).map_err(|cause| SceneError::Io {
         path: path.display().to_string(),
-        source,
+        cause,
     })?;
     let scene: Scene = serde_json::from_slice(&bytes)?;
     validate(&scene)?;
@@ -20,9 +20,9 @@ pub fn read_scene(path: &Path) -> Result<(Scene, u64), SceneError> {
 /// Writes a scene as JSON.
 pub fn write_scene(path: &Path, scene: &Scene) -> Result<(), SceneError> {
     let text = serde_json::to_string(scene)?;
-    std::fs::write(path, text).map_err(|source| SceneError::Io {
+    std::fs::write(path, text).map_err(|cause| SceneError::Io {
         path: path.display().to_string(),
-        source,
+        cause,
     })
 }
 

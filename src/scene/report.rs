@@ -92,17 +92,17 @@ impl RunReport {
     /// Writes the report as JSON.
     pub fn write(&self, path: &Path) -> Result<(), super::SceneError> {
         let text = serde_json::to_string(self)?;
-        std::fs::write(path, text).map_err(|source| super::SceneError::Io {
+        std::fs::write(path, text).map_err(|cause| super::SceneError::Io {
             path: path.display().to_string(),
-            source,
+            cause,
         })
     }
 
     /// Reads a report written by [`RunReport::write`].
     pub fn read(path: &Path) -> Result<Self, super::SceneError> {
-        let bytes = std::fs::read(path).map_err(|source| super::SceneError::Io {
+        let bytes = std::fs::read(path).map_err(|cause| super::SceneError::Io {
             path: path.display().to_string(),
-            source,
+            cause,
         })?;
         Ok(serde_json::from_slice(&bytes)?)
     }

@@ -17,12 +17,12 @@ use std::path::{Path, PathBuf};
 #[derive(Debug, thiserror::Error)]
 pub enum TrajectoryError {
     /// The file could not be created, written or read.
-    #[error("{path}: {source}")]
+    #[error("{path}: {cause}")]
     Io {
         /// The file.
         path: PathBuf,
-        /// The cause.
-        source: std::io::Error,
+        /// The cause (in the message, not chained, so it prints once).
+        cause: std::io::Error,
     },
     /// A dump file is malformed.
     #[error("{path}, line {line}: {reason}")]
@@ -80,9 +80,9 @@ pub struct DumpWriter {
 }
 
 fn io_error(path: &Path) -> impl FnOnce(std::io::Error) -> TrajectoryError + '_ {
-    move |source| TrajectoryError::Io {
+    move |cause| TrajectoryError::Io {
         path: path.to_path_buf(),
-        source,
+        cause,
     }
 }
 

@@ -8,16 +8,16 @@ use crate::kernels::Separation;
 #[derive(Debug, thiserror::Error)]
 pub enum SceneError {
     /// The file could not be read or written.
-    #[error("{path}: {source}")]
+    #[error("{path}: {cause}")]
     Io {
         /// The file.
         path: String,
-        /// The cause.
-        source: std::io::Error,
+        /// The cause (in the message, not chained, so it prints once).
+        cause: std::io::Error,
     },
     /// The JSON did not match the scene format (names the field and line).
     #[error("scene is not valid JSON for the scene format: {0}")]
-    Parse(#[from] serde_json::Error),
+    Parse(serde_json::Error),
     /// A value is out of range or inconsistent.
     #[error("field `{field}`: {reason}")]
     Invalid {
@@ -26,6 +26,12 @@ pub enum SceneError {
         /// What is wrong with it.
         reason: String,
     },
+}
+
+impl From<serde_json::Error> for SceneError {
+    fn from(e: serde_json::Error) -> Self {
+        SceneError::Parse(e)
+    }
 }
 
 fn invalid(field: impl Into<String>, reason: impl Into<String>) -> SceneError {

@@ -191,9 +191,9 @@ pub fn run_study(
                 threads,
                 false,
             )
-            .map_err(|source| HarnessError::Scene {
+            .map_err(|cause| HarnessError::Scene {
                 scene: format!("bulk L={size} seed {seed}"),
-                source,
+                cause,
             })?;
             let build_seconds = start.elapsed().as_secs_f64();
             // Every a_B at the largest size, and for the LAMMPS comparison.

@@ -32,12 +32,12 @@ pub enum HarnessError {
         dir: String,
     },
     /// The scene is invalid for both engines.
-    #[error("scene `{scene}`: {source}")]
+    #[error("scene `{scene}`: {cause}")]
     Scene {
         /// Scene tag.
         scene: String,
-        /// The validation error.
-        source: crate::scene::SceneError,
+        /// The validation error (in the message, not chained).
+        cause: crate::scene::SceneError,
     },
     /// A file could not be read or written.
     #[error("{0}")]
@@ -57,9 +57,9 @@ pub struct EngineRun {
 
 /// Runs `scene` on the native engine with `threads` threads.
 pub fn run_native(scene: &Scene, tag: &str, threads: usize) -> Result<EngineRun, HarnessError> {
-    validate(scene).map_err(|source| HarnessError::Scene {
+    validate(scene).map_err(|cause| HarnessError::Scene {
         scene: tag.into(),
-        source,
+        cause,
     })?;
     let start = std::time::Instant::now();
     let mut sys = build_system(scene, threads);
