@@ -7,19 +7,20 @@
 //! - [`engine`]: the native integrator;
 //! - [`scene`]: the JSON scene, its validation, builders and the stage runner;
 //! - [`analysis`]: fits, moduli and plots of recorded observables;
-//! - `lammps`, `verify`, `bench` (feature `lammps`, on by default): the
-//!   LAMMPS bridge, the cross-check harness and the benchmarks.
+//! - `lammps`, `verify`, `studies` (feature `lammps`, on by default): the
+//!   LAMMPS bridge, the cross-check harness, and the studies (calibration,
+//!   comparison with upstream LAMMPS, benchmarks).
 #![warn(missing_docs)]
 
 pub mod analysis;
-#[cfg(feature = "lammps")]
-pub mod bench;
 pub mod engine;
 pub mod ffi;
 pub mod kernels;
 #[cfg(feature = "lammps")]
 pub mod lammps;
 pub mod scene;
+#[cfg(feature = "lammps")]
+pub mod studies;
 #[cfg(feature = "lammps")]
 pub mod verify;
 

@@ -4,7 +4,7 @@
 mod common;
 
 use bpm::scene::builders::bulk::{build_bulk, BulkParams};
-use bpm::verify::calibration::{measure_moduli, CalibrationEngine, Loading};
+use bpm::studies::calibration::{measure_moduli, CalibrationEngine, Loading};
 use bpm::verify::tolerances::tolerance;
 use bpm::verify::{
     as_trajectory, compare_runs, contact_solid, grain_pair, grain_squeeze, run_native,

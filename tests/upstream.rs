@@ -5,7 +5,7 @@
 
 mod common;
 
-use bpm::verify::upstream::{
+use bpm::studies::upstream::{
     compare_configuration, configurations, ModernLammps, UpstreamRow, STEP0_TOLERANCE,
 };
 use std::path::Path;

@@ -388,11 +388,11 @@ fn real_main() -> Result<()> {
             steps,
             output,
         } => {
-            let solid = bpm::bench::bench_solid(size, seed, cli.threads)?;
+            let solid = bpm::studies::bench::bench_solid(size, seed, cli.threads)?;
             let mut cases = Vec::new();
             for a_b in [0.0, -0.5] {
                 for threads in [1, 2] {
-                    let case = bpm::bench::bench_case(&solid, a_b, threads, steps);
+                    let case = bpm::studies::bench::bench_case(&solid, a_b, threads, steps);
                     let parts: Vec<String> = case
                         .breakdown
                         .iter()
@@ -516,13 +516,13 @@ fn real_main() -> Result<()> {
             }
             calibrate(
                 &output,
-                bpm::verify::calibration::StudyOptions {
+                bpm::studies::calibration::StudyOptions {
                     sizes,
                     seeds,
                     a_b,
                     convergence_a_b,
                     lammps_sizes,
-                    loading: bpm::verify::calibration::Loading {
+                    loading: bpm::studies::calibration::Loading {
                         strain,
                         rate,
                         ..Default::default()
@@ -543,7 +543,7 @@ fn real_main() -> Result<()> {
             upstream_check(&output, size, grain_radius, steps, speed_size, seed)?;
         }
         Command::BenchLammps { size, seed, steps } => {
-            let solid = bpm::bench::bench_solid(size, seed, cli.threads)?;
+            let solid = bpm::studies::bench::bench_solid(size, seed, cli.threads)?;
             let lmp = std::env::current_exe()?.with_file_name("lmp-bpm");
             let dir = std::env::temp_dir().join(format!("bpm-bench-lammps-{}", std::process::id()));
             std::fs::create_dir_all(&dir)?;
@@ -556,7 +556,8 @@ fn real_main() -> Result<()> {
             ];
             let mut timings = Vec::new();
             for (style, a_b) in variants {
-                let t = bpm::bench::lammps_bond_timing(&lmp, &solid, &dir, style, a_b, steps)?;
+                let t =
+                    bpm::studies::bench::lammps_bond_timing(&lmp, &solid, &dir, style, a_b, steps)?;
                 println!(
                     "{:<24} bond {:>7.1} ns per particle-step   loop {:>7.1}",
                     t.name, t.bond_ns, t.loop_ns
@@ -624,10 +625,10 @@ fn run_lammps(
 /// `bpm calibrate`: runs the study, writes JSON, Markdown tables and plots.
 fn calibrate(
     output: &Path,
-    opts: bpm::verify::calibration::StudyOptions,
+    opts: bpm::studies::calibration::StudyOptions,
     threads: usize,
 ) -> Result<()> {
-    use bpm::verify::calibration::run_study;
+    use bpm::studies::calibration::run_study;
     std::fs::create_dir_all(output).with_context(|| format!("creating {}", output.display()))?;
     let launcher = bpm::verify::LammpsLauncher {
         bpm: std::env::current_exe()?,
@@ -678,9 +679,9 @@ fn replot_calibration(path: &Path, output: &Path) -> Result<()> {
         std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
     let doc: serde_json::Value =
         serde_json::from_str(&text).with_context(|| format!("parsing {}", path.display()))?;
-    let opts: bpm::verify::calibration::StudyOptions =
+    let opts: bpm::studies::calibration::StudyOptions =
         serde_json::from_value(doc["options"].clone()).context("reading `options`")?;
-    let cases: Vec<bpm::verify::calibration::Case> =
+    let cases: Vec<bpm::studies::calibration::Case> =
         serde_json::from_value(doc["cases"].clone()).context("reading `cases`")?;
     let command = doc["command"].as_str().unwrap_or("unknown").to_string();
     std::fs::create_dir_all(output)?;
@@ -690,12 +691,12 @@ fn replot_calibration(path: &Path, output: &Path) -> Result<()> {
 /// Writes calibration.md and the two plots.
 fn write_calibration_report(
     output: &Path,
-    opts: &bpm::verify::calibration::StudyOptions,
-    cases: &[bpm::verify::calibration::Case],
+    opts: &bpm::studies::calibration::StudyOptions,
+    cases: &[bpm::studies::calibration::Case],
     command: &str,
 ) -> Result<()> {
     let (md, moduli_panels, convergence_panels) =
-        bpm::verify::calibration::study_report(opts, cases);
+        bpm::studies::calibration::study_report(opts, cases);
     let header = format!(
         "# Calibration of K and G against a_B\n\nMade by `{command}` (bpm {}); every case is in `calibration.json`.\n\n",
         bpm::VERSION
@@ -722,7 +723,7 @@ fn upstream_check(
     speed_size: f64,
     seed: u64,
 ) -> Result<()> {
-    use bpm::verify::upstream::{
+    use bpm::studies::upstream::{
         compare_configuration, configurations, speed, Configuration, ModernLammps,
     };
     let lammps = ModernLammps::locate()?;
@@ -734,7 +735,7 @@ fn upstream_check(
     );
     let mut rows = Vec::new();
     let mut print_from = 0;
-    let flush = |rows: &Vec<bpm::verify::upstream::UpstreamRow>, from: &mut usize| {
+    let flush = |rows: &Vec<bpm::studies::upstream::UpstreamRow>, from: &mut usize| {
         for r in &rows[*from..] {
             println!(
                 "{:<30} {:>5} {:>7} {:<22} {:>10.2e} {:>9} {:>8}",
@@ -794,8 +795,8 @@ fn upstream_check(
         "command": std::env::args().collect::<Vec<_>>().join(" "),
         "lammps": lammps,
         "size": size, "grain_radius": grain_radius, "steps": steps, "seed": seed,
-        "step0_tolerance": bpm::verify::upstream::STEP0_TOLERANCE,
-        "trajectory_tolerance": bpm::verify::upstream::TRAJECTORY_TOLERANCE,
+        "step0_tolerance": bpm::studies::upstream::STEP0_TOLERANCE,
+        "trajectory_tolerance": bpm::studies::upstream::TRAJECTORY_TOLERANCE,
         "rows": rows,
         "speed": speeds,
     });

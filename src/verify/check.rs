@@ -1,7 +1,6 @@
 //! `bpm check`: the built-in scenes through both engines, a verdict per
 //! observable, a JSON report and plots.
 
-use super::calibration::{measure_moduli, CalibrationEngine, Loading, Moduli};
 use super::compare::{compare_runs, deviation_series};
 use super::engines::{run_native, LammpsLauncher};
 use super::scenes::{as_trajectory, contact_solid, grain_pair, grain_squeeze};
@@ -11,6 +10,7 @@ use crate::analysis::plot::{write_svg, Mark, Panel, Series};
 use crate::lammps::LammpsVersion;
 use crate::scene::builders::bulk::{build_bulk, BulkParams};
 use crate::scene::{ForceField, Scene};
+use crate::studies::calibration::{measure_moduli, CalibrationEngine, Loading, Moduli};
 use anyhow::{Context, Result};
 use serde::Serialize;
 use std::path::{Path, PathBuf};

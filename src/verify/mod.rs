@@ -1,14 +1,12 @@
 //! The cross-check: the same scene through LAMMPS with our plugin and
 //! through the native engine, compared observable by observable.
 
-pub mod calibration;
 pub mod check;
 pub mod compare;
 pub mod engines;
 pub mod scenes;
 pub mod single_point;
 pub mod tolerances;
-pub mod upstream;
 
 pub use compare::{compare_runs, Deviation};
 pub use engines::{run_native, EngineRun, HarnessError, LammpsLauncher};

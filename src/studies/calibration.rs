@@ -1,11 +1,11 @@
 //! Calibration runs: K and G of a bulk solid at one `a_B` (docs/protocols.md
 //! "Calibration"), on either engine.
 
-use super::engines::{run_native, EngineRun, HarnessError, LammpsLauncher};
 use crate::analysis::moduli::{
     bulk_modulus, paper_bulk_modulus, paper_shear_to_bulk, poisson_ratio, shear_modulus,
 };
 use crate::scene::{protocols, ForceField, Scene};
+use crate::verify::engines::{run_native, EngineRun, HarnessError, LammpsLauncher};
 use serde::{Deserialize, Serialize};
 
 /// Strain and rate of the calibration runs.

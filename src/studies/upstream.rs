@@ -7,13 +7,13 @@
 //! (`lammps_inputs/upstream_compare/`, run from the embedded copy written
 //! into the work folder).
 
-use super::compare::max_position_deviation;
-use super::scenes::{contact_solid_reference, grain_pair};
-use super::single_point::{max_relative_deviation, read_dump};
 use crate::engine::SimBox;
 use crate::kernels::Separation;
 use crate::lammps::{write_data_file, write_templates};
 use crate::scene::Scene;
+use crate::verify::compare::max_position_deviation;
+use crate::verify::scenes::{contact_solid_reference, grain_pair};
+use crate::verify::single_point::{max_relative_deviation, read_dump};
 use anyhow::{bail, Context, Result};
 use serde::Serialize;
 use std::path::{Path, PathBuf};
