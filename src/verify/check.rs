@@ -1,19 +1,63 @@
 //! `bpm check`: the built-in scenes through both engines, a verdict per
 //! observable, a JSON report and plots.
 
+use super::compare::CompareError;
 use super::compare::{compare_runs, deviation_series};
-use super::engines::{run_native, LammpsLauncher};
+use super::engines::{run_native, HarnessError, LammpsLauncher};
 use super::scenes::{as_trajectory, contact_solid, grain_pair, grain_squeeze};
-use super::single_point::{lammps_single_point, max_relative_deviation, native_single_point};
+use super::single_point::{
+    lammps_single_point, max_relative_deviation, native_single_point, SinglePointError,
+};
 use super::tolerances::tolerance;
-use crate::analysis::plot::{write_svg, Mark, Panel, Series};
+use crate::analysis::plot::{write_svg, Mark, Panel, PlotError, Series};
 use crate::lammps::LammpsVersion;
 use crate::scene::builders::bulk::{build_bulk, BulkParams};
-use crate::scene::{ForceField, Scene};
+use crate::scene::{ForceField, Scene, SceneError};
 use crate::studies::calibration::{measure_moduli, CalibrationEngine, Loading, Moduli};
-use anyhow::{Context, Result};
 use serde::Serialize;
 use std::path::{Path, PathBuf};
+
+/// Why `bpm check` could not finish (failed verdicts are not errors: they
+/// are in the report). Each message carries its cause once.
+#[derive(Debug, thiserror::Error)]
+pub enum CheckError {
+    /// A built-in scene could not be built.
+    #[error(transparent)]
+    Scene(#[from] SceneError),
+    /// A single point through LAMMPS failed.
+    #[error(transparent)]
+    SinglePoint(#[from] SinglePointError),
+    /// A trajectory through either engine failed.
+    #[error(transparent)]
+    Harness(#[from] HarnessError),
+    /// The two engines' runs could not be compared.
+    #[error(transparent)]
+    Compare(#[from] CompareError),
+    /// A plot could not be written.
+    #[error(transparent)]
+    Plot(#[from] PlotError),
+    /// A folder or the report could not be written.
+    #[error("{action} {path}: {cause}")]
+    File {
+        /// "creating", "writing".
+        action: &'static str,
+        /// The folder or file.
+        path: String,
+        /// The cause.
+        cause: std::io::Error,
+    },
+}
+
+type Result<T> = std::result::Result<T, CheckError>;
+
+fn file_error(action: &'static str, path: &Path) -> impl FnOnce(std::io::Error) -> CheckError {
+    let path = path.display().to_string();
+    move |cause| CheckError::File {
+        action,
+        path,
+        cause,
+    }
+}
 
 /// What `bpm check` runs.
 #[derive(Clone, Debug, Serialize)]
@@ -194,7 +238,7 @@ fn trajectory(
 pub fn run_check(opts: &CheckOptions) -> Result<CheckReport> {
     let dir = &opts.out_dir;
     let work = dir.join("lammps");
-    std::fs::create_dir_all(&work).with_context(|| format!("creating {}", work.display()))?;
+    std::fs::create_dir_all(&work).map_err(file_error("creating", &work))?;
     let launcher = LammpsLauncher {
         bpm: opts.bpm.clone(),
         dir: work.clone(),
@@ -317,8 +361,7 @@ pub fn run_check(opts: &CheckOptions) -> Result<CheckReport> {
         })).collect::<Vec<_>>(),
         "report": report,
     });
-    std::fs::write(&json, serde_json::to_string_pretty(&doc)?)
-        .with_context(|| format!("writing {}", json.display()))?;
+    super::write_json(&json, &doc).map_err(file_error("writing", &json))?;
     let mut report = report;
     report.files.push(json.display().to_string());
     Ok(report)

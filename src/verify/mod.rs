@@ -17,3 +17,13 @@ pub use single_point::{
     lammps_single_point, max_relative_deviation, native_single_point, run_lmp_bpm, SinglePoint,
     CHECK_LIMIT_SECONDS,
 };
+
+/// Writes `value` as pretty-printed JSON (the studies' and the check's
+/// report files).
+pub(crate) fn write_json(
+    path: &std::path::Path,
+    value: &impl serde::Serialize,
+) -> std::io::Result<()> {
+    let text = serde_json::to_string_pretty(value).map_err(std::io::Error::other)?;
+    std::fs::write(path, text)
+}

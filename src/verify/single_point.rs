@@ -3,10 +3,64 @@
 use crate::engine::StageDrivers;
 use crate::lammps::{write_data_file, write_reference_lengths, write_templates, ScriptVars};
 use crate::scene::{build_system, Scene};
-use anyhow::{bail, Context, Result};
 use serde::Serialize;
 use std::path::Path;
 use std::process::Command;
+
+/// Why a single point (or another `lmp-bpm` run) failed. Each message
+/// carries its cause (not chained again, so it prints once).
+#[derive(Debug, thiserror::Error)]
+pub enum SinglePointError {
+    /// A file could not be written or read.
+    #[error("{action} {path}: {cause}")]
+    File {
+        /// "writing", "reading".
+        action: &'static str,
+        /// The file.
+        path: String,
+        /// The cause.
+        cause: std::io::Error,
+    },
+    /// The embedded input templates could not be written.
+    #[error("writing the LAMMPS input templates: {cause}")]
+    Templates {
+        /// The cause (names the file).
+        cause: std::io::Error,
+    },
+    /// `lmp-bpm` could not be started.
+    #[error("starting {program}: {cause}")]
+    Start {
+        /// The executable.
+        program: String,
+        /// The cause.
+        cause: std::io::Error,
+    },
+    /// `lmp-bpm` ran and failed.
+    #[error("lmp-bpm ({ranks} ranks) failed on {input}:\n{output}")]
+    Lammps {
+        /// MPI ranks.
+        ranks: usize,
+        /// The input script.
+        input: String,
+        /// Its screen output.
+        output: String,
+    },
+    /// LAMMPS's output or dump lacks something or is malformed.
+    #[error("{0}")]
+    Output(String),
+}
+
+fn file_error(
+    action: &'static str,
+    path: &Path,
+) -> impl FnOnce(std::io::Error) -> SinglePointError {
+    let path = path.display().to_string();
+    move |cause| SinglePointError::File {
+        action,
+        path,
+        cause,
+    }
+}
 
 /// Wall-clock limit of a single-point LAMMPS run (it takes about a second):
 /// a hung LAMMPS (e.g. NaN positions) fails instead of stalling.
@@ -39,15 +93,12 @@ pub fn run_lmp_bpm(
     tag: &str,
     extra: &[(&str, String)],
     limit_seconds: u32,
-) -> Result<String> {
+) -> Result<String, SinglePointError> {
     let data = dir.join(format!("{tag}.data"));
-    std::fs::write(&data, write_data_file(scene))
-        .with_context(|| format!("writing {}", data.display()))?;
-    std::fs::write(
-        format!("{}.r0", data.display()),
-        write_reference_lengths(scene),
-    )?;
-    let inputs = write_templates(dir)?;
+    std::fs::write(&data, write_data_file(scene)).map_err(file_error("writing", &data))?;
+    let r0 = Path::new(&format!("{}.r0", data.display())).to_path_buf();
+    std::fs::write(&r0, write_reference_lengths(scene)).map_err(file_error("writing", &r0))?;
+    let inputs = write_templates(dir).map_err(|cause| SinglePointError::Templates { cause })?;
     let vars = ScriptVars::of(scene, &data.display().to_string(), newton, &inputs);
     let input = if Path::new(input).is_absolute() {
         input.to_string()
@@ -61,16 +112,21 @@ pub fn run_lmp_bpm(
     for (k, v) in extra {
         cmd.args(["-var", k, v]);
     }
-    let out = cmd
-        .output()
-        .with_context(|| format!("starting {}", lmp_bpm.display()))?;
+    let out = cmd.output().map_err(|cause| SinglePointError::Start {
+        program: lmp_bpm.display().to_string(),
+        cause,
+    })?;
     let text = format!(
         "{}{}",
         String::from_utf8_lossy(&out.stdout),
         String::from_utf8_lossy(&out.stderr)
     );
     if !out.status.success() {
-        bail!("lmp-bpm ({ranks} ranks) failed on {input}:\n{text}");
+        return Err(SinglePointError::Lammps {
+            ranks,
+            input,
+            output: text,
+        });
     }
     Ok(text)
 }
@@ -98,9 +154,8 @@ pub fn limited_launch(limit_seconds: u32, ranks: usize) -> Command {
 }
 
 /// Rows of a LAMMPS custom dump sorted by id, without the id column.
-pub fn read_dump(path: &Path) -> Result<Vec<Vec<f64>>> {
-    let text =
-        std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
+pub fn read_dump(path: &Path) -> Result<Vec<Vec<f64>>, SinglePointError> {
+    let text = std::fs::read_to_string(path).map_err(file_error("reading", path))?;
     text.lines()
         .skip_while(|l| !l.starts_with("ITEM: ATOMS"))
         .skip(1)
@@ -108,8 +163,12 @@ pub fn read_dump(path: &Path) -> Result<Vec<Vec<f64>>> {
             line.split_whitespace()
                 .skip(1)
                 .map(|t| {
-                    t.parse::<f64>()
-                        .with_context(|| format!("bad number {t} in {}", path.display()))
+                    t.parse::<f64>().map_err(|e| {
+                        SinglePointError::Output(format!(
+                            "bad number {t} in {}: {e}",
+                            path.display()
+                        ))
+                    })
                 })
                 .collect()
         })
@@ -124,7 +183,7 @@ pub fn lammps_single_point(
     ranks: usize,
     dir: &Path,
     tag: &str,
-) -> Result<SinglePoint> {
+) -> Result<SinglePoint, SinglePointError> {
     let dump = dir.join(format!("{tag}.dump"));
     let out = run_lmp_bpm(
         lmp_bpm,
@@ -137,34 +196,35 @@ pub fn lammps_single_point(
         &[("dump", dump.display().to_string())],
         CHECK_LIMIT_SECONDS,
     )?;
-    let numbers = |key: &str| -> Result<Vec<f64>> {
+    let output = |m: String| SinglePointError::Output(m);
+    let numbers = |key: &str| -> Result<Vec<f64>, SinglePointError> {
         let line = out
             .lines()
             .find(|l| l.starts_with(key))
-            .with_context(|| format!("no {key} line in the LAMMPS output"))?;
+            .ok_or_else(|| output(format!("no {key} line in the LAMMPS output")))?;
         line.split_whitespace()
             .skip(1)
             .map(|v| {
                 v.parse::<f64>()
-                    .with_context(|| format!("bad {key} value {v}"))
+                    .map_err(|e| output(format!("bad {key} value {v}: {e}")))
             })
             .collect()
     };
     let p = numbers("BPM_PRESSURE")?;
     let e = numbers("BPM_ENERGY")?;
     if p.len() != 6 || e.len() != 2 {
-        bail!("unexpected BPM_PRESSURE or BPM_ENERGY line");
+        return Err(output("unexpected BPM_PRESSURE or BPM_ENERGY line".into()));
     }
     let forces: Vec<[f64; 3]> = read_dump(&dump)?
         .iter()
         .map(|v| [v[0], v[1], v[2]])
         .collect();
     if forces.len() != scene.particles.positions.len() {
-        bail!(
+        return Err(output(format!(
             "dump has {} atoms, scene {}",
             forces.len(),
             scene.particles.positions.len()
-        );
+        )));
     }
     Ok(SinglePoint {
         forces,
