@@ -24,7 +24,6 @@ fn main() -> anyhow::Result<()> {
     let launcher = LammpsLauncher {
         bpm,
         dir: dir.clone(),
-        limit_seconds: 3600,
     };
     let scenes = [
         ("contact solid L=8 a_B=-0.5", contact_solid(8.0, 1, -0.5)?),

@@ -16,7 +16,6 @@ fn launcher(name: &str) -> LammpsLauncher {
     LammpsLauncher {
         bpm: PathBuf::from(env!("CARGO_BIN_EXE_bpm")),
         dir: common::scratch_dir(&format!("harness-{name}")),
-        limit_seconds: 300,
     }
 }
 

@@ -239,7 +239,6 @@ fn per_particle_masses_and_types_agree_between_engines() {
     let launcher = bpm::verify::LammpsLauncher {
         bpm: bpm_exe(),
         dir: common::scratch_dir("trajectory-masses"),
-        limit_seconds: 300,
     };
     let lammps = launcher.run(&scene, "masses", 1, true).unwrap();
     let deviations = bpm::verify::compare_runs(&native.stages, &lammps.stages).unwrap();

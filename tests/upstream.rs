@@ -32,7 +32,11 @@ fn plugin_load_registers_our_styles() {
         ),
     )
     .unwrap();
-    let out = lmp.run(&input, &[], 1).unwrap();
+    let setup = bpm::verify::Work {
+        particles: 0,
+        steps: 0,
+    };
+    let out = lmp.run(&input, &[], 1, setup).unwrap();
     for style in ["bpm/multibody", "bpm/contact"] {
         assert!(out.contains(style), "`plugin list` lacks {style}:\n{out}");
     }

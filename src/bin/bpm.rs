@@ -633,7 +633,6 @@ fn calibrate(
     let launcher = bpm::verify::LammpsLauncher {
         bpm: std::env::current_exe()?,
         dir: output.join("lammps"),
-        limit_seconds: 3600,
     };
     let start = std::time::Instant::now();
     println!(

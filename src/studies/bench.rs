@@ -136,7 +136,7 @@ pub fn lammps_bond_timing(
         dir,
         &format!("bench-{a_b}"),
         &vars,
-        3600,
+        steps,
     )?;
     let field = |prefix: &str, col: usize| -> Option<f64> {
         let line = text.lines().find(|l| l.starts_with(prefix))?;

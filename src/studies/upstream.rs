@@ -12,11 +12,11 @@ use crate::kernels::Separation;
 use crate::lammps::{write_data_file, write_templates};
 use crate::scene::{Scene, SceneError};
 use crate::verify::compare::max_position_deviation;
+use crate::verify::launch::{LammpsChild, LaunchError, Work};
 use crate::verify::scenes::{contact_solid_reference, grain_pair};
 use crate::verify::single_point::{max_relative_deviation, read_dump, SinglePointError};
 use serde::Serialize;
 use std::path::{Path, PathBuf};
-use std::process::Command;
 
 /// Why the comparison with upstream could not finish (failed comparisons
 /// are not errors: they are rows). Each message carries its cause once.
@@ -45,26 +45,9 @@ pub enum UpstreamError {
         /// The cause (names the file).
         cause: std::io::Error,
     },
-    /// LAMMPS could not be started.
-    #[error("starting {program}: {cause}")]
-    Start {
-        /// The executable.
-        program: String,
-        /// The cause.
-        cause: std::io::Error,
-    },
-    /// LAMMPS ran and failed.
-    #[error("{program} on {input} failed ({status}): {error}")]
-    Lammps {
-        /// The executable.
-        program: String,
-        /// The input script.
-        input: String,
-        /// Its exit status.
-        status: std::process::ExitStatus,
-        /// LAMMPS's ERROR line.
-        error: String,
-    },
+    /// LAMMPS could not be started, or failed.
+    #[error(transparent)]
+    Launch(#[from] LaunchError),
     /// A dump file is missing or malformed.
     #[error(transparent)]
     Dump(#[from] SinglePointError),
@@ -204,43 +187,27 @@ impl ModernLammps {
         })
     }
 
-    /// Runs `input` with `-var` pairs on `ranks` ranks; returns the screen output.
-    pub fn run(&self, input: &Path, vars: &[(&str, String)], ranks: usize) -> Result<String> {
-        let mut cmd = Command::new("timeout");
-        cmd.arg("600");
-        if ranks > 1 {
-            cmd.arg(&self.mpiexec).args(["-n", &ranks.to_string()]);
-        }
-        cmd.arg(&self.lmp)
-            .arg("-in")
-            .arg(input)
-            .args(["-log", "none"]);
+    /// Runs `input` with `-var` pairs on `ranks` ranks, as a child process
+    /// within the time limit of `work` ([`Work::time_limit`]); returns the
+    /// screen output.
+    pub fn run(
+        &self,
+        input: &Path,
+        vars: &[(&str, String)],
+        ranks: usize,
+        work: Work,
+    ) -> Result<String> {
+        let mut args = vec![
+            "-in".to_string(),
+            input.display().to_string(),
+            "-log".into(),
+            "none".into(),
+        ];
         for (k, v) in vars {
-            cmd.args(["-var", k, v]);
+            args.extend(["-var".to_string(), k.to_string(), v.clone()]);
         }
-        cmd.env("LD_LIBRARY_PATH", &self.lib_dir);
-        let out = cmd.output().map_err(|cause| UpstreamError::Start {
-            program: self.lmp.display().to_string(),
-            cause,
-        })?;
-        let text = format!(
-            "{}{}",
-            String::from_utf8_lossy(&out.stdout),
-            String::from_utf8_lossy(&out.stderr)
-        );
-        if !out.status.success() {
-            let error = text
-                .lines()
-                .find(|l| l.starts_with("ERROR"))
-                .unwrap_or("no ERROR line");
-            return Err(UpstreamError::Lammps {
-                program: self.lmp.display().to_string(),
-                input: input.display().to_string(),
-                status: out.status,
-                error: error.to_string(),
-            });
-        }
-        Ok(text)
+        let child = LammpsChild::with_libraries(&self.lmp, &self.lib_dir, &self.mpiexec);
+        Ok(child.run(&input.display().to_string(), args, ranks, work, None)?)
     }
 }
 
@@ -370,7 +337,7 @@ pub fn run_style(
         ("steps", steps.to_string()),
         ("dump", dump.display().to_string()),
     ];
-    let out = lammps.run(&input, &vars, ranks)?;
+    let out = lammps.run(&input, &vars, ranks, Work::steps_of(&config.scene, steps))?;
     let read = |k: usize| -> Result<Vec<Vec<f64>>> {
         Ok(read_dump(Path::new(&format!("{}.{k}", dump.display())))?)
     };

@@ -242,7 +242,6 @@ pub fn run_check(opts: &CheckOptions) -> Result<CheckReport> {
     let launcher = LammpsLauncher {
         bpm: opts.bpm.clone(),
         dir: work.clone(),
-        limit_seconds: 600,
     };
     let mut verdicts = Vec::new();
     print_header();

@@ -4,9 +4,11 @@
 //! under `mpirun`): Debian's LAMMPS ends its process on any error, and the
 //! harness must turn that into an error value with LAMMPS's message.
 
+use super::launch::{LammpsChild, LaunchError, Work};
 use crate::scene::run::{run_scene, RunOptions, StageOutput};
 use crate::scene::{build_system, validate, write_scene, EngineInfo, RunReport, Scene};
-use std::path::{Path, PathBuf};
+use std::ffi::OsStr;
+use std::path::PathBuf;
 
 /// A failure of a harness run.
 #[derive(Debug, thiserror::Error)]
@@ -77,19 +79,19 @@ pub fn run_native(scene: &Scene, tag: &str, threads: usize) -> Result<EngineRun,
     })
 }
 
-/// How to start LAMMPS runs.
+/// Runs scenes in LAMMPS: `bpm run --engine lammps` as a child process
+/// ([`LammpsChild`], with its time-out policy), optionally under MPI.
 #[derive(Clone, Debug)]
 pub struct LammpsLauncher {
     /// The `bpm` executable (runs `bpm run --engine lammps`).
     pub bpm: PathBuf,
     /// Folder for scenes, drivers, data files and logs.
     pub dir: PathBuf,
-    /// Wall-clock limit per run (s): a hung LAMMPS fails instead of stalling.
-    pub limit_seconds: u32,
 }
 
 impl LammpsLauncher {
-    /// Runs `scene` (named `tag`) in LAMMPS on `ranks` MPI ranks.
+    /// Runs `scene` (named `tag`) in LAMMPS on `ranks` MPI ranks, within
+    /// the time limit of its particles and steps ([`Work::time_limit`]).
     pub fn run(
         &self,
         scene: &Scene,
@@ -104,33 +106,38 @@ impl LammpsLauncher {
         write_scene(&scene_path, scene).map_err(|e| io(e.to_string()))?;
         let output = work.join("lammps.out.json");
         let _ = std::fs::remove_file(&output);
-        let mut cmd = super::single_point::limited_launch(self.limit_seconds, ranks);
-        cmd.arg(&self.bpm)
-            .args(["run", "--engine", "lammps", "--newton"])
-            .arg(if newton { "on" } else { "off" })
-            .arg("--workdir")
-            .arg(&work)
-            .arg(&scene_path)
-            .arg("-o")
-            .arg(&output);
-        let start = std::time::Instant::now();
-        let out = cmd
-            .output()
-            .map_err(|e| io(format!("starting {}: {e}", self.bpm.display())))?;
-        let seconds = start.elapsed().as_secs_f64();
+        let args: [&OsStr; 10] = [
+            "run".as_ref(),
+            "--engine".as_ref(),
+            "lammps".as_ref(),
+            "--newton".as_ref(),
+            (if newton { "on" } else { "off" }).as_ref(),
+            "--workdir".as_ref(),
+            work.as_os_str(),
+            scene_path.as_os_str(),
+            "-o".as_ref(),
+            output.as_os_str(),
+        ];
         let fail = |message: String| HarnessError::Lammps {
             scene: tag.into(),
             ranks,
             message,
             dir: work.display().to_string(),
         };
-        if !out.status.success() {
-            return Err(fail(failure_message(
-                &out,
-                &work.join("scene.log"),
-                self.limit_seconds,
-            )));
-        }
+        let start = std::time::Instant::now();
+        LammpsChild::debian(&self.bpm)
+            .run(
+                &scene_path.display().to_string(),
+                args,
+                ranks,
+                Work::of_scene(scene),
+                Some(&work.join("scene.log")),
+            )
+            .map_err(|e| match e {
+                LaunchError::Failed { message, .. } => fail(message),
+                start @ LaunchError::Start { .. } => io(start.to_string()),
+            })?;
+        let seconds = start.elapsed().as_secs_f64();
         let report =
             RunReport::read(&output).map_err(|e| fail(format!("reading the run report: {e}")))?;
         let lammps_version = match report.engine {
@@ -145,31 +152,4 @@ impl LammpsLauncher {
             lammps_version,
         })
     }
-}
-
-/// The best explanation of a failed child: LAMMPS's `ERROR` line from the
-/// log, else the child's own `error:` line, else the exit status.
-fn failure_message(out: &std::process::Output, log: &Path, limit: u32) -> String {
-    if out.status.code() == Some(124) {
-        return format!("no result within {limit} s (killed)");
-    }
-    let log_text = std::fs::read_to_string(log).unwrap_or_default();
-    let streams = format!(
-        "{}\n{}",
-        String::from_utf8_lossy(&out.stdout),
-        String::from_utf8_lossy(&out.stderr)
-    );
-    for text in [&log_text, &streams] {
-        if let Some(line) = text.lines().find(|l| l.starts_with("ERROR")) {
-            return line.trim().to_string();
-        }
-    }
-    if let Some(line) = streams.lines().find(|l| l.starts_with("error:")) {
-        return line.trim_start_matches("error:").trim().to_string();
-    }
-    format!(
-        "exit status {} without a message; output:\n{}",
-        out.status,
-        streams.trim()
-    )
 }

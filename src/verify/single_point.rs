@@ -1,11 +1,11 @@
 //! One force evaluation of a scene in both engines.
 
+use super::launch::{LammpsChild, LaunchError, Work};
 use crate::engine::StageDrivers;
 use crate::lammps::{write_data_file, write_reference_lengths, write_templates, ScriptVars};
 use crate::scene::{build_system, Scene};
 use serde::Serialize;
 use std::path::Path;
-use std::process::Command;
 
 /// Why a single point (or another `lmp-bpm` run) failed. Each message
 /// carries its cause (not chained again, so it prints once).
@@ -27,24 +27,9 @@ pub enum SinglePointError {
         /// The cause (names the file).
         cause: std::io::Error,
     },
-    /// `lmp-bpm` could not be started.
-    #[error("starting {program}: {cause}")]
-    Start {
-        /// The executable.
-        program: String,
-        /// The cause.
-        cause: std::io::Error,
-    },
-    /// `lmp-bpm` ran and failed.
-    #[error("lmp-bpm ({ranks} ranks) failed on {input}:\n{output}")]
-    Lammps {
-        /// MPI ranks.
-        ranks: usize,
-        /// The input script.
-        input: String,
-        /// Its screen output.
-        output: String,
-    },
+    /// `lmp-bpm` could not be started, or failed.
+    #[error(transparent)]
+    Launch(#[from] LaunchError),
     /// LAMMPS's output or dump lacks something or is malformed.
     #[error("{0}")]
     Output(String),
@@ -62,10 +47,6 @@ fn file_error(
     }
 }
 
-/// Wall-clock limit of a single-point LAMMPS run (it takes about a second):
-/// a hung LAMMPS (e.g. NaN positions) fails instead of stalling.
-pub const CHECK_LIMIT_SECONDS: u32 = 120;
-
 /// Forces, pressure tensor and energies of one evaluation.
 #[derive(Clone, Debug, Serialize)]
 pub struct SinglePoint {
@@ -80,8 +61,10 @@ pub struct SinglePoint {
 /// Runs `lmp_bpm` on the template `input` (an absolute path, or a name in
 /// `lammps_inputs/`, run from the embedded copy written to `<dir>/inputs/`)
 /// for `scene`, files in `dir` named after `tag`, on
-/// `ranks` MPI ranks; `extra` adds `-var` pairs. Returns the output; a
-/// LAMMPS error, a crash or `limit_seconds` without finishing is an error.
+/// `ranks` MPI ranks; `extra` adds `-var` pairs; `steps` is what the input
+/// runs in all (with the scene's particles, it sets the time limit:
+/// [`Work::time_limit`]). Returns the screen output; a LAMMPS error, a crash
+/// or no result within the time limit is an error.
 #[allow(clippy::too_many_arguments)]
 pub fn run_lmp_bpm(
     lmp_bpm: &Path,
@@ -92,7 +75,7 @@ pub fn run_lmp_bpm(
     dir: &Path,
     tag: &str,
     extra: &[(&str, String)],
-    limit_seconds: u32,
+    steps: u64,
 ) -> Result<String, SinglePointError> {
     let data = dir.join(format!("{tag}.data"));
     std::fs::write(&data, write_data_file(scene)).map_err(file_error("writing", &data))?;
@@ -105,52 +88,20 @@ pub fn run_lmp_bpm(
     } else {
         inputs.join(input).display().to_string()
     };
-    let mut cmd = limited_launch(limit_seconds, ranks);
-    cmd.arg(lmp_bpm)
-        .args(["-in", &input, "-log", "none"])
-        .args(vars.args());
+    let mut args: Vec<String> = vec!["-in".into(), input.clone(), "-log".into(), "none".into()];
+    args.extend(vars.args());
     for (k, v) in extra {
-        cmd.args(["-var", k, v]);
+        args.extend(["-var".to_string(), k.to_string(), v.clone()]);
     }
-    let out = cmd.output().map_err(|cause| SinglePointError::Start {
-        program: lmp_bpm.display().to_string(),
-        cause,
-    })?;
-    let text = format!(
-        "{}{}",
-        String::from_utf8_lossy(&out.stdout),
-        String::from_utf8_lossy(&out.stderr)
-    );
-    if !out.status.success() {
-        return Err(SinglePointError::Lammps {
+    Ok(
+        LammpsChild::debian(lmp_bpm).run(
+            &input,
+            args,
             ranks,
-            input,
-            output: text,
-        });
-    }
-    Ok(text)
-}
-
-/// `timeout <limit> [mpirun.openmpi ... -np <ranks>]`, ready for the
-/// program and its arguments: Debian's LAMMPS links Open MPI, so its
-/// `mpirun` (not MPICH's, also installed) starts the ranks; as root, without
-/// binding (two ranks on a shared two-core machine).
-pub fn limited_launch(limit_seconds: u32, ranks: usize) -> Command {
-    let mut cmd = Command::new("timeout");
-    cmd.arg(limit_seconds.to_string());
-    if ranks > 1 {
-        cmd.args([
-            "mpirun.openmpi",
-            "--allow-run-as-root",
-            "--oversubscribe",
-            "--bind-to",
-            "none",
-            "-np",
-            &ranks.to_string(),
-        ]);
-    }
-    cmd.env("OMPI_MCA_btl_vader_single_copy_mechanism", "none");
-    cmd
+            Work::steps_of(scene, steps),
+            None,
+        )?,
+    )
 }
 
 /// Rows of a LAMMPS custom dump sorted by id, without the id column.
@@ -194,7 +145,7 @@ pub fn lammps_single_point(
         dir,
         tag,
         &[("dump", dump.display().to_string())],
-        CHECK_LIMIT_SECONDS,
+        0,
     )?;
     let output = |m: String| SinglePointError::Output(m);
     let numbers = |key: &str| -> Result<Vec<f64>, SinglePointError> {
