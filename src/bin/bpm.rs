@@ -6,6 +6,8 @@ use bpm::scene::{
     final_scene as final_scene_of, protocols, read_scene, run_native_report, write_scene,
     DumpOptions, EngineInfo, OutputFiles, RunOptions, RunReport,
 };
+use bpm::studies::bench::{self, BenchOptions};
+use bpm::studies::{calibration, upstream};
 use clap::{Parser, Subcommand, ValueEnum};
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
@@ -388,46 +390,9 @@ fn real_main() -> Result<()> {
             steps,
             output,
         } => {
-            let solid = bpm::studies::bench::bench_solid(size, seed, cli.threads)?;
-            let mut cases = Vec::new();
-            for a_b in [0.0, -0.5] {
-                for threads in [1, 2] {
-                    let case = bpm::studies::bench::bench_case(&solid, a_b, threads, steps);
-                    let parts: Vec<String> = case
-                        .breakdown
-                        .iter()
-                        .filter(|(_, v)| *v > 0.05)
-                        .map(|(k, v)| format!("{k} {v:.1}"))
-                        .collect();
-                    println!(
-                        "{:<36} {:>5} particles {:>6} bonds  {:>7.1} ns per particle-step  [{}]",
-                        case.name,
-                        case.particles,
-                        case.bonds,
-                        case.ns_per_particle_step,
-                        parts.join(", ")
-                    );
-                    cases.push(case);
-                }
-            }
-            let ns = |a: f64, t: usize| {
-                cases
-                    .iter()
-                    .find(|c| c.a_b == a && c.threads == t)
-                    .map_or(f64::NAN, |c| c.ns_per_particle_step)
-            };
-            println!(
-                "multibody cost (a_B=-0.5 / a_B=0, 1 thread): {:.2}x   2-thread speed-up: {:.2}x (a_B=0), {:.2}x (a_B=-0.5)",
-                ns(-0.5, 1) / ns(0.0, 1),
-                ns(0.0, 1) / ns(0.0, 2),
-                ns(-0.5, 1) / ns(-0.5, 2)
-            );
-            if let Some(path) = output {
-                let report = serde_json::json!({
-                    "program": "bpm bench", "version": bpm::VERSION, "size": size, "seed": seed, "steps": steps, "cases": cases,
-                });
-                std::fs::write(&path, serde_json::to_string_pretty(&report)?)?;
-            }
+            let opts = BenchOptions { size, seed, steps };
+            let bench = bench::run_bench(&opts, cli.threads, output.as_deref(), &mut print)?;
+            println!("{}", bench.summary());
         }
         Command::Check {
             output,
@@ -496,7 +461,8 @@ fn real_main() -> Result<()> {
             from,
         } => {
             if let Some(path) = from {
-                return replot_calibration(&path, &output);
+                print_calibration_report(&calibration::replot(&path, &output)?);
+                return Ok(());
             }
             if let Some(bad) = sizes.iter().find(|l| !(l.is_finite() && **l >= 5.0)) {
                 bail!("--sizes must be at least 5 (d), got {bad}");
@@ -514,23 +480,24 @@ fn real_main() -> Result<()> {
             if !(rate.is_finite() && rate > 0.0 && strain.is_finite() && strain > 0.0) {
                 bail!("--rate and --strain must be positive");
             }
-            calibrate(
-                &output,
-                bpm::studies::calibration::StudyOptions {
-                    sizes,
-                    seeds,
-                    a_b,
-                    convergence_a_b,
-                    lammps_sizes,
-                    loading: bpm::studies::calibration::Loading {
-                        strain,
-                        rate,
-                        ..Default::default()
-                    },
-                    halve_rate: !no_rate_check,
+            let opts = calibration::StudyOptions {
+                sizes,
+                seeds,
+                a_b,
+                convergence_a_b,
+                lammps_sizes,
+                loading: calibration::Loading {
+                    strain,
+                    rate,
+                    ..Default::default()
                 },
-                cli.threads,
-            )?;
+                halve_rate: !no_rate_check,
+            };
+            let exe = std::env::current_exe()?;
+            let done =
+                calibration::calibrate(&opts, &output, &exe, cli.threads, &command(), &mut print)?;
+            println!("wrote {}", done.json.display());
+            print_calibration_report(&done.report);
         }
         Command::UpstreamCheck {
             output,
@@ -540,42 +507,41 @@ fn real_main() -> Result<()> {
             speed_size,
             seed,
         } => {
-            upstream_check(&output, size, grain_radius, steps, speed_size, seed)?;
+            let opts = upstream::UpstreamOptions {
+                size,
+                grain_radius,
+                steps,
+                speed_size,
+                seed,
+            };
+            let report = upstream::run_upstream_check(&opts, &output, &command(), &mut print)?;
+            println!("wrote {}", report.json.display());
+            let failed = report.failures();
+            if failed > 0 {
+                bail!("{failed} comparisons with upstream failed");
+            }
+            println!("all {} judged comparisons pass", report.judged());
         }
         Command::BenchLammps { size, seed, steps } => {
-            let solid = bpm::studies::bench::bench_solid(size, seed, cli.threads)?;
+            let opts = BenchOptions { size, seed, steps };
             let lmp = std::env::current_exe()?.with_file_name("lmp-bpm");
-            let dir = std::env::temp_dir().join(format!("bpm-bench-lammps-{}", std::process::id()));
-            std::fs::create_dir_all(&dir)?;
-            let variants = [
-                ("harmonic", 0.0),
-                ("bpm", 0.0),
-                ("nodamp", 0.0),
-                ("bpm", -0.5),
-                ("nodamp", -0.5),
-            ];
-            let mut timings = Vec::new();
-            for (style, a_b) in variants {
-                let t =
-                    bpm::studies::bench::lammps_bond_timing(&lmp, &solid, &dir, style, a_b, steps)?;
-                println!(
-                    "{:<24} bond {:>7.1} ns per particle-step   loop {:>7.1}",
-                    t.name, t.bond_ns, t.loop_ns
-                );
-                timings.push(t);
+            let bench = bench::run_bench_lammps(&opts, &lmp, cli.threads, &mut print)?;
+            for line in bench.ratios() {
+                println!("{line}");
             }
-            let harmonic = timings[0].bond_ns;
-            for t in &timings[1..] {
-                println!(
-                    "{:<24} bond time / harmonic = {:.2}x",
-                    t.name,
-                    t.bond_ns / harmonic
-                );
-            }
-            let _ = std::fs::remove_dir_all(&dir);
         }
     }
     Ok(())
+}
+
+/// Prints one line of a study's running table.
+fn print(line: &str) {
+    println!("{line}");
+}
+
+/// The command line, as recorded in the studies' reports.
+fn command() -> String {
+    std::env::args().collect::<Vec<_>>().join(" ")
 }
 
 /// `bpm run --engine lammps`: the scene in LAMMPS in this process. LAMMPS
@@ -622,192 +588,10 @@ fn run_lammps(
     Ok(())
 }
 
-/// `bpm calibrate`: runs the study, writes JSON, Markdown tables and plots.
-fn calibrate(
-    output: &Path,
-    opts: bpm::studies::calibration::StudyOptions,
-    threads: usize,
-) -> Result<()> {
-    use bpm::studies::calibration::run_study;
-    std::fs::create_dir_all(output).with_context(|| format!("creating {}", output.display()))?;
-    let launcher = bpm::verify::LammpsLauncher {
-        bpm: std::env::current_exe()?,
-        dir: output.join("lammps"),
-    };
-    let start = std::time::Instant::now();
-    println!(
-        "{:>5} {:>5} {:>6} {:<11} {:>8} {:>8} {:>8} {:>7} {:>7} {:>8}",
-        "L", "seed", "a_B", "engine", "rate", "K", "G", "G/K", "nu", "seconds"
-    );
-    let cases = run_study(&opts, &launcher, threads, &mut |c| {
-        println!(
-            "{:>5} {:>5} {:>6} {:<11} {:>8.1e} {:>8.4} {:>8.4} {:>7.3} {:>7.3} {:>8.2}",
-            c.size,
-            c.seed,
-            c.moduli.a_b,
-            c.engine,
-            c.rate,
-            c.moduli.k,
-            c.moduli.g,
-            c.moduli.g_over_k,
-            c.moduli.nu,
-            c.moduli.seconds
-        );
-    })?;
-    let command: Vec<String> = std::env::args().collect();
-    let doc = serde_json::json!({
-        "program": "bpm calibrate",
-        "version": bpm::VERSION,
-        "command": command.join(" "),
-        "threads": threads,
-        "options": opts,
-        "bulk_protocol": bpm::scene::builders::bulk::BulkParams::paper(0.0, 0, 0.0),
-        "reference": "reference_data/paper_fits.json",
-        "wall_seconds": start.elapsed().as_secs_f64(),
-        "cases": cases,
-    });
-    let json = output.join("calibration.json");
-    std::fs::write(&json, serde_json::to_string_pretty(&doc)?)?;
-    println!("wrote {}", json.display());
-    write_calibration_report(output, &opts, &cases, &command.join(" "))
-}
-
-/// `bpm calibrate --from FILE`: tables and plots of an earlier study.
-fn replot_calibration(path: &Path, output: &Path) -> Result<()> {
-    let text =
-        std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
-    let doc: serde_json::Value =
-        serde_json::from_str(&text).with_context(|| format!("parsing {}", path.display()))?;
-    let opts: bpm::studies::calibration::StudyOptions =
-        serde_json::from_value(doc["options"].clone()).context("reading `options`")?;
-    let cases: Vec<bpm::studies::calibration::Case> =
-        serde_json::from_value(doc["cases"].clone()).context("reading `cases`")?;
-    let command = doc["command"].as_str().unwrap_or("unknown").to_string();
-    std::fs::create_dir_all(output)?;
-    write_calibration_report(output, &opts, &cases, &command)
-}
-
-/// Writes calibration.md and the two plots.
-fn write_calibration_report(
-    output: &Path,
-    opts: &bpm::studies::calibration::StudyOptions,
-    cases: &[bpm::studies::calibration::Case],
-    command: &str,
-) -> Result<()> {
-    let (md, moduli_panels, convergence_panels) =
-        bpm::studies::calibration::study_report(opts, cases);
-    let header = format!(
-        "# Calibration of K and G against a_B\n\nMade by `{command}` (bpm {}); every case is in `calibration.json`.\n\n",
-        bpm::VERSION
-    );
-    let table = output.join("calibration.md");
-    std::fs::write(&table, header + &md)?;
-    let p1 = output.join("moduli_vs_a_b.svg");
-    bpm::analysis::plot::write_svg(&p1, &moduli_panels)?;
-    let p2 = output.join("size_convergence.svg");
-    bpm::analysis::plot::write_svg(&p2, &convergence_panels)?;
-    println!("\n{md}");
-    for f in [&table, &p1, &p2] {
+/// The calibration tables, then the files written.
+fn print_calibration_report(report: &calibration::StudyReport) {
+    println!("\n{}", report.markdown);
+    for f in &report.files {
         println!("wrote {}", f.display());
     }
-    Ok(())
-}
-
-/// `bpm upstream-check`.
-fn upstream_check(
-    output: &Path,
-    size: f64,
-    grain_radius: f64,
-    steps: u64,
-    speed_size: f64,
-    seed: u64,
-) -> Result<()> {
-    use bpm::studies::upstream::{
-        compare_configuration, configurations, speed, Configuration, ModernLammps,
-    };
-    let lammps = ModernLammps::locate()?;
-    let work = output.join("lammps");
-    std::fs::create_dir_all(&work).with_context(|| format!("creating {}", work.display()))?;
-    println!(
-        "{:<30} {:>5} {:>7} {:<22} {:>10} {:>9} {:>8}",
-        "configuration", "ranks", "gammaP", "observable", "max dev", "tolerance", "verdict"
-    );
-    let mut rows = Vec::new();
-    let mut print_from = 0;
-    let flush = |rows: &Vec<bpm::studies::upstream::UpstreamRow>, from: &mut usize| {
-        for r in &rows[*from..] {
-            println!(
-                "{:<30} {:>5} {:>7} {:<22} {:>10.2e} {:>9} {:>8}",
-                r.configuration,
-                r.ranks,
-                r.pair_gamma,
-                r.observable,
-                r.max_deviation,
-                r.tolerance.map_or("-".into(), |t| format!("{t:.0e}")),
-                if r.tolerance.is_none() {
-                    "explained"
-                } else if r.pass {
-                    "pass"
-                } else {
-                    "FAIL"
-                }
-            );
-        }
-        *from = rows.len();
-    };
-    for a_b in [0.0, -0.5, 1.0] {
-        for config in configurations(size, grain_radius, seed, a_b)? {
-            for ranks in [1, 2] {
-                compare_configuration(&lammps, &config, 0.0, steps, ranks, &work, &mut rows)?;
-                flush(&rows, &mut print_from);
-            }
-        }
-    }
-    // Pair damping: upstream multiplies it by 1 - (r/r_c)^8, we do not
-    // (docs/model.md's damping is the plain gamma (v_ij . n) n).
-    for config in configurations(size, grain_radius, seed, -0.5)? {
-        compare_configuration(&lammps, &config, 1.0, 0, 1, &work, &mut rows)?;
-        flush(&rows, &mut print_from);
-    }
-    let mut speeds = Vec::new();
-    if speed_size > 0.0 {
-        // The squeeze sets the volume strain, which picks the cube-root
-        // path: 4.5% (compaction-like) and 0.6% (calibration-like).
-        for (a_b, squeeze) in [(0.0, 0.985), (-0.5, 0.985), (-0.5, 0.998)] {
-            let config = Configuration {
-                name: format!("contact solid L={speed_size} a_B={a_b} squeeze {squeeze}"),
-                scene: bpm::verify::contact_solid_reference(speed_size, seed, a_b)?,
-                squeeze,
-            };
-            let row = speed(&lammps, &config, steps, 3, &work)?;
-            println!(
-                "speed {:<30} {} particles: ours {:.1} ns, upstream {:.1} ns per particle-step, ratio {:.2}",
-                row.configuration, row.particles, row.ours_ns, row.upstream_ns, row.ratio
-            );
-            speeds.push(row);
-        }
-    }
-    let failed = rows.iter().filter(|r| !r.pass).count();
-    let report = serde_json::json!({
-        "program": "bpm upstream-check",
-        "version": bpm::VERSION,
-        "command": std::env::args().collect::<Vec<_>>().join(" "),
-        "lammps": lammps,
-        "size": size, "grain_radius": grain_radius, "steps": steps, "seed": seed,
-        "step0_tolerance": bpm::studies::upstream::STEP0_TOLERANCE,
-        "trajectory_tolerance": bpm::studies::upstream::TRAJECTORY_TOLERANCE,
-        "rows": rows,
-        "speed": speeds,
-    });
-    let path = output.join("upstream.json");
-    std::fs::write(&path, serde_json::to_string_pretty(&report)?)?;
-    println!("wrote {}", path.display());
-    if failed > 0 {
-        bail!("{failed} comparisons with upstream failed");
-    }
-    println!(
-        "all {} judged comparisons pass",
-        rows.iter().filter(|r| r.tolerance.is_some()).count()
-    );
-    Ok(())
 }

@@ -1,12 +1,59 @@
-//! Calibration runs: K and G of a bulk solid at one `a_B` (docs/protocols.md
-//! "Calibration"), on either engine.
+//! The calibration study (`bpm calibrate`, docs/protocols.md
+//! "Calibration", the paper's Fig. 2): K and G of bulk solids against
+//! `a_B` on either engine ([`measure_moduli`], also used by `bpm check`),
+//! the study over sizes, seeds and engines ([`calibrate`]), and its tables
+//! and plots ([`write_report`], [`replot`]).
 
 use crate::analysis::moduli::{
     bulk_modulus, paper_bulk_modulus, paper_shear_to_bulk, poisson_ratio, shear_modulus,
 };
+use crate::analysis::plot::PlotError;
 use crate::scene::{protocols, ForceField, Scene};
 use crate::verify::engines::{run_native, EngineRun, HarnessError, LammpsLauncher};
 use serde::{Deserialize, Serialize};
+use std::path::{Path, PathBuf};
+
+/// Why the calibration study could not finish. Each message carries its
+/// cause once.
+#[derive(Debug, thiserror::Error)]
+pub enum CalibrationError {
+    /// A solid could not be built or a run failed.
+    #[error(transparent)]
+    Harness(#[from] HarnessError),
+    /// A plot could not be written.
+    #[error(transparent)]
+    Plot(#[from] PlotError),
+    /// A folder or file could not be created, written or read.
+    #[error("{action} {path}: {cause}")]
+    File {
+        /// "creating", "writing", "reading".
+        action: &'static str,
+        /// The folder or file.
+        path: String,
+        /// The cause.
+        cause: std::io::Error,
+    },
+    /// An earlier `calibration.json` could not be parsed.
+    #[error("{what}: {cause}")]
+    Json {
+        /// What was read ("parsing <file>", "reading `options`").
+        what: String,
+        /// The cause.
+        cause: serde_json::Error,
+    },
+}
+
+fn file_error(
+    action: &'static str,
+    path: &Path,
+) -> impl FnOnce(std::io::Error) -> CalibrationError {
+    let path = path.display().to_string();
+    move |cause| CalibrationError::File {
+        action,
+        path,
+        cause,
+    }
+}
 
 /// Strain and rate of the calibration runs.
 #[derive(Clone, Copy, Debug, Serialize, Deserialize)]
@@ -174,7 +221,34 @@ pub struct Case {
     pub moduli: Moduli,
 }
 
-/// Runs the study; `log` receives one line per case as it finishes.
+/// The header of the table of cases ([`Case::row`]).
+pub fn case_header() -> String {
+    format!(
+        "{:>5} {:>5} {:>6} {:<11} {:>8} {:>8} {:>8} {:>7} {:>7} {:>8}",
+        "L", "seed", "a_B", "engine", "rate", "K", "G", "G/K", "nu", "seconds"
+    )
+}
+
+impl Case {
+    /// The case as a row of the table of cases ([`case_header`]).
+    pub fn row(&self) -> String {
+        format!(
+            "{:>5} {:>5} {:>6} {:<11} {:>8.1e} {:>8.4} {:>8.4} {:>7.3} {:>7.3} {:>8.2}",
+            self.size,
+            self.seed,
+            self.moduli.a_b,
+            self.engine,
+            self.rate,
+            self.moduli.k,
+            self.moduli.g,
+            self.moduli.g_over_k,
+            self.moduli.nu,
+            self.moduli.seconds
+        )
+    }
+}
+
+/// Runs the study's cases; `log` receives each case as it finishes.
 pub fn run_study(
     opts: &StudyOptions,
     launcher: &LammpsLauncher,
@@ -570,4 +644,107 @@ pub fn study_report(
         },
     ];
     (md, moduli_panels, convergence_panels)
+}
+
+/// What [`calibrate`] measured and wrote.
+#[derive(Clone, Debug)]
+pub struct Calibration {
+    /// Every case, in the order run.
+    pub cases: Vec<Case>,
+    /// `calibration.json`: options, bulk protocol and every case.
+    pub json: PathBuf,
+    /// The tables and plots.
+    pub report: StudyReport,
+}
+
+/// The study's tables and plots ([`write_report`]).
+#[derive(Clone, Debug)]
+pub struct StudyReport {
+    /// The tables (Markdown), as written below the header of calibration.md.
+    pub markdown: String,
+    /// calibration.md, moduli_vs_a_b.svg and size_convergence.svg.
+    pub files: Vec<PathBuf>,
+}
+
+/// `bpm calibrate`: runs the study into `output` with `threads` threads
+/// (LAMMPS cases through `bpm` = the `bpm` executable, files in
+/// `output/lammps/`) and writes calibration.json, calibration.md and the
+/// plots; `command` is recorded in both. `log` receives the lines of the
+/// table of cases (header first) as the cases finish.
+pub fn calibrate(
+    opts: &StudyOptions,
+    output: &Path,
+    bpm: &Path,
+    threads: usize,
+    command: &str,
+    log: &mut dyn FnMut(&str),
+) -> Result<Calibration, CalibrationError> {
+    std::fs::create_dir_all(output).map_err(file_error("creating", output))?;
+    let launcher = LammpsLauncher {
+        bpm: bpm.to_path_buf(),
+        dir: output.join("lammps"),
+    };
+    let start = std::time::Instant::now();
+    log(&case_header());
+    let cases = run_study(opts, &launcher, threads, &mut |c| log(&c.row()))?;
+    let doc = serde_json::json!({
+        "program": "bpm calibrate",
+        "version": crate::VERSION,
+        "command": command,
+        "threads": threads,
+        "options": opts,
+        "bulk_protocol": crate::scene::builders::bulk::BulkParams::paper(0.0, 0, 0.0),
+        "reference": "reference_data/paper_fits.json",
+        "wall_seconds": start.elapsed().as_secs_f64(),
+        "cases": cases,
+    });
+    let json = output.join("calibration.json");
+    crate::verify::write_json(&json, &doc).map_err(file_error("writing", &json))?;
+    let report = write_report(output, opts, &cases, command)?;
+    Ok(Calibration {
+        cases,
+        json,
+        report,
+    })
+}
+
+/// `bpm calibrate --from FILE`: the tables and plots of an earlier study
+/// (its calibration.json) into `output`, without running anything.
+pub fn replot(json: &Path, output: &Path) -> Result<StudyReport, CalibrationError> {
+    let text = std::fs::read_to_string(json).map_err(file_error("reading", json))?;
+    let parse_error = |what: String| move |cause| CalibrationError::Json { what, cause };
+    let doc: serde_json::Value =
+        serde_json::from_str(&text).map_err(parse_error(format!("parsing {}", json.display())))?;
+    let opts: StudyOptions = serde_json::from_value(doc["options"].clone())
+        .map_err(parse_error("reading `options`".into()))?;
+    let cases: Vec<Case> = serde_json::from_value(doc["cases"].clone())
+        .map_err(parse_error("reading `cases`".into()))?;
+    let command = doc["command"].as_str().unwrap_or("unknown").to_string();
+    std::fs::create_dir_all(output).map_err(file_error("creating", output))?;
+    write_report(output, &opts, &cases, &command)
+}
+
+/// Writes calibration.md (a header naming `command`, then the tables of
+/// [`study_report`]) and the two plots into `output`.
+pub fn write_report(
+    output: &Path,
+    opts: &StudyOptions,
+    cases: &[Case],
+    command: &str,
+) -> Result<StudyReport, CalibrationError> {
+    let (markdown, moduli_panels, convergence_panels) = study_report(opts, cases);
+    let header = format!(
+        "# Calibration of K and G against a_B\n\nMade by `{command}` (bpm {}); every case is in `calibration.json`.\n\n",
+        crate::VERSION
+    );
+    let table = output.join("calibration.md");
+    std::fs::write(&table, header + &markdown).map_err(file_error("writing", &table))?;
+    let moduli = output.join("moduli_vs_a_b.svg");
+    crate::analysis::plot::write_svg(&moduli, &moduli_panels)?;
+    let convergence = output.join("size_convergence.svg");
+    crate::analysis::plot::write_svg(&convergence, &convergence_panels)?;
+    Ok(StudyReport {
+        markdown,
+        files: vec![table, moduli, convergence],
+    })
 }

@@ -1,6 +1,8 @@
-//! Our styles (loaded with `plugin load`) against upstream LAMMPS's own
-//! implementation of the model (`bond_style bpm/spring volume/factor yes`,
-//! `pair_style bpm/spring anharmonic yes`) in the same modern LAMMPS.
+//! The comparison with upstream (`bpm upstream-check`): our styles (loaded
+//! with `plugin load`) against upstream LAMMPS's own implementation of the
+//! model (`bond_style bpm/spring volume/factor yes`, `pair_style bpm/spring
+//! anharmonic yes`) in the same modern LAMMPS, and the speed ratio
+//! ([`run_upstream_check`]).
 //!
 //! Upstream takes reference lengths at the first run, so both inputs read
 //! the same data file at the reference state and deform it in LAMMPS
@@ -376,6 +378,14 @@ pub const STEP0_TOLERANCE: f64 = 1e-10;
 /// See [`STEP0_TOLERANCE`].
 pub const TRAJECTORY_TOLERANCE: f64 = 1e-9;
 
+/// The header of the verdict table ([`UpstreamRow::line`]).
+pub fn row_header() -> String {
+    format!(
+        "{:<30} {:>5} {:>7} {:<22} {:>10} {:>9} {:>8}",
+        "configuration", "ranks", "gammaP", "observable", "max dev", "tolerance", "verdict"
+    )
+}
+
 /// One verdict row.
 #[derive(Clone, Debug, Serialize)]
 pub struct UpstreamRow {
@@ -393,6 +403,28 @@ pub struct UpstreamRow {
     pub tolerance: Option<f64>,
     /// Pass (documented differences always pass).
     pub pass: bool,
+}
+
+impl UpstreamRow {
+    /// The row as a line of the verdict table ([`row_header`]).
+    pub fn line(&self) -> String {
+        format!(
+            "{:<30} {:>5} {:>7} {:<22} {:>10.2e} {:>9} {:>8}",
+            self.configuration,
+            self.ranks,
+            self.pair_gamma,
+            self.observable,
+            self.max_deviation,
+            self.tolerance.map_or("-".into(), |t| format!("{t:.0e}")),
+            if self.tolerance.is_none() {
+                "explained"
+            } else if self.pass {
+                "pass"
+            } else {
+                "FAIL"
+            }
+        )
+    }
 }
 
 /// Compares ours and upstream on `config`; pushes verdict rows.
@@ -486,6 +518,16 @@ pub struct SpeedRow {
     pub ratio: f64,
 }
 
+impl SpeedRow {
+    /// The row as one line of text.
+    pub fn line(&self) -> String {
+        format!(
+            "speed {:<30} {} particles: ours {:.1} ns, upstream {:.1} ns per particle-step, ratio {:.2}",
+            self.configuration, self.particles, self.ours_ns, self.upstream_ns, self.ratio
+        )
+    }
+}
+
 /// Times both styles on `config`, alternating them `repeats` times and
 /// keeping each one's fastest run (the machine is shared and noisy).
 pub fn speed(
@@ -553,4 +595,123 @@ pub fn smoothing_share(
         }
     }
     share
+}
+
+/// What `bpm upstream-check` compares.
+#[derive(Clone, Debug)]
+pub struct UpstreamOptions {
+    /// Box side of the contact solid (d).
+    pub size: f64,
+    /// Grain radius of the grain pair (d).
+    pub grain_radius: f64,
+    /// Steps of the trajectories (and of the speed runs).
+    pub steps: u64,
+    /// Box side of the solid for the speed comparison (0: no speed runs).
+    pub speed_size: f64,
+    /// Seed of the scenes.
+    pub seed: u64,
+}
+
+/// What [`run_upstream_check`] measured and wrote.
+#[derive(Clone, Debug)]
+pub struct UpstreamReport {
+    /// The modern LAMMPS and plugin used.
+    pub lammps: ModernLammps,
+    /// The verdict rows, in order.
+    pub rows: Vec<UpstreamRow>,
+    /// The speed comparisons.
+    pub speeds: Vec<SpeedRow>,
+    /// `upstream.json`.
+    pub json: PathBuf,
+}
+
+impl UpstreamReport {
+    /// Rows that failed.
+    pub fn failures(&self) -> usize {
+        self.rows.iter().filter(|r| !r.pass).count()
+    }
+
+    /// Rows judged against a tolerance (not documented differences).
+    pub fn judged(&self) -> usize {
+        self.rows.iter().filter(|r| r.tolerance.is_some()).count()
+    }
+}
+
+/// `bpm upstream-check`: finds the modern LAMMPS and our plugin for it
+/// ([`ModernLammps::locate`]), compares ours and upstream on the contact
+/// solid and the grain pair at a_B = 0, -0.5 and 1 on 1 and 2 ranks, with
+/// pair damping at a_B = -0.5, times both, and writes `upstream.json` into
+/// `output` (LAMMPS files in `output/lammps/`); `command` is recorded.
+/// `log` receives the lines of the verdict table (header first) and the
+/// speed lines as they are measured. Failed comparisons are rows, not
+/// errors ([`UpstreamReport::failures`]).
+pub fn run_upstream_check(
+    opts: &UpstreamOptions,
+    output: &Path,
+    command: &str,
+    log: &mut dyn FnMut(&str),
+) -> Result<UpstreamReport> {
+    let lammps = ModernLammps::locate()?;
+    let work = output.join("lammps");
+    std::fs::create_dir_all(&work).map_err(file_error("creating", &work))?;
+    log(&row_header());
+    let mut rows = Vec::new();
+    let mut logged = 0;
+    let mut flush = |rows: &Vec<UpstreamRow>| {
+        for r in &rows[logged..] {
+            log(&r.line());
+        }
+        logged = rows.len();
+    };
+    for a_b in [0.0, -0.5, 1.0] {
+        for config in configurations(opts.size, opts.grain_radius, opts.seed, a_b)? {
+            for ranks in [1, 2] {
+                compare_configuration(&lammps, &config, 0.0, opts.steps, ranks, &work, &mut rows)?;
+                flush(&rows);
+            }
+        }
+    }
+    // Pair damping: upstream multiplies it by 1 - (r/r_c)^8, we do not
+    // (docs/model.md's damping is the plain gamma (v_ij . n) n).
+    for config in configurations(opts.size, opts.grain_radius, opts.seed, -0.5)? {
+        compare_configuration(&lammps, &config, 1.0, 0, 1, &work, &mut rows)?;
+        flush(&rows);
+    }
+    let mut speeds = Vec::new();
+    if opts.speed_size > 0.0 {
+        // The squeeze sets the volume strain, which picks the cube-root
+        // path: 4.5% (compaction-like) and 0.6% (calibration-like).
+        for (a_b, squeeze) in [(0.0, 0.985), (-0.5, 0.985), (-0.5, 0.998)] {
+            let config = Configuration {
+                name: format!(
+                    "contact solid L={} a_B={a_b} squeeze {squeeze}",
+                    opts.speed_size
+                ),
+                scene: contact_solid_reference(opts.speed_size, opts.seed, a_b)?,
+                squeeze,
+            };
+            let row = speed(&lammps, &config, opts.steps, 3, &work)?;
+            log(&row.line());
+            speeds.push(row);
+        }
+    }
+    let report = serde_json::json!({
+        "program": "bpm upstream-check",
+        "version": crate::VERSION,
+        "command": command,
+        "lammps": lammps,
+        "size": opts.size, "grain_radius": opts.grain_radius, "steps": opts.steps, "seed": opts.seed,
+        "step0_tolerance": STEP0_TOLERANCE,
+        "trajectory_tolerance": TRAJECTORY_TOLERANCE,
+        "rows": rows,
+        "speed": speeds,
+    });
+    let json = output.join("upstream.json");
+    crate::verify::write_json(&json, &report).map_err(file_error("writing", &json))?;
+    Ok(UpstreamReport {
+        lammps,
+        rows,
+        speeds,
+        json,
+    })
 }
