@@ -7,6 +7,7 @@
 //! - [`engine`]: the native integrator;
 //! - [`scene`]: the JSON scene, its validation, builders and the stage runner;
 //! - [`analysis`]: fits, moduli and plots of recorded observables;
+//! - [`options`]: checks of user options, with errors naming the argument;
 //! - `lammps`, `verify`, `studies` (feature `lammps`, on by default): the
 //!   LAMMPS bridge, the cross-check harness, and the studies (calibration,
 //!   comparison with upstream LAMMPS, benchmarks).
@@ -18,6 +19,7 @@ pub mod ffi;
 pub mod kernels;
 #[cfg(feature = "lammps")]
 pub mod lammps;
+pub mod options;
 pub mod scene;
 #[cfg(feature = "lammps")]
 pub mod studies;

@@ -120,3 +120,50 @@ fn each_error_is_printed_once() {
         assert_eq!(stderr.matches(cause).count(), 1, "{stderr}");
     }
 }
+
+#[test]
+fn out_of_range_options_are_refused_with_the_argument_named() {
+    let x = tmp("never.json");
+    let x = x.to_str().unwrap();
+    let cases: [(&[&str], &str); 9] = [
+        (&["--threads", "0", "bench"], "--threads must be at least 1"),
+        (
+            &["build", "bulk", "--time-scale", "0", "-o", x],
+            "--time-scale must be positive, got 0",
+        ),
+        (
+            &["build", "bulk", "--strain", "0", "-o", x],
+            "--rate and --strain must be positive",
+        ),
+        (
+            &["build", "bulk", "--a-b", "inf", "-o", x],
+            "--a-b must be finite",
+        ),
+        (
+            &["check", "--grain-radius", "1", "-o", x],
+            "--grain-radius must be at least 1.5 (d), got 1",
+        ),
+        (
+            &["check", "--a-b", "0,-1", "-o", x],
+            "--a-b values must be finite and above -1 (k d), got -1",
+        ),
+        (
+            &["calibrate", "--sizes", "4", "-o", x],
+            "--sizes must be at least 5 (d), got 4",
+        ),
+        (
+            &["calibrate", "--convergence-a-b", "-2", "-o", x],
+            "a_B values must be finite and above -1 (k d), got -2",
+        ),
+        (
+            &["run", x, "-o", x, "--dump", x, "--dump-every", "0"],
+            "--dump-every must be at least 1",
+        ),
+    ];
+    for (args, message) in cases {
+        let out = bpm().args(args).output().unwrap();
+        assert_eq!(out.status.code(), Some(1), "{args:?}");
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(stderr.trim(), format!("error: {message}"), "{args:?}");
+    }
+}

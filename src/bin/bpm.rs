@@ -1,10 +1,11 @@
 //! `bpm`: build scenes, run them on the native engine, benchmark it.
 
 use anyhow::{bail, Context, Result};
-use bpm::scene::builders::bulk::{build_bulk, BulkParams};
+use bpm::options::validate_threads;
+use bpm::scene::builders::bulk::{build_bulk, BulkBuild, BulkProtocol};
 use bpm::scene::{
-    final_scene as final_scene_of, protocols, read_scene, run_native_report, write_scene,
-    DumpOptions, EngineInfo, OutputFiles, RunOptions, RunReport,
+    final_scene as final_scene_of, read_scene, run_native_report, write_scene, DumpOptions,
+    EngineInfo, OutputFiles, RunOptions, RunReport,
 };
 use bpm::studies::bench::{self, BenchOptions};
 use bpm::studies::{calibration, upstream};
@@ -263,9 +264,7 @@ fn main() {
 
 fn real_main() -> Result<()> {
     let cli = Cli::parse();
-    if cli.threads == 0 {
-        bail!("--threads must be at least 1");
-    }
+    validate_threads(cli.threads)?;
     rayon::ThreadPoolBuilder::new()
         .num_threads(cli.threads.max(2))
         .build_global()
@@ -286,30 +285,25 @@ fn real_main() -> Result<()> {
                     output,
                 },
         } => {
-            if !(size.is_finite() && size > 3.0) {
-                bail!("--size must be a number above 3 (d), got {size}");
-            }
-            if !(time_scale.is_finite() && time_scale > 0.0) {
-                bail!("--time-scale must be positive, got {time_scale}");
-            }
-            if !(rate.is_finite() && rate > 0.0 && strain.is_finite() && strain > 0.0) {
-                bail!("--rate and --strain must be positive");
-            }
-            if !a_b.is_finite() {
-                bail!("--a-b must be finite");
-            }
-            let mut params = BulkParams::paper(size, seed, a_b);
-            params.relax_time *= time_scale;
-            params.thermal_time *= time_scale;
-            params.quench_time *= time_scale;
-            let (mut scene, summary) = build_bulk(&params, cli.threads, progress)?;
-            let dt = params.dt;
-            scene.stages = match protocol {
-                Protocol::None => vec![],
-                Protocol::Relax => vec![protocols::relax(steps, dt, (steps / 100).max(1))],
-                Protocol::Compress => vec![protocols::isotropic_compression(strain, rate, dt, 50)],
-                Protocol::Shear => vec![protocols::simple_shear(strain, rate, dt, 50)],
+            let bulk = BulkBuild {
+                size,
+                seed,
+                a_b,
+                protocol: match protocol {
+                    Protocol::None => BulkProtocol::None,
+                    Protocol::Relax => BulkProtocol::Relax,
+                    Protocol::Compress => BulkProtocol::Compress,
+                    Protocol::Shear => BulkProtocol::Shear,
+                },
+                steps,
+                strain,
+                rate,
+                time_scale,
             };
+            bulk.validate()?;
+            let params = bulk.params();
+            let (mut scene, summary) = build_bulk(&params, cli.threads, progress)?;
+            scene.stages = bulk.stages(params.dt);
             write_scene(&output, &scene)?;
             println!(
                 "bulk solid L = {size} d, seed {seed}: {} particles, {} bonds, {:.2} bonds per particle (paper: about 15), largest overlap {:.4} d, built in {:.1} s -> {}",
@@ -333,9 +327,6 @@ fn real_main() -> Result<()> {
             dump_every,
             dump_forces,
         } => {
-            if dump.is_some() && dump_every == 0 {
-                bail!("--dump-every must be at least 1");
-            }
             let files = OutputFiles {
                 thermo,
                 dump: dump.map(|path| DumpOptions {
@@ -344,6 +335,7 @@ fn real_main() -> Result<()> {
                     forces: dump_forces,
                 }),
             };
+            files.validate()?;
             let (scene, hash) =
                 read_scene(&path).with_context(|| format!("reading scene {}", path.display()))?;
             if engine == Engine::Lammps {
@@ -403,18 +395,6 @@ fn real_main() -> Result<()> {
             a_b,
             seed,
         } => {
-            for (name, v, min) in [
-                ("--solid-size", solid_size, 5.0),
-                ("--grain-radius", grain_radius, 1.5),
-                ("--calibration-size", calibration_size, 5.0),
-            ] {
-                if !(v.is_finite() && v >= min) {
-                    bail!("{name} must be at least {min} (d), got {v}");
-                }
-            }
-            if let Some(bad) = a_b.iter().find(|a| !(a.is_finite() && **a > -1.0)) {
-                bail!("--a-b values must be finite and above -1 (k d), got {bad}");
-            }
             let exe = std::env::current_exe()?;
             let opts = bpm::verify::check::CheckOptions {
                 solid_size,
@@ -427,6 +407,7 @@ fn real_main() -> Result<()> {
                 bpm: exe.clone(),
                 lmp_bpm: exe.with_file_name("lmp-bpm"),
             };
+            opts.validate()?;
             let report = bpm::verify::check::run_check(&opts)?;
             println!();
             println!(
@@ -464,22 +445,6 @@ fn real_main() -> Result<()> {
                 print_calibration_report(&calibration::replot(&path, &output)?);
                 return Ok(());
             }
-            if let Some(bad) = sizes.iter().find(|l| !(l.is_finite() && **l >= 5.0)) {
-                bail!("--sizes must be at least 5 (d), got {bad}");
-            }
-            if let Some(bad) = a_b
-                .iter()
-                .chain(&convergence_a_b)
-                .find(|a| !(a.is_finite() && **a > -1.0))
-            {
-                bail!("a_B values must be finite and above -1 (k d), got {bad}");
-            }
-            if seeds.is_empty() || a_b.is_empty() {
-                bail!("--seeds and --a-b need at least one value");
-            }
-            if !(rate.is_finite() && rate > 0.0 && strain.is_finite() && strain > 0.0) {
-                bail!("--rate and --strain must be positive");
-            }
             let opts = calibration::StudyOptions {
                 sizes,
                 seeds,
@@ -493,6 +458,7 @@ fn real_main() -> Result<()> {
                 },
                 halve_rate: !no_rate_check,
             };
+            opts.validate()?;
             let exe = std::env::current_exe()?;
             let done =
                 calibration::calibrate(&opts, &output, &exe, cli.threads, &command(), &mut print)?;

@@ -71,6 +71,17 @@ pub struct OutputFiles {
 }
 
 impl OutputFiles {
+    /// Checks `--dump-every` (at least 1 when there is a dump).
+    pub fn validate(&self) -> Result<(), crate::options::InvalidOption> {
+        if self.dump.as_ref().is_some_and(|d| d.every == 0) {
+            return Err(crate::options::InvalidOption::new(
+                "--dump-every",
+                "must be at least 1",
+            ));
+        }
+        Ok(())
+    }
+
     /// The files, as text for reports.
     pub fn paths(&self) -> Vec<String> {
         self.thermo

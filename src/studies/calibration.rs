@@ -8,6 +8,7 @@ use crate::analysis::moduli::{
     bulk_modulus, paper_bulk_modulus, paper_shear_to_bulk, poisson_ratio, shear_modulus,
 };
 use crate::analysis::plot::PlotError;
+use crate::options::{validate_a_b_values, validate_strain_and_rate, InvalidOption};
 use crate::scene::{protocols, ForceField, Scene};
 use crate::verify::engines::{run_native, EngineRun, HarnessError, LammpsLauncher};
 use serde::{Deserialize, Serialize};
@@ -17,6 +18,9 @@ use std::path::{Path, PathBuf};
 /// cause once.
 #[derive(Debug, thiserror::Error)]
 pub enum CalibrationError {
+    /// An option is out of range.
+    #[error(transparent)]
+    Invalid(#[from] InvalidOption),
     /// A solid could not be built or a run failed.
     #[error(transparent)]
     Harness(#[from] HarnessError),
@@ -200,6 +204,28 @@ pub struct StudyOptions {
     pub loading: Loading,
     /// Repeat the first seed's cases at the largest size at half the rate.
     pub halve_rate: bool,
+}
+
+impl StudyOptions {
+    /// Checks `--sizes` (at least 5 d), the a_B values (`--a-b` and
+    /// `--convergence-a-b`: finite, above -1), that `--seeds` and `--a-b`
+    /// are not empty, and `--rate` and `--strain` (positive).
+    pub fn validate(&self) -> Result<(), InvalidOption> {
+        if let Some(bad) = self.sizes.iter().find(|l| !(l.is_finite() && **l >= 5.0)) {
+            return Err(InvalidOption::new(
+                "--sizes",
+                format!("must be at least 5 (d), got {bad}"),
+            ));
+        }
+        validate_a_b_values("a_B values", self.a_b.iter().chain(&self.convergence_a_b))?;
+        if self.seeds.is_empty() || self.a_b.is_empty() {
+            return Err(InvalidOption::new(
+                "--seeds and --a-b",
+                "need at least one value",
+            ));
+        }
+        validate_strain_and_rate(self.loading.strain, self.loading.rate)
+    }
 }
 
 /// One measured case.
@@ -666,7 +692,7 @@ pub struct StudyReport {
     pub files: Vec<PathBuf>,
 }
 
-/// `bpm calibrate`: runs the study into `output` with `threads` threads
+/// `bpm calibrate`: validates `opts`, runs the study into `output` with `threads` threads
 /// (LAMMPS cases through `bpm` = the `bpm` executable, files in
 /// `output/lammps/`) and writes calibration.json, calibration.md and the
 /// plots; `command` is recorded in both. `log` receives the lines of the
@@ -679,6 +705,7 @@ pub fn calibrate(
     command: &str,
     log: &mut dyn FnMut(&str),
 ) -> Result<Calibration, CalibrationError> {
+    opts.validate()?;
     std::fs::create_dir_all(output).map_err(file_error("creating", output))?;
     let launcher = LammpsLauncher {
         bpm: bpm.to_path_buf(),

@@ -11,6 +11,7 @@ use super::single_point::{
 use super::tolerances::tolerance;
 use crate::analysis::plot::{write_svg, Mark, Panel, PlotError, Series};
 use crate::lammps::LammpsVersion;
+use crate::options::{validate_a_b_values, InvalidOption};
 use crate::scene::builders::bulk::{build_bulk, BulkParams};
 use crate::scene::{ForceField, Scene, SceneError};
 use crate::studies::calibration::{measure_moduli, CalibrationEngine, Loading, Moduli};
@@ -21,6 +22,9 @@ use std::path::{Path, PathBuf};
 /// are in the report). Each message carries its cause once.
 #[derive(Debug, thiserror::Error)]
 pub enum CheckError {
+    /// An option is out of range.
+    #[error(transparent)]
+    Invalid(#[from] InvalidOption),
     /// A built-in scene could not be built.
     #[error(transparent)]
     Scene(#[from] SceneError),
@@ -83,6 +87,27 @@ pub struct CheckOptions {
     /// The `lmp-bpm` executable (step-0 forces).
     #[serde(skip)]
     pub lmp_bpm: PathBuf,
+}
+
+impl CheckOptions {
+    /// Checks the sizes (`--solid-size` and `--calibration-size` at least
+    /// 5 d, `--grain-radius` at least 1.5 d) and the a_B values (finite,
+    /// above -1).
+    pub fn validate(&self) -> std::result::Result<(), InvalidOption> {
+        for (option, v, min) in [
+            ("--solid-size", self.solid_size, 5.0),
+            ("--grain-radius", self.grain_radius, 1.5),
+            ("--calibration-size", self.calibration_size, 5.0),
+        ] {
+            if !(v.is_finite() && v >= min) {
+                return Err(InvalidOption::new(
+                    option,
+                    format!("must be at least {min} (d), got {v}"),
+                ));
+            }
+        }
+        validate_a_b_values("--a-b values", &self.calibration_a_b)
+    }
 }
 
 /// One line of the verdict table.
@@ -234,8 +259,10 @@ fn trajectory(
     ))
 }
 
-/// Runs the check and writes `check.json` and plots into `opts.out_dir`.
+/// Validates `opts`, runs the check and writes `check.json` and plots into
+/// `opts.out_dir`.
 pub fn run_check(opts: &CheckOptions) -> Result<CheckReport> {
+    opts.validate()?;
     let dir = &opts.out_dir;
     let work = dir.join("lammps");
     std::fs::create_dir_all(&work).map_err(file_error("creating", &work))?;

@@ -8,8 +8,10 @@
 use crate::engine::{BondTopology, NeighbourList, System};
 use crate::kernels::PairCoeffs;
 use crate::kernels::Separation;
+use crate::options::{validate_strain_and_rate, InvalidOption};
 use crate::scene::load::build_system;
 use crate::scene::model::{Bonds, BoxSpec, ForceField, Particles, Scene, StageSpec, VelocityInit};
+use crate::scene::protocols;
 use crate::scene::run::{run_scene, RunOptions};
 use crate::scene::validate::SceneError;
 use rand::{Rng, SeedableRng};
@@ -61,7 +63,46 @@ impl BulkParams {
     }
 }
 
+fn validate_size(size: f64) -> Result<(), InvalidOption> {
+    if !(size.is_finite() && size > 3.0) {
+        return Err(InvalidOption::new(
+            "--size",
+            format!("must be a number above 3 (d), got {size}"),
+        ));
+    }
+    Ok(())
+}
+
+fn validate_a_b(a_b: f64) -> Result<(), InvalidOption> {
+    if !a_b.is_finite() {
+        return Err(InvalidOption::new("--a-b", "must be finite"));
+    }
+    Ok(())
+}
+
 impl BulkParams {
+    /// Checks the box side (above 3 d: the fill needs room for the bond
+    /// cutoff), a_B (finite) and the build's times and time step
+    /// (positive).
+    pub fn validate(&self) -> Result<(), InvalidOption> {
+        validate_size(self.size)?;
+        validate_a_b(self.force_field.bond.a)?;
+        for (option, t) in [
+            ("relax_time", self.relax_time),
+            ("thermal_time", self.thermal_time),
+            ("quench_time", self.quench_time),
+            ("dt", self.dt),
+        ] {
+            if !(t.is_finite() && t > 0.0) {
+                return Err(InvalidOption::new(
+                    option,
+                    format!("must be positive, got {t}"),
+                ));
+            }
+        }
+        Ok(())
+    }
+
     /// The paper's protocol with short stages (relax 20, thermal 50, quench
     /// 100 tau): a quick solid for cross-checks and tests, not for physics.
     pub fn shortened(size: f64, seed: u64, a_b: f64) -> Self {
@@ -70,6 +111,86 @@ impl BulkParams {
             thermal_time: 50.0,
             quench_time: 100.0,
             ..Self::paper(size, seed, a_b)
+        }
+    }
+}
+
+/// The protocol stages appended to a built bulk solid.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum BulkProtocol {
+    /// No stages: only the solid.
+    None,
+    /// Hold and record.
+    Relax,
+    /// Isotropic compression (bulk modulus).
+    Compress,
+    /// Simple shear by xy tilt (shear modulus).
+    Shear,
+}
+
+/// What `bpm build bulk` builds: the paper's solid ([`BulkParams::paper`])
+/// with its relax, thermal and quench times scaled, and protocol stages.
+#[derive(Clone, Debug)]
+pub struct BulkBuild {
+    /// Box side L (d).
+    pub size: f64,
+    /// Seed of the fill and thermal velocities.
+    pub seed: u64,
+    /// Multibody strength a_B (k d).
+    pub a_b: f64,
+    /// Protocol stages to append.
+    pub protocol: BulkProtocol,
+    /// Steps of the relax protocol.
+    pub steps: u64,
+    /// Strain of compress and shear.
+    pub strain: f64,
+    /// Strain rate of compress and shear (1 / tau).
+    pub rate: f64,
+    /// Scale of the build's relax, thermal and quench times (1 = the paper's).
+    pub time_scale: f64,
+}
+
+impl BulkBuild {
+    /// Checks `--size`, `--time-scale`, `--rate` and `--strain` (whatever
+    /// the protocol) and `--a-b`, in that order.
+    pub fn validate(&self) -> Result<(), InvalidOption> {
+        validate_size(self.size)?;
+        if !(self.time_scale.is_finite() && self.time_scale > 0.0) {
+            return Err(InvalidOption::new(
+                "--time-scale",
+                format!("must be positive, got {}", self.time_scale),
+            ));
+        }
+        validate_strain_and_rate(self.strain, self.rate)?;
+        validate_a_b(self.a_b)
+    }
+
+    /// The builder's parameters: the paper's, times scaled.
+    pub fn params(&self) -> BulkParams {
+        let mut params = BulkParams::paper(self.size, self.seed, self.a_b);
+        params.relax_time *= self.time_scale;
+        params.thermal_time *= self.time_scale;
+        params.quench_time *= self.time_scale;
+        params
+    }
+
+    /// The protocol's stages at time step `dt`: relax records every
+    /// hundredth step, compress and shear 50 rows.
+    pub fn stages(&self, dt: f64) -> Vec<StageSpec> {
+        match self.protocol {
+            BulkProtocol::None => vec![],
+            BulkProtocol::Relax => {
+                vec![protocols::relax(self.steps, dt, (self.steps / 100).max(1))]
+            }
+            BulkProtocol::Compress => {
+                vec![protocols::isotropic_compression(
+                    self.strain,
+                    self.rate,
+                    dt,
+                    50,
+                )]
+            }
+            BulkProtocol::Shear => vec![protocols::simple_shear(self.strain, self.rate, dt, 50)],
         }
     }
 }
