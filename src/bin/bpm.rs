@@ -794,8 +794,13 @@ fn upstream_check(
         "command": std::env::args().collect::<Vec<_>>().join(" "),
         "lammps": lammps,
         "size": size, "grain_radius": grain_radius, "steps": steps, "seed": seed,
-        "step0_tolerance": bpm::verify::upstream::STEP0_TOLERANCE,
-        "trajectory_tolerance": bpm::verify::upstream::TRAJECTORY_TOLERANCE,
+        "tolerances": bpm::verify::tolerances::TOLERANCES
+            .iter()
+            .filter(|t| t.observable.starts_with(bpm::verify::upstream::TOLERANCE_PREFIX))
+            .map(|t| serde_json::json!({
+                "observable": t.observable, "tolerance": t.tolerance, "why": t.why,
+            }))
+            .collect::<Vec<_>>(),
         "rows": rows,
         "speed": speeds,
     });
