@@ -178,3 +178,111 @@ fn pair_abi_reads_a_lammps_style_neighbour_list() {
     assert!((f[0][0] + 0.6).abs() < 1e-14 && (f[0][1] + 0.15).abs() < 1e-14);
     assert!((f[1][0] - 0.6).abs() < 1e-14 && (f[2][1] - 0.15).abs() < 1e-14);
 }
+
+/// `bpm_bond_single`, behind LAMMPS's `Bond::single` (e.g. `compute
+/// bond/local`), against the bulk loop `bond_forces` run on each bond alone.
+/// What single() promises (src/ffi.rs, bpm_kernels.h): the force over
+/// distance and the spring-proxy energy of the bond, without damping (it
+/// gets no velocities), and the multibody term of the `dilation` it is given
+/// (the shim passes r / r0, which leaves that term out).
+#[test]
+fn single_bond_abi_equals_the_bulk_bond_loop_without_damping() {
+    let (x0, bonds, r0) = random_network(60, 3.2, 1.5, 11);
+    let x: Vec<[f64; 3]> = x0
+        .iter()
+        .map(|p| [p[0] * 1.02, p[1] * 0.985, p[2]])
+        .collect();
+    let v = random_rows(x.len(), 0.1, 12);
+    let n = x.len();
+    let mut vol = vec![0.0; n];
+    let mut vol0 = vec![0.0; n];
+    accumulate_volumes(&Unwrapped, &x, &bonds, Ownership::all(n), &mut vol);
+    accumulate_reference_volumes(&bonds, &r0, Ownership::all(n), &mut vol0);
+    let damped = BondCoeffs {
+        k: 1.3,
+        a: -0.5,
+        gamma: 1.0,
+    };
+    let undamped = BondCoeffs {
+        gamma: 0.0,
+        ..damped
+    };
+    // The bulk loop on one bond: the force on atom i.
+    let bulk = |b: &BondEntry, r0: f64, c: BondCoeffs, v: Option<&[[f64; 3]]>, multibody: bool| {
+        let mut f = vec![[0.0; 3]; n];
+        let inputs = BondInputs {
+            x: &x,
+            v,
+            bonds: std::slice::from_ref(b),
+            r0: &[r0],
+            coeffs: &[c],
+            volumes: multibody.then_some((vol.as_slice(), vol0.as_slice())),
+            tally: true,
+        };
+        let tally = bond_forces(&Unwrapped, &inputs, Ownership::all(n), &mut f);
+        assert_eq!(f[b.j as usize], f[b.i as usize].map(|c| -c));
+        (f[b.i as usize], tally.energy)
+    };
+    let single = |r: f64, r0: f64, dilation: f64, c: &BondCoeffs| {
+        let mut fforce = f64::NAN;
+        let e = unsafe { bpm_bond_single(r, r0, dilation, c, &mut fforce) };
+        (fforce, e)
+    };
+    // fforce = F / r against the bulk loop's F * (1 / r): one rounding
+    // apart, so the force rows agree to a few ulp of their largest component.
+    let close = |a: [f64; 3], b: [f64; 3]| {
+        let scale = a.iter().chain(&b).fold(0.0f64, |m, v| m.max(v.abs()));
+        (0..3).all(|k| (a[k] - b[k]).abs() <= 4.0 * f64::EPSILON * scale)
+    };
+    let mut largest = [0.0f64; 2];
+    assert!(bonds.len() > 50, "{} bonds", bonds.len());
+    for (b, &r0) in bonds.iter().zip(&r0) {
+        let (xi, xj) = (&x[b.i as usize], &x[b.j as usize]);
+        let del = Unwrapped.delta(xi, xj);
+        let r = Unwrapped.distance(xi, xj);
+        let along = |fforce: f64| del.map(|d| d * fforce);
+        // The shim's call: dilation r / r0, no multibody term. The bulk
+        // loop without velocities, i.e. without damping, whatever gamma.
+        let (fforce, e) = single(r, r0, r / r0, &damped);
+        let (f_bulk, e_bulk) = bulk(b, r0, damped, None, false);
+        assert!(
+            close(along(fforce), f_bulk),
+            "bond {b:?}: single {:?}, bulk {f_bulk:?}",
+            along(fforce)
+        );
+        assert!(
+            (e - e_bulk).abs() <= 4.0 * f64::EPSILON * e_bulk,
+            "bond {b:?}: energy single {e}, bulk {e_bulk}"
+        );
+        // Damping is left out: the same as the bulk loop with velocities
+        // and gamma = 0, and gamma does not change the result.
+        let (f_still, _) = bulk(b, r0, undamped, Some(&v), false);
+        assert!(close(along(fforce), f_still), "bond {b:?}");
+        assert_eq!(single(r, r0, r / r0, &undamped), (fforce, e));
+        // Given the bond's dilation, the multibody term is the bulk loop's.
+        let d = dilation(
+            vol[b.i as usize],
+            vol[b.j as usize],
+            vol0[b.i as usize],
+            vol0[b.j as usize],
+        );
+        let (fforce_mb, e_mb) = single(r, r0, d, &damped);
+        let (f_mb, e_mb_bulk) = bulk(b, r0, damped, None, true);
+        assert!(
+            close(along(fforce_mb), f_mb),
+            "bond {b:?} with multibody: single {:?}, bulk {f_mb:?}",
+            along(fforce_mb)
+        );
+        assert_eq!(e_mb, e);
+        assert!((e_mb - e_mb_bulk).abs() <= 4.0 * f64::EPSILON * e_mb_bulk);
+        largest[0] = largest[0].max(fforce.abs() * r);
+        largest[1] = largest[1].max((fforce_mb - fforce).abs() * r);
+    }
+    // Spring and multibody forces far above round-off.
+    assert!(
+        largest[0] > 1e-2 && largest[1] > 1e-3,
+        "largest spring force {:e}, multibody term {:e}",
+        largest[0],
+        largest[1]
+    );
+}

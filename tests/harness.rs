@@ -114,11 +114,11 @@ fn calibration_agrees_between_engines_and_with_the_paper() {
         )
         .unwrap();
         let (dk, dg) = (((m.k - n.k) / n.k).abs(), ((m.g - n.g) / n.g).abs());
+        // The 0.5% is far looser than these; see tolerances.rs.
         assert!(
             dk <= tolerance("K") && dg <= tolerance("G"),
             "a_B={a_b}: dK {dk:e}, dG {dg:e}"
         );
-        assert!(dk < 5e-3 && dg < 5e-3);
         // G/K against the paper's L = 50 fit. results/calibration (bpm
         // calibrate, 4 seeds per size): the converged L = 20 d solid sits
         // 1.6% (a_B = 0) and 0.9% (a_B = 1) below the fit, and at L = 8 d the

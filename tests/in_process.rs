@@ -7,6 +7,8 @@ use bpm::engine::StageDrivers;
 use bpm::lammps::{write_data_file, write_reference_lengths, write_templates, Lammps, ScriptVars};
 use bpm::scene::builders::bulk::{build_bulk, BulkParams};
 use bpm::scene::{build_system, ForceField};
+use bpm::verify::max_relative_deviation;
+use bpm::verify::tolerances::tolerance;
 
 #[test]
 fn in_process_lammps_gives_the_native_forces() {
@@ -42,22 +44,20 @@ fn in_process_lammps_gives_the_native_forces() {
         dt: 0.1,
         ..Default::default()
     });
-    let scale = sys
-        .particles
-        .f
-        .iter()
-        .flat_map(|r| r.iter())
-        .fold(0.0f64, |m, v| m.max(v.abs()));
-    assert!(scale > 1e-3);
-    let dev = forces
-        .iter()
-        .zip(&sys.particles.f)
-        .flat_map(|(a, b)| (0..3).map(move |d| (a[d] - b[d]).abs()))
-        .fold(0.0f64, f64::max);
     assert!(
-        dev < 1e-12 * scale,
+        common::max_abs(&sys.particles.f) > 1e-3,
+        "the scene must carry forces"
+    );
+    let dev = max_relative_deviation(&forces, &sys.particles.f);
+    assert!(
+        dev <= tolerance("step-0 forces"),
         "in-process LAMMPS forces differ by {dev:e}"
     );
     let pxx = lmp.thermo("pxx").unwrap();
-    assert!((pxx - sys.pressure_tensor()[0]).abs() < 1e-12 * pxx.abs());
+    let native_pxx = sys.pressure_tensor()[0];
+    let dev = max_relative_deviation(&[[pxx]], &[[native_pxx]]);
+    assert!(
+        dev <= tolerance("step-0 stress"),
+        "pxx {pxx} vs native {native_pxx}"
+    );
 }

@@ -7,6 +7,56 @@ use approx::assert_relative_eq;
 use bpm::kernels::*;
 use common::*;
 
+// Tolerances of these analytic and finite-difference tests, local (they
+// compare the kernels with mathematics, not two engines) and each with the
+// reason for its value. Measured figures: this file's cases (the worst over
+// each test's loop).
+
+/// Hand values of order 0.1 to 1 from a few operations: each rounding is at
+/// most half an ulp of 1 (1.1e-16), so a handful stays below 1e-15, while a
+/// wrong coefficient, sign or factor misses by 1e-2 or more.
+const HAND: f64 = 1e-15;
+
+/// The multibody triangle by hand: `powf(1/3)` for the kernel's cube root
+/// (both within 2 ulp) and the bond sums in another order, forces of order
+/// 0.1 to 1: a few ulp, below 1e-14; the multibody part alone is above
+/// 1e-3 (asserted in the test).
+const HAND_MULTIBODY: f64 = 1e-14;
+
+/// Uniform dilation: `a (D - r / r0)` is zero analytically; numerically `D`
+/// (a cube root of summed cubed lengths) and `r / r0` are each rounded, so
+/// per atom a few ulp of `a` over its ~16 bonds remain: measured 1.2e-14 of
+/// the largest force (990 bonds); 1e-12 of it is 90 times that and five
+/// decades below the multibody force a lost cancellation would leave.
+const DILATION_CANCELS: f64 = 1e-12;
+
+/// Central differences with h = 1e-6: truncation (h^2 times the third
+/// derivative) ~ 1e-12; the energy difference loses eps E / h (E = 46 for
+/// the spring network: 1e-8); measured 1.4e-8, relative to 1 + |F|. A wrong
+/// force factor misses by |F|.
+const SPRING_GRADIENT: f64 = 1e-7;
+
+/// As [`SPRING_GRADIENT`] with the contact energy E = 195 (a_P = 50):
+/// eps E / h = 4e-8, measured 1.5e-8.
+const PAIR_GRADIENT: f64 = 1e-6;
+
+/// Net force: a sum of N forces each at most max|F|, rounded N times: below
+/// N eps max|F| = 2.2e-16 of `N max|F|` (measured 7e-18); the torque adds
+/// lever arms up to 4 d (measured 1.7e-17). A force applied to one atom of
+/// a bond only leaves max|F|, i.e. 1/N = 5e-3 of the scale.
+const NET_FORCE: f64 = 1e-14;
+/// See [`NET_FORCE`].
+const NET_TORQUE: f64 = 1e-13;
+
+/// Newton-off energy against the same sum by hand over ~940 bonds in
+/// another order: relative N eps = 2e-13 at most (measured 0); half-counting
+/// a shared bond wrongly changes it by percents.
+const SUM_ORDER: f64 = 1e-12;
+
+/// `cube_root`'s documented accuracy (src/kernels/bond.rs): within 2 ulp of
+/// `f64::cbrt`.
+const CUBE_ROOT_ULP: f64 = 2.0 * f64::EPSILON;
+
 const SPRING: BondCoeffs = BondCoeffs {
     k: 2.0,
     a: 0.0,
@@ -80,11 +130,11 @@ fn stretched_spring_pulls_the_atoms_together_with_k_times_stretch() {
     let x = [[0.0, 0.0, 0.0], [1.2, 0.0, 0.0]];
     let (f, t) = forces(&x, None, &one_bond(), &[1.0], SPRING, Ownership::all(2));
     // F = k (r0 - r) = -0.4 (attractive): atom 0 is pulled towards +x.
-    assert_relative_eq!(f[0][0], 0.4, epsilon = 1e-15);
-    assert_relative_eq!(f[1][0], -0.4, epsilon = 1e-15);
-    assert_relative_eq!(t.energy, 0.5 * 2.0 * 0.2 * 0.2, epsilon = 1e-15);
+    assert_relative_eq!(f[0][0], 0.4, epsilon = HAND);
+    assert_relative_eq!(f[1][0], -0.4, epsilon = HAND);
+    assert_relative_eq!(t.energy, 0.5 * 2.0 * 0.2 * 0.2, epsilon = HAND);
     // Tension gives a negative virial: W_xx = r_x F_x = (-1.2)(0.4).
-    assert_relative_eq!(t.virial[0], -0.48, epsilon = 1e-15);
+    assert_relative_eq!(t.virial[0], -0.48, epsilon = HAND);
     assert_eq!(&t.virial[1..], &[0.0; 5]);
 }
 
@@ -100,9 +150,9 @@ fn damping_resists_approach_along_the_bond_only() {
     };
     let (f, _) = forces(&x, Some(&v), &one_bond(), &[1.0], c, Ownership::all(2));
     // n = (-1, 0, 0), n.dv = -0.1, F = -gamma n.dv = +0.05 (repulsive).
-    assert_relative_eq!(f[0][0], -0.05, epsilon = 1e-15);
+    assert_relative_eq!(f[0][0], -0.05, epsilon = HAND);
     assert_eq!(f[0][1], 0.0);
-    assert_relative_eq!(f[1][0], 0.05, epsilon = 1e-15);
+    assert_relative_eq!(f[1][0], 0.05, epsilon = HAND);
 }
 
 #[test]
@@ -160,8 +210,8 @@ fn multibody_force_matches_a_hand_computed_triangle() {
         0.0,
     ];
     for d in 0..3 {
-        assert_relative_eq!(f[0][d], expected0[d], epsilon = 1e-14);
-        assert_relative_eq!(f[1][d], expected1[d], epsilon = 1e-14);
+        assert_relative_eq!(f[0][d], expected0[d], epsilon = HAND_MULTIBODY);
+        assert_relative_eq!(f[1][d], expected1[d], epsilon = HAND_MULTIBODY);
     }
     // The multibody part is non-zero here, so this pins its sign and factor.
     assert!((f02 - c.k * (r0[2] - r02)).abs() > 1e-3);
@@ -185,7 +235,7 @@ fn uniform_dilation_cancels_the_multibody_term() {
         for (a, b) in fa.iter().zip(&f0) {
             for d in 0..3 {
                 assert!(
-                    (a[d] - b[d]).abs() < 1e-12 * scale_of_forces,
+                    (a[d] - b[d]).abs() < DILATION_CANCELS * scale_of_forces,
                     "{a:?} vs {b:?}"
                 );
             }
@@ -249,7 +299,7 @@ fn spring_force_is_minus_the_gradient_of_its_energy() {
             xm[i][d] -= h;
             let fd = -(energy(&xp) - energy(&xm)) / (2.0 * h);
             assert!(
-                (fd - f[i][d]).abs() < 1e-7 * (1.0 + f[i][d].abs()),
+                (fd - f[i][d]).abs() < SPRING_GRADIENT * (1.0 + f[i][d].abs()),
                 "atom {i} dim {d}: {fd} vs {}",
                 f[i][d]
             );
@@ -282,7 +332,7 @@ fn pair_force_is_minus_the_gradient_of_its_energy() {
             xm[i][d] -= h;
             let fd = -(compute(&xp).1.energy - compute(&xm).1.energy) / (2.0 * h);
             assert!(
-                (fd - f[i][d]).abs() < 1e-6 * (1.0 + f[i][d].abs()),
+                (fd - f[i][d]).abs() < PAIR_GRADIENT * (1.0 + f[i][d].abs()),
                 "atom {i} dim {d}: {fd} vs {}",
                 f[i][d]
             );
@@ -301,7 +351,7 @@ fn pair_force_has_the_cubic_term_and_stops_at_d() {
     assert_relative_eq!(
         pair_force_magnitude(0.9, 0.0, &c),
         0.1 + 50.0 * 0.001,
-        epsilon = 1e-15
+        epsilon = HAND
     );
     let x = [[0.0, 0.0, 0.0], [1.0 + 1e-12, 0.0, 0.0]];
     let (f, _) = pair_on(&x, c, [1.0; 4], &[(0, vec![1])]);
@@ -325,7 +375,7 @@ fn special_bits_select_the_weight_and_zero_weight_skips() {
         &[(0, vec![1 | (1 << 30), 2 | (2 << 30)])],
     );
     assert_eq!(f[1], [0.0; 3]);
-    assert_relative_eq!(f[2][1], 0.25 * 0.5, epsilon = 1e-15);
+    assert_relative_eq!(f[2][1], 0.25 * 0.5, epsilon = HAND);
 }
 
 #[test]
@@ -356,11 +406,11 @@ fn net_force_and_torque_vanish_for_any_network() {
     let scale = max_abs(&f) * x.len() as f64;
     assert!(max_abs(&f) > 1e-2);
     assert!(
-        net.iter().all(|c| c.abs() < 1e-14 * scale),
+        net.iter().all(|c| c.abs() < NET_FORCE * scale),
         "net force {net:?}"
     );
     assert!(
-        torque.iter().all(|c| c.abs() < 1e-13 * scale),
+        torque.iter().all(|c| c.abs() < NET_TORQUE * scale),
         "net torque {torque:?}"
     );
 }
@@ -396,7 +446,7 @@ fn newton_off_gives_owners_the_same_forces_and_half_of_shared_tallies() {
             w * 0.5 * (r - r0) * (r - r0)
         })
         .sum();
-    assert_relative_eq!(tpart.energy, frac, max_relative = 1e-12);
+    assert_relative_eq!(tpart.energy, frac, max_relative = SUM_ORDER);
     assert!(tpart.energy < tfull.energy);
 }
 
@@ -409,7 +459,7 @@ fn cube_root_is_within_two_ulp_of_the_library() {
             let ours = cube_root(v);
             let lib = v.cbrt();
             assert!(
-                (ours - lib).abs() <= 2.0 * f64::EPSILON * lib,
+                (ours - lib).abs() <= CUBE_ROOT_ULP * lib,
                 "{v}: {ours} vs {lib}"
             );
         }
@@ -420,7 +470,7 @@ fn cube_root_is_within_two_ulp_of_the_library() {
         let v = 0.7 + 0.6 * k as f64 / 200_000.0;
         let (ours, lib) = (cube_root(v), v.cbrt());
         assert!(
-            (ours - lib).abs() <= 2.0 * f64::EPSILON * lib,
+            (ours - lib).abs() <= CUBE_ROOT_ULP * lib,
             "{v}: {ours} vs {lib}"
         );
     }
@@ -429,7 +479,7 @@ fn cube_root_is_within_two_ulp_of_the_library() {
         let v = 1.0 - 1.0 / 32.0 + (1.0 / 16.0) * k as f64 / 200_000.0;
         let (ours, lib) = (cube_root(v), v.cbrt());
         assert!(
-            (ours - lib).abs() <= 2.0 * f64::EPSILON * lib,
+            (ours - lib).abs() <= CUBE_ROOT_ULP * lib,
             "{v}: {ours} vs {lib}"
         );
     }
@@ -445,7 +495,7 @@ fn cube_root_is_within_two_ulp_of_the_library() {
         1.0 + 1.0 / 32.0,
         1.0 + 1.0 / 32.0 + 2e-16,
     ] {
-        assert!((cube_root(v) - v.cbrt()).abs() <= 2.0 * f64::EPSILON, "{v}");
+        assert!((cube_root(v) - v.cbrt()).abs() <= CUBE_ROOT_ULP, "{v}");
     }
     assert!(cube_root(-8.0) == -2.0 && cube_root(0.0) == 0.0);
 }

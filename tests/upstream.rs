@@ -5,9 +5,8 @@
 
 mod common;
 
-use bpm::studies::upstream::{
-    compare_configuration, configurations, ModernLammps, UpstreamRow, STEP0_TOLERANCE,
-};
+use bpm::studies::upstream::{compare_configuration, configurations, ModernLammps, UpstreamRow};
+use bpm::verify::tolerances::tolerance;
 use std::path::Path;
 
 fn modern() -> ModernLammps {
@@ -89,8 +88,11 @@ fn pair_damping_differs_from_upstream_by_its_smoothing_factor_only() {
             .unwrap()
             .max_deviation
     };
-    assert!(forces(1.0) > 1e-4, "with damping: {:e}", forces(1.0));
-    assert!(forces(0.0) < STEP0_TOLERANCE, "without: {:e}", forces(0.0));
+    // Visible: six decades above the tolerance (measured 4.1e-1,
+    // results/upstream); gone: within it.
+    let tol = tolerance("upstream step-0 forces");
+    assert!(forces(1.0) > 1e6 * tol, "with damping: {:e}", forces(1.0));
+    assert!(forces(0.0) <= tol, "without: {:e}", forces(0.0));
     let explained = rows
         .iter()
         .find(|r| r.observable == "step-0 forces, factor applied")

@@ -70,7 +70,9 @@ impl SimBox {
             let w = self.image_vector(&shift);
             for d in 0..3 {
                 x[d] -= w[d];
-                image[d] += shift[d];
+                // Saturating: a blown-up position (shift near i32::MAX) must
+                // reach the engine's finiteness check, not overflow here.
+                image[d] = image[d].saturating_add(shift[d]);
             }
         }
     }

@@ -290,7 +290,12 @@ impl System {
     pub fn check_finite(&self) -> Result<(), EngineError> {
         let bad = |a: &[[f64; 3]]| a.iter().position(|r| !r.iter().all(|c| c.is_finite()));
         let p = &self.particles;
-        if let Some(i) = bad(&p.x).or_else(|| bad(&p.v)).or_else(|| bad(&p.f)) {
+        let rotation = p.rotation.as_ref();
+        if let Some(i) = bad(&p.x)
+            .or_else(|| bad(&p.v))
+            .or_else(|| bad(&p.f))
+            .or_else(|| rotation.and_then(|r| bad(&r.omega).or_else(|| bad(&r.torque))))
+        {
             return Err(EngineError::NonFinite {
                 step: self.step,
                 particle: i,

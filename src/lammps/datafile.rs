@@ -2,6 +2,7 @@
 //! `-var` values of the input templates in `lammps_inputs/` (embedded in
 //! the binary, written next to each run by [`super::templates`]).
 
+pub use crate::scene::datafile::{type_masses, write_data_file};
 use crate::scene::load::reference_lengths;
 use crate::scene::Scene;
 use std::fmt::Write as _;
@@ -65,92 +66,6 @@ impl ScriptVars {
             .flat_map(|(k, v)| ["-var".to_string(), k.clone(), v.clone()])
             .collect()
     }
-}
-
-/// The mass of each particle type `1..=ntypes` of `scene`, or `None` when
-/// two particles of one type differ in mass (LAMMPS's `atom_style bond`
-/// keeps one mass per type).
-pub fn type_masses(scene: &Scene) -> Option<Vec<f64>> {
-    let pa = &scene.particles;
-    let n = pa.positions.len();
-    let masses = pa.mass.values(n);
-    let kind = |i: usize| pa.kind.as_ref().map_or(1, |t| t[i]) as usize;
-    let ntypes = (0..n).map(kind).max().unwrap_or(1);
-    let mut by_type: Vec<Option<f64>> = vec![None; ntypes];
-    for (i, &m) in masses.iter().enumerate() {
-        match by_type[kind(i) - 1] {
-            Some(prev) if prev != m => return None,
-            _ => by_type[kind(i) - 1] = Some(m),
-        }
-    }
-    // A type no particle has still needs a mass in LAMMPS.
-    Some(by_type.into_iter().map(|m| m.unwrap_or(1.0)).collect())
-}
-
-/// The data file text of `scene`: atoms (id, grain + 1 as molecule, type,
-/// x y z), velocities and bonds (type 1). Particle `i` is atom `i + 1`.
-/// Masses are per type ([`type_masses`]; the harness refuses scenes where
-/// that fails, and here the first particle's mass stands in).
-pub fn write_data_file(scene: &Scene) -> String {
-    let b = &scene.simbox;
-    let pa = &scene.particles;
-    let n = pa.positions.len();
-    let mut s = String::new();
-    let _ = writeln!(
-        s,
-        "LAMMPS data file written by bpm {} (scene seed {})\n",
-        crate::VERSION,
-        scene.seed
-    );
-    let masses = type_masses(scene).unwrap_or_else(|| vec![pa.mass.values(n)[0]]);
-    let _ = writeln!(
-        s,
-        "{n} atoms\n{} bonds\n{} atom types\n1 bond types\n",
-        scene.bonds.pairs.len(),
-        masses.len()
-    );
-    let hi = |d: usize| b.lo[d] + b.lengths[d];
-    let _ = writeln!(s, "{:.17e} {:.17e} xlo xhi", b.lo[0], hi(0));
-    let _ = writeln!(s, "{:.17e} {:.17e} ylo yhi", b.lo[1], hi(1));
-    let _ = writeln!(s, "{:.17e} {:.17e} zlo zhi", b.lo[2], hi(2));
-    if super::script::needs_triclinic(scene) {
-        let _ = writeln!(
-            s,
-            "{:.17e} {:.17e} {:.17e} xy xz yz",
-            b.tilt[0], b.tilt[1], b.tilt[2]
-        );
-    }
-    let _ = writeln!(s, "\nMasses\n");
-    for (t, m) in masses.iter().enumerate() {
-        let _ = writeln!(s, "{} {m:.17e}", t + 1);
-    }
-    let _ = writeln!(s, "\nAtoms # bond\n");
-    for (i, x) in pa.positions.iter().enumerate() {
-        let grain = pa.grain.as_ref().map_or(0, |g| g[i]);
-        let kind = pa.kind.as_ref().map_or(1, |t| t[i]);
-        let _ = writeln!(
-            s,
-            "{} {} {kind} {:.17e} {:.17e} {:.17e}",
-            i + 1,
-            grain + 1,
-            x[0],
-            x[1],
-            x[2]
-        );
-    }
-    if let Some(v) = &pa.velocities {
-        let _ = writeln!(s, "\nVelocities\n");
-        for (i, v) in v.iter().enumerate() {
-            let _ = writeln!(s, "{} {:.17e} {:.17e} {:.17e}", i + 1, v[0], v[1], v[2]);
-        }
-    }
-    if !scene.bonds.pairs.is_empty() {
-        let _ = writeln!(s, "\nBonds\n");
-        for (k, [i, j]) in scene.bonds.pairs.iter().enumerate() {
-            let _ = writeln!(s, "{} 1 {} {}", k + 1, i + 1, j + 1);
-        }
-    }
-    s
 }
 
 /// The reference length of every bond as `tag_i tag_j r0` lines, read by

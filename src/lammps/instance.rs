@@ -140,27 +140,16 @@ impl Lammps {
 
     /// Box lower corner, upper corner and tilts `xy xz yz`.
     pub fn box_geometry(&self) -> ([f64; 3], [f64; 3], [f64; 3]) {
-        let (mut lo, mut hi) = ([0.0; 3], [0.0; 3]);
-        let (mut xy, mut yz, mut xz) = (0.0, 0.0, 0.0);
-        let (mut periodic, mut changed) = ([0i32; 3], 0i32);
-        // SAFETY: live handle; every pointer is to a local of the right size.
-        unsafe {
-            sys::lammps_extract_box(
-                self.handle,
-                lo.as_mut_ptr(),
-                hi.as_mut_ptr(),
-                &mut xy,
-                &mut yz,
-                &mut xz,
-                periodic.as_mut_ptr(),
-                &mut changed,
-            )
-        };
-        (lo, hi, [xy, xz, yz])
+        let (lo, hi, tilt, _) = self.extract_box();
+        (lo, hi, tilt)
     }
 
     /// Whether each dimension of the box is periodic.
     pub fn periodicity(&self) -> [bool; 3] {
+        self.extract_box().3
+    }
+
+    fn extract_box(&self) -> ([f64; 3], [f64; 3], [f64; 3], [bool; 3]) {
         let (mut lo, mut hi) = ([0.0; 3], [0.0; 3]);
         let (mut xy, mut yz, mut xz) = (0.0, 0.0, 0.0);
         let (mut periodic, mut changed) = ([0i32; 3], 0i32);
@@ -177,7 +166,7 @@ impl Lammps {
                 &mut changed,
             )
         };
-        periodic.map(|p| p != 0)
+        (lo, hi, [xy, xz, yz], periodic.map(|p| p != 0))
     }
 
     /// The first `rows` rows of a fix's global array (e.g. `fix vector`).
@@ -223,74 +212,52 @@ impl Lammps {
 
     /// A per-atom 3-vector ("x", "v", "f") of all atoms, ordered by atom id.
     pub fn gather_vectors(&self, name: &str) -> Result<Vec<[f64; 3]>, LammpsError> {
-        let n = self.natoms();
-        let mut data = vec![[0.0f64; 3]; n];
-        let c = CString::new(name).map_err(|_| LammpsError::Nul)?;
-        // SAFETY: live handle; data holds 3 n doubles; type 1 = double.
-        unsafe {
-            sys::lammps_gather_atoms(
-                self.handle,
-                c.as_ptr() as *mut c_char,
-                1,
-                3,
-                data.as_mut_ptr() as *mut c_void,
-            )
-        };
-        match self.last_error() {
-            Some(message) => Err(LammpsError::Command {
-                command: format!("gather {name}"),
-                message,
-            }),
-            None => Ok(data),
-        }
-    }
-
-    /// Per-atom integers of every atom, by atom id (`mol`, `type`).
-    pub fn gather_ints(&self, name: &str) -> Result<Vec<i32>, LammpsError> {
-        let n = self.natoms();
-        let mut data = vec![0i32; n];
-        let c = CString::new(name).map_err(|_| LammpsError::Nul)?;
-        // SAFETY: live handle; data holds n ints; type 0 = int.
-        unsafe {
-            sys::lammps_gather_atoms(
-                self.handle,
-                c.as_ptr() as *mut c_char,
-                0,
-                1,
-                data.as_mut_ptr() as *mut c_void,
-            )
-        };
-        match self.last_error() {
-            Some(message) => Err(LammpsError::Command {
-                command: format!("gather {name}"),
-                message,
-            }),
-            None => Ok(data),
-        }
+        let mut data = vec![[0.0f64; 3]; self.natoms()];
+        // SAFETY: data holds 3 n doubles; type 1 = double.
+        unsafe { self.gather(name, 1, 3, data.as_mut_ptr() as *mut c_void)? };
+        Ok(data)
     }
 
     /// Image flags of every atom, by atom id (LAMMPS unpacks its packed
     /// image integers when three values per atom are asked for).
     pub fn gather_images(&self) -> Result<Vec<[i32; 3]>, LammpsError> {
-        let n = self.natoms();
-        let mut data = vec![[0i32; 3]; n];
-        let c = CString::new("image").map_err(|_| LammpsError::Nul)?;
-        // SAFETY: live handle; data holds 3 n ints; type 0 = int.
+        let mut data = vec![[0i32; 3]; self.natoms()];
+        // SAFETY: data holds 3 n ints; type 0 = int.
+        unsafe { self.gather("image", 0, 3, data.as_mut_ptr() as *mut c_void)? };
+        Ok(data)
+    }
+
+    /// A per-atom integer ("molecule", "type") of every atom, by atom id.
+    pub fn gather_ints(&self, name: &str) -> Result<Vec<i32>, LammpsError> {
+        let mut data = vec![0i32; self.natoms()];
+        // SAFETY: data holds n ints; type 0 = int.
+        unsafe { self.gather(name, 0, 1, data.as_mut_ptr() as *mut c_void)? };
+        Ok(data)
+    }
+
+    /// `lammps_gather_atoms` into `data`.
+    ///
+    /// # Safety
+    /// `data` must hold `count * natoms` values of the type `kind` names
+    /// (0 = int, 1 = double).
+    unsafe fn gather(
+        &self,
+        name: &str,
+        kind: i32,
+        count: i32,
+        data: *mut c_void,
+    ) -> Result<(), LammpsError> {
+        let c = CString::new(name).map_err(|_| LammpsError::Nul)?;
+        // SAFETY: live handle; the caller sized data.
         unsafe {
-            sys::lammps_gather_atoms(
-                self.handle,
-                c.as_ptr() as *mut c_char,
-                0,
-                3,
-                data.as_mut_ptr() as *mut c_void,
-            )
+            sys::lammps_gather_atoms(self.handle, c.as_ptr() as *mut c_char, kind, count, data)
         };
         match self.last_error() {
             Some(message) => Err(LammpsError::Command {
-                command: "gather image".into(),
+                command: format!("gather {name}"),
                 message,
             }),
-            None => Ok(data),
+            None => Ok(()),
         }
     }
 }

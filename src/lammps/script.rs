@@ -9,7 +9,7 @@
 //! harness handles the `run` lines itself (in chunks at position
 //! checkpoints) and reads the recorded rows back after each.
 
-use super::datafile::{write_data_file, write_reference_lengths, ScriptVars};
+use super::datafile::{type_masses, write_data_file, write_reference_lengths, ScriptVars};
 use super::templates::{write_templates, FOLDER as TEMPLATE_FOLDER};
 use crate::engine::{Deformation, TiltFactor, WallSide};
 use crate::scene::observables::{energy_terms, lammps_energy_compute, stage_columns, Column};
@@ -122,14 +122,7 @@ fn record_commands(columns: &[Column]) -> Vec<String> {
     c
 }
 
-/// Whether LAMMPS needs a triclinic box for `scene` (tilted, or sheared later).
-pub fn needs_triclinic(scene: &Scene) -> bool {
-    scene.simbox.tilt.iter().any(|&t| t != 0.0)
-        || scene
-            .stages
-            .iter()
-            .any(|s| matches!(s.deformation, Some(Deformation::SimpleShear { .. })))
-}
+pub use crate::scene::datafile::needs_triclinic;
 
 fn check_supported(index: usize, stage: &StageSpec, scene: &Scene) -> Result<(), ScriptError> {
     let unsupported = |what| ScriptError::Unsupported {
@@ -147,7 +140,7 @@ fn check_supported(index: usize, stage: &StageSpec, scene: &Scene) -> Result<(),
     if stage.barostat.is_some() {
         return Err(unsupported("a barostat"));
     }
-    if super::datafile::type_masses(scene).is_none() {
+    if type_masses(scene).is_none() {
         return Err(unsupported(
             "masses that differ within a particle type (LAMMPS's atom_style bond has one mass per type)",
         ));

@@ -17,6 +17,7 @@ use crate::verify::compare::max_position_deviation;
 use crate::verify::launch::{LammpsChild, LaunchError, Work};
 use crate::verify::scenes::{contact_solid_reference, grain_pair};
 use crate::verify::single_point::{max_relative_deviation, read_dump, SinglePointError};
+use crate::verify::tolerances::tolerance;
 use serde::Serialize;
 use std::path::{Path, PathBuf};
 
@@ -367,16 +368,10 @@ pub fn run_style(
     })
 }
 
-/// Tolerances of the comparison with upstream. Step 0: the 1e-10;
-/// measured <= 7.0e-15 (forces) and 2.3e-15 (pressure). After 1,000 steps
-/// both codes have integrated the same equations in the same LAMMPS with
-/// bond damping (Gamma = 1), which does not amplify round-off (see
-/// `verify::tolerances`): measured <= 1.6e-12 (forces, relative to the
-/// then smaller largest force), 4.8e-14 (pressure), 2.5e-15 d (positions);
-/// results/upstream/upstream.txt.
-pub const STEP0_TOLERANCE: f64 = 1e-10;
-/// See [`STEP0_TOLERANCE`].
-pub const TRAJECTORY_TOLERANCE: f64 = 1e-9;
+/// Prefix of the tolerance-table entries of the comparison with upstream
+/// ([`super::tolerances`]): `upstream step-0 forces`, `upstream trajectory
+/// positions`, ...
+pub const TOLERANCE_PREFIX: &str = "upstream";
 
 /// The header of the verdict table ([`UpstreamRow::line`]).
 pub fn row_header() -> String {
@@ -441,7 +436,9 @@ pub fn compare_configuration(
     let upstream = run_style(lammps, config, false, pair_gamma, steps, ranks, dir)?;
     let squeezed_box = config.squeezed_box();
     let judged = pair_gamma == 0.0;
-    let mut push = |observable: &str, dev: f64, tol: f64| {
+    // Each row is judged by the table entry `upstream <kind> <what>`.
+    let mut push = |observable: &str, dev: f64, kind: &str, what: &str| {
+        let tol = tolerance(&format!("{TOLERANCE_PREFIX} {kind} {what}"));
         rows.push(UpstreamRow {
             configuration: config.name.clone(),
             ranks,
@@ -455,29 +452,34 @@ pub fn compare_configuration(
     push(
         "step-0 forces",
         max_relative_deviation(&ours.forces[0], &upstream.forces[0]),
-        STEP0_TOLERANCE,
+        "step-0",
+        "forces",
     );
     push(
         "step-0 pressure",
         max_relative_deviation(&[ours.pressure[0]], &[upstream.pressure[0]]),
-        STEP0_TOLERANCE,
+        "step-0",
+        "pressure",
     );
     if steps > 0 {
         let t = format!("step-{steps}");
         push(
             &format!("{t} forces"),
             max_relative_deviation(&ours.forces[1], &upstream.forces[1]),
-            TRAJECTORY_TOLERANCE,
+            "trajectory",
+            "forces",
         );
         push(
             &format!("{t} pressure"),
             max_relative_deviation(&[ours.pressure[1]], &[upstream.pressure[1]]),
-            TRAJECTORY_TOLERANCE,
+            "trajectory",
+            "pressure",
         );
         push(
             &format!("{t} positions"),
             max_position_deviation(&ours.positions[1], &upstream.positions[1], &squeezed_box),
-            TRAJECTORY_TOLERANCE,
+            "trajectory",
+            "positions",
         );
     }
     if !judged {
@@ -489,14 +491,16 @@ pub fn compare_configuration(
             .zip(&share)
             .map(|(f, s)| [f[0] - s[0], f[1] - s[1], f[2] - s[2]])
             .collect();
+        let dev = max_relative_deviation(&corrected, &upstream.forces[0]);
+        let tol = tolerance(&format!("{TOLERANCE_PREFIX} step-0 forces"));
         rows.push(UpstreamRow {
             configuration: config.name.clone(),
             ranks,
             pair_gamma,
             observable: "step-0 forces, factor applied".into(),
-            max_deviation: max_relative_deviation(&corrected, &upstream.forces[0]),
-            tolerance: Some(STEP0_TOLERANCE),
-            pass: max_relative_deviation(&corrected, &upstream.forces[0]) <= STEP0_TOLERANCE,
+            max_deviation: dev,
+            tolerance: Some(tol),
+            pass: dev <= tol,
         });
     }
     Ok(())
@@ -701,8 +705,13 @@ pub fn run_upstream_check(
         "command": command,
         "lammps": lammps,
         "size": opts.size, "grain_radius": opts.grain_radius, "steps": opts.steps, "seed": opts.seed,
-        "step0_tolerance": STEP0_TOLERANCE,
-        "trajectory_tolerance": TRAJECTORY_TOLERANCE,
+        "tolerances": crate::verify::tolerances::TOLERANCES
+            .iter()
+            .filter(|t| t.observable.starts_with(TOLERANCE_PREFIX))
+            .map(|t| serde_json::json!({
+                "observable": t.observable, "tolerance": t.tolerance, "why": t.why,
+            }))
+            .collect::<Vec<_>>(),
         "rows": rows,
         "speed": speeds,
     });

@@ -79,8 +79,7 @@ pub fn compare_runs(
                 for k in 0..x.len() {
                     scale = scale.max(x[k].abs());
                     let d = (x[k] - y[k]).abs();
-                    // NaN counts as the worst deviation.
-                    if nan_max(worst.0, d) != worst.0 {
+                    if is_worse(d, worst.0) {
                         worst = (d, step[k] as u64);
                     }
                 }
@@ -125,7 +124,7 @@ pub fn compare_runs(
                 periodic: [true; 3],
             };
             let r = max_position_deviation(&p.positions, &q.positions, &simbox);
-            if r.is_nan() || r > worst.0 {
+            if is_worse(r, worst.0) {
                 worst = (r, p.step);
             }
         }
@@ -138,6 +137,14 @@ pub fn compare_runs(
         });
     }
     Ok(out)
+}
+
+/// Whether the deviation `d` replaces `worst` as the largest so far: NaN
+/// counts as the worst deviation and, once found, stays (a later finite
+/// value must not replace it, as `nan_max(worst, d) != worst` did: NaN is
+/// unequal to itself).
+fn is_worse(d: f64, worst: f64) -> bool {
+    !worst.is_nan() && (d.is_nan() || d > worst)
 }
 
 /// Largest distance (d) between the positions `a[k]` and `b[k]` under the

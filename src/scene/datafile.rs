@@ -1,0 +1,486 @@
+//! LAMMPS data files (`atom_style bond`) in and out, so users can bring
+//! their own grains and packings and take scenes to LAMMPS.
+//!
+//! Reading accepts what LAMMPS's `write_data` produces: any header lines
+//! (counts, box, tilt; others are skipped), coefficient sections (skipped:
+//! the scene's force field is set separately), `Masses`, `Atoms` (`id mol
+//! type x y z`, optional image flags `ix iy iz`), `Velocities` and `Bonds`,
+//! atom ids in any order and not necessarily 1..N. Molecule ids become
+//! grain ids (the distinct molecule ids in increasing order become grains
+//! 0, 1, ...). Reference lengths are the bond lengths in the file (minimum
+//! image). Malformed input is an error naming the line.
+
+use super::model::{Bonds, BoxSpec, ForceField, Mass, ModelKind, Particles, Scene};
+use crate::engine::Deformation;
+use std::collections::BTreeMap;
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+
+/// Why a data file could not be read.
+#[derive(Debug, thiserror::Error)]
+pub enum DataFileError {
+    /// The file could not be read.
+    #[error("{path}: {cause}")]
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// The cause (in the message, not chained, so it prints once).
+        cause: std::io::Error,
+    },
+    /// The file is not a data file this reader understands.
+    #[error("{path}, line {line}: {reason}")]
+    Malformed {
+        /// The file.
+        path: PathBuf,
+        /// Line number, from 1 (0: the file as a whole).
+        line: usize,
+        /// What is wrong.
+        reason: String,
+    },
+}
+
+const SKIPPED_SECTIONS: [&str; 14] = [
+    "Pair Coeffs",
+    "PairIJ Coeffs",
+    "Bond Coeffs",
+    "Angle Coeffs",
+    "Dihedral Coeffs",
+    "Improper Coeffs",
+    "BondBond Coeffs",
+    "BondAngle Coeffs",
+    "Angles",
+    "Dihedrals",
+    "Impropers",
+    "Ellipsoids",
+    "Lines",
+    "Triangles",
+];
+
+/// One atom line.
+struct Atom {
+    id: i64,
+    mol: i64,
+    kind: u32,
+    x: [f64; 3],
+}
+
+/// Reads a data file as a scene with `boundary` periodicity (data files do
+/// not record it), the force field `force_field`, no stages and the given
+/// seed.
+pub fn read_data_file(
+    path: &Path,
+    periodic: [bool; 3],
+    force_field: ForceField,
+    seed: u64,
+) -> Result<Scene, DataFileError> {
+    let text = std::fs::read_to_string(path).map_err(|cause| DataFileError::Io {
+        path: path.to_path_buf(),
+        cause,
+    })?;
+    parse(&text, path, periodic, force_field, seed)
+}
+
+fn parse(
+    text: &str,
+    path: &Path,
+    periodic: [bool; 3],
+    force_field: ForceField,
+    seed: u64,
+) -> Result<Scene, DataFileError> {
+    let bad = |line: usize, reason: String| DataFileError::Malformed {
+        path: path.to_path_buf(),
+        line,
+        reason,
+    };
+    let lines: Vec<(usize, &str)> = text
+        .lines()
+        .enumerate()
+        .map(|(k, l)| (k + 1, l.split('#').next().unwrap_or("").trim()))
+        .collect();
+    let number = |k: usize, w: &str| -> Result<f64, DataFileError> {
+        w.parse::<f64>()
+            .ok()
+            .filter(|v| v.is_finite())
+            .ok_or_else(|| bad(k, format!("`{w}` is not a finite number")))
+    };
+    let integer = |k: usize, w: &str| -> Result<i64, DataFileError> {
+        w.parse::<i64>()
+            .map_err(|_| bad(k, format!("`{w}` is not an integer")))
+    };
+    // Header: up to the first section keyword. The first line is a title.
+    let mut counts: BTreeMap<&str, usize> = BTreeMap::new();
+    let mut lo = [f64::NAN; 3];
+    let mut hi = [f64::NAN; 3];
+    let mut tilt = [0.0; 3];
+    let is_section = |l: &str| {
+        ["Masses", "Atoms", "Velocities", "Bonds"]
+            .iter()
+            .chain(SKIPPED_SECTIONS.iter())
+            .any(|s| l == *s || l.starts_with(&format!("{s} ")))
+    };
+    let mut i = 1;
+    while i < lines.len() && !is_section(lines[i].1) {
+        let (k, l) = lines[i];
+        i += 1;
+        let w: Vec<&str> = l.split_whitespace().collect();
+        match w.as_slice() {
+            [] => {}
+            [n, "atoms"] | [n, "bonds"] | [n, "atom", "types"] | [n, "bond", "types"] => {
+                let key = w[1..].join(" ");
+                let v = integer(k, n)?;
+                if v < 0 {
+                    return Err(bad(k, format!("negative count {v}")));
+                }
+                counts.insert(
+                    match key.as_str() {
+                        "atoms" => "atoms",
+                        "bonds" => "bonds",
+                        "atom types" => "atom types",
+                        _ => "bond types",
+                    },
+                    v as usize,
+                );
+            }
+            [a, b, lo_name, hi_name] if lo_name.ends_with("lo") && hi_name.ends_with("hi") => {
+                let d = match *lo_name {
+                    "xlo" => 0,
+                    "ylo" => 1,
+                    "zlo" => 2,
+                    _ => return Err(bad(k, format!("unknown box line `{l}`"))),
+                };
+                lo[d] = number(k, a)?;
+                hi[d] = number(k, b)?;
+            }
+            [a, b, c, "xy", "xz", "yz"] => {
+                tilt = [number(k, a)?, number(k, b)?, number(k, c)?];
+            }
+            // Other header keywords (angles, extra bond per atom, ellipsoids,
+            // ...) do not concern this model.
+            _ if w.first().is_some_and(|v| v.parse::<f64>().is_ok()) => {}
+            _ => return Err(bad(k, format!("unrecognised header line `{l}`"))),
+        }
+    }
+    for d in 0..3 {
+        if !(lo[d].is_finite() && hi[d] > lo[d]) {
+            return Err(bad(
+                0,
+                format!(
+                    "the header lacks a valid {}lo {}hi line",
+                    ["x", "y", "z"][d],
+                    ["x", "y", "z"][d]
+                ),
+            ));
+        }
+    }
+    let natoms = *counts
+        .get("atoms")
+        .ok_or_else(|| bad(0, "the header lacks the `atoms` count".into()))?;
+    let nbonds = counts.get("bonds").copied().unwrap_or(0);
+    let mut masses: BTreeMap<u32, f64> = BTreeMap::new();
+    let mut atoms: Vec<Atom> = Vec::new();
+    let mut velocities: BTreeMap<i64, [f64; 3]> = BTreeMap::new();
+    let mut bond_ids: Vec<(usize, i64, i64)> = Vec::new();
+    // Sections: a keyword line, a blank line, then data lines until the
+    // next keyword.
+    while i < lines.len() {
+        let (k, l) = lines[i];
+        i += 1;
+        if l.is_empty() {
+            continue;
+        }
+        if !is_section(l) {
+            return Err(bad(k, format!("expected a section keyword, found `{l}`")));
+        }
+        let name = l.split_whitespace().next().unwrap_or("");
+        let mut body = Vec::new();
+        while i < lines.len() && !is_section(lines[i].1) {
+            if !lines[i].1.is_empty() {
+                body.push(lines[i]);
+            }
+            i += 1;
+        }
+        match name {
+            "Masses" => {
+                for &(k, l) in &body {
+                    let w: Vec<&str> = l.split_whitespace().collect();
+                    if w.len() < 2 {
+                        return Err(bad(k, "a mass line needs `type mass`".into()));
+                    }
+                    let t = integer(k, w[0])?;
+                    let m = number(k, w[1])?;
+                    if t < 1 || m <= 0.0 {
+                        return Err(bad(
+                            k,
+                            format!(
+                                "type {t} with mass {m}: types count from 1, masses are positive"
+                            ),
+                        ));
+                    }
+                    masses.insert(t as u32, m);
+                }
+            }
+            "Atoms" => {
+                if let Some(style) = l.split_whitespace().nth(1) {
+                    if style != "bond" && style != "molecular" {
+                        return Err(bad(
+                            k,
+                            format!(
+                                "atom style `{style}`: only `bond` (id mol type x y z) is read"
+                            ),
+                        ));
+                    }
+                }
+                for &(k, l) in &body {
+                    let w: Vec<&str> = l.split_whitespace().collect();
+                    if w.len() != 6 && w.len() != 9 {
+                        return Err(bad(k, format!("an atom line needs `id mol type x y z [ix iy iz]`, found {} values", w.len())));
+                    }
+                    let kind = integer(k, w[2])?;
+                    if kind < 1 {
+                        return Err(bad(k, format!("atom type {kind}: types count from 1")));
+                    }
+                    let x = [number(k, w[3])?, number(k, w[4])?, number(k, w[5])?];
+                    let image = if w.len() == 9 {
+                        [integer(k, w[6])?, integer(k, w[7])?, integer(k, w[8])?]
+                    } else {
+                        [0; 3]
+                    };
+                    // Positions whole: grains crossing periodic faces are
+                    // unwrapped through their image flags.
+                    let l = [hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]];
+                    let x = [
+                        x[0] + image[0] as f64 * l[0]
+                            + image[1] as f64 * tilt[0]
+                            + image[2] as f64 * tilt[1],
+                        x[1] + image[1] as f64 * l[1] + image[2] as f64 * tilt[2],
+                        x[2] + image[2] as f64 * l[2],
+                    ];
+                    atoms.push(Atom {
+                        id: integer(k, w[0])?,
+                        mol: integer(k, w[1])?,
+                        kind: kind as u32,
+                        x,
+                    });
+                }
+            }
+            "Velocities" => {
+                for &(k, l) in &body {
+                    let w: Vec<&str> = l.split_whitespace().collect();
+                    if w.len() < 4 {
+                        return Err(bad(k, "a velocity line needs `id vx vy vz`".into()));
+                    }
+                    let id = integer(k, w[0])?;
+                    let v = [number(k, w[1])?, number(k, w[2])?, number(k, w[3])?];
+                    if velocities.insert(id, v).is_some() {
+                        return Err(bad(k, format!("atom {id} has two velocities")));
+                    }
+                }
+            }
+            "Bonds" => {
+                for &(k, l) in &body {
+                    let w: Vec<&str> = l.split_whitespace().collect();
+                    if w.len() != 4 {
+                        return Err(bad(k, "a bond line needs `id type atom1 atom2`".into()));
+                    }
+                    integer(k, w[0])?;
+                    integer(k, w[1])?;
+                    bond_ids.push((k, integer(k, w[2])?, integer(k, w[3])?));
+                }
+            }
+            _ => {} // coefficient and other sections: skipped
+        }
+    }
+    if atoms.len() != natoms {
+        return Err(bad(
+            0,
+            format!(
+                "the header says {natoms} atoms, the Atoms section has {}",
+                atoms.len()
+            ),
+        ));
+    }
+    if bond_ids.len() != nbonds {
+        return Err(bad(
+            0,
+            format!(
+                "the header says {nbonds} bonds, the Bonds section has {}",
+                bond_ids.len()
+            ),
+        ));
+    }
+    atoms.sort_by_key(|a| a.id);
+    if let Some(w) = atoms.windows(2).find(|w| w[0].id == w[1].id) {
+        return Err(bad(0, format!("atom id {} appears twice", w[0].id)));
+    }
+    let index_of = |id: i64| atoms.binary_search_by_key(&id, |a| a.id).ok();
+    let mut mols: Vec<i64> = atoms.iter().map(|a| a.mol).collect();
+    mols.sort_unstable();
+    mols.dedup();
+    let grain: Vec<u32> = atoms
+        .iter()
+        .map(|a| mols.binary_search(&a.mol).unwrap_or(0) as u32)
+        .collect();
+    let mut pairs = Vec::with_capacity(bond_ids.len());
+    for &(k, a, b) in &bond_ids {
+        match (index_of(a), index_of(b)) {
+            (Some(i), Some(j)) if i != j => pairs.push([i, j]),
+            (Some(_), Some(_)) => return Err(bad(k, format!("bond joins atom {a} to itself"))),
+            _ => {
+                return Err(bad(
+                    k,
+                    format!("bond ({a}, {b}) names an atom that is not in Atoms"),
+                ))
+            }
+        }
+    }
+    let mass_of = |t: u32| masses.get(&t).copied();
+    let mass: Vec<f64> = atoms
+        .iter()
+        .map(|a| mass_of(a.kind).unwrap_or(1.0))
+        .collect();
+    if !masses.is_empty() {
+        if let Some(a) = atoms.iter().find(|a| mass_of(a.kind).is_none()) {
+            return Err(bad(
+                0,
+                format!("atom {} has type {} with no mass in Masses", a.id, a.kind),
+            ));
+        }
+    }
+    let velocities = if velocities.is_empty() {
+        None
+    } else {
+        let v: Option<Vec<[f64; 3]>> = atoms
+            .iter()
+            .map(|a| velocities.get(&a.id).copied())
+            .collect();
+        Some(v.ok_or_else(|| bad(0, "the Velocities section does not list every atom".into()))?)
+    };
+    let uniform = mass.iter().all(|&m| m == mass[0]);
+    let mut scene = Scene {
+        version: super::SCENE_VERSION,
+        model: ModelKind::Bpm,
+        description: format!("imported from {}", path.display()),
+        seed,
+        simbox: BoxSpec {
+            lo,
+            lengths: [hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]],
+            tilt,
+            periodic,
+        },
+        particles: Particles {
+            positions: atoms.iter().map(|a| a.x).collect(),
+            velocities,
+            grain: Some(grain),
+            mass: if uniform {
+                Mass::Uniform(mass.first().copied().unwrap_or(1.0))
+            } else {
+                Mass::PerParticle(mass)
+            },
+            radius: None,
+            kind: Some(atoms.iter().map(|a| a.kind).collect()),
+        },
+        bonds: Bonds { pairs, r0: None },
+        force_field,
+        stages: Vec::new(),
+        provenance: serde_json::json!({"imported_from": path.display().to_string()}),
+    };
+    // The reference: the bond lengths in the file.
+    let r0 = super::load::reference_lengths(&scene);
+    scene.bonds.r0 = Some(r0);
+    Ok(scene)
+}
+
+/// Whether LAMMPS needs a triclinic box for `scene` (tilted, or sheared later).
+pub fn needs_triclinic(scene: &Scene) -> bool {
+    scene.simbox.tilt.iter().any(|&t| t != 0.0)
+        || scene
+            .stages
+            .iter()
+            .any(|s| matches!(s.deformation, Some(Deformation::SimpleShear { .. })))
+}
+
+/// The mass of each particle type `1..=ntypes` of `scene`, or `None` when
+/// two particles of one type differ in mass (LAMMPS's `atom_style bond`
+/// keeps one mass per type).
+pub fn type_masses(scene: &Scene) -> Option<Vec<f64>> {
+    let pa = &scene.particles;
+    let n = pa.positions.len();
+    let masses = pa.mass.values(n);
+    let kind = |i: usize| pa.kind.as_ref().map_or(1, |t| t[i]) as usize;
+    let ntypes = (0..n).map(kind).max().unwrap_or(1);
+    let mut by_type: Vec<Option<f64>> = vec![None; ntypes];
+    for (i, &m) in masses.iter().enumerate() {
+        match by_type[kind(i) - 1] {
+            Some(prev) if prev != m => return None,
+            _ => by_type[kind(i) - 1] = Some(m),
+        }
+    }
+    // A type no particle has still needs a mass in LAMMPS.
+    Some(by_type.into_iter().map(|m| m.unwrap_or(1.0)).collect())
+}
+
+/// The data file text of `scene`: atoms (id, grain + 1 as molecule, type,
+/// x y z), velocities and bonds (type 1). Particle `i` is atom `i + 1`.
+/// Masses are per type ([`type_masses`]; the harness refuses scenes where
+/// that fails, and here the first particle's mass stands in).
+pub fn write_data_file(scene: &Scene) -> String {
+    let b = &scene.simbox;
+    let pa = &scene.particles;
+    let n = pa.positions.len();
+    let mut s = String::new();
+    let _ = writeln!(
+        s,
+        "LAMMPS data file written by bpm {} (scene seed {})\n",
+        crate::VERSION,
+        scene.seed
+    );
+    let masses = type_masses(scene).unwrap_or_else(|| vec![pa.mass.values(n)[0]]);
+    let _ = writeln!(
+        s,
+        "{n} atoms\n{} bonds\n{} atom types\n1 bond types\n",
+        scene.bonds.pairs.len(),
+        masses.len()
+    );
+    let hi = |d: usize| b.lo[d] + b.lengths[d];
+    let _ = writeln!(s, "{:.17e} {:.17e} xlo xhi", b.lo[0], hi(0));
+    let _ = writeln!(s, "{:.17e} {:.17e} ylo yhi", b.lo[1], hi(1));
+    let _ = writeln!(s, "{:.17e} {:.17e} zlo zhi", b.lo[2], hi(2));
+    if needs_triclinic(scene) {
+        let _ = writeln!(
+            s,
+            "{:.17e} {:.17e} {:.17e} xy xz yz",
+            b.tilt[0], b.tilt[1], b.tilt[2]
+        );
+    }
+    let _ = writeln!(s, "\nMasses\n");
+    for (t, m) in masses.iter().enumerate() {
+        let _ = writeln!(s, "{} {m:.17e}", t + 1);
+    }
+    let _ = writeln!(s, "\nAtoms # bond\n");
+    for (i, x) in pa.positions.iter().enumerate() {
+        let grain = pa.grain.as_ref().map_or(0, |g| g[i]);
+        let kind = pa.kind.as_ref().map_or(1, |t| t[i]);
+        let _ = writeln!(
+            s,
+            "{} {} {kind} {:.17e} {:.17e} {:.17e}",
+            i + 1,
+            grain + 1,
+            x[0],
+            x[1],
+            x[2]
+        );
+    }
+    if let Some(v) = &pa.velocities {
+        let _ = writeln!(s, "\nVelocities\n");
+        for (i, v) in v.iter().enumerate() {
+            let _ = writeln!(s, "{} {:.17e} {:.17e} {:.17e}", i + 1, v[0], v[1], v[2]);
+        }
+    }
+    if !scene.bonds.pairs.is_empty() {
+        let _ = writeln!(s, "\nBonds\n");
+        for (k, [i, j]) in scene.bonds.pairs.iter().enumerate() {
+            let _ = writeln!(s, "{} 1 {} {}", k + 1, i + 1, j + 1);
+        }
+    }
+    s
+}
