@@ -1,6 +1,7 @@
 //! Analysis of recorded observables.
 
 pub mod fit;
+pub mod hertz;
 pub mod moduli;
 pub mod plot;
 
