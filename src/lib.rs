@@ -21,6 +21,8 @@ pub mod kernels;
 pub mod lammps;
 pub mod scene;
 #[cfg(feature = "lammps")]
+pub mod studies;
+#[cfg(feature = "lammps")]
 pub mod verify;
 
 /// The crate version, recorded in every output file.
