@@ -10,7 +10,7 @@
 //! - [`options`]: checks of user options, with errors naming the argument;
 //! - `lammps`, `verify`, `studies` (feature `lammps`, on by default): the
 //!   LAMMPS bridge, the cross-check harness, and the studies (calibration,
-//!   comparison with upstream LAMMPS, benchmarks).
+//!   Hertz squeeze, comparison with upstream LAMMPS, benchmarks).
 #![warn(missing_docs)]
 
 pub mod analysis;

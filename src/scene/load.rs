@@ -17,6 +17,17 @@ pub fn read_scene(path: &Path) -> Result<(Scene, u64), SceneError> {
     Ok((scene, fnv1a(&bytes)))
 }
 
+/// Reads a scene file without validating it: for scenes that are inputs
+/// to a study (a grain with no stages yet), validated once the study has
+/// added its stages.
+pub fn read_scene_unvalidated(path: &Path) -> Result<Scene, SceneError> {
+    let bytes = std::fs::read(path).map_err(|cause| SceneError::Io {
+        path: path.display().to_string(),
+        cause,
+    })?;
+    Ok(serde_json::from_slice(&bytes)?)
+}
+
 /// Writes a scene as JSON.
 pub fn write_scene(path: &Path, scene: &Scene) -> Result<(), SceneError> {
     let text = serde_json::to_string(scene)?;

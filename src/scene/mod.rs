@@ -13,7 +13,7 @@ pub mod run;
 pub mod trajectory;
 pub mod validate;
 
-pub use load::{build_system, final_scene, read_scene, write_scene};
+pub use load::{build_system, final_scene, read_scene, read_scene_unvalidated, write_scene};
 pub use model::{
     Bonds, BoxSpec, ForceField, Mass, ModelKind, Particles, Record, Scene, StageSpec, VelocityInit,
     SCENE_VERSION,

