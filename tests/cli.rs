@@ -167,3 +167,49 @@ fn out_of_range_options_are_refused_with_the_argument_named() {
         assert_eq!(stderr.trim(), format!("error: {message}"), "{args:?}");
     }
 }
+
+#[test]
+fn grain_builds_exports_and_imports_through_the_command_line() {
+    let scene = tmp("grain.json");
+    let data = tmp("grain.data");
+    let again = tmp("grain-again.json");
+    let run = |args: &[&str]| {
+        let out = bpm().args(args).output().unwrap();
+        assert!(
+            out.status.success(),
+            "{args:?}: {}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        String::from_utf8_lossy(&out.stdout).to_string()
+    };
+    let s = scene.to_str().unwrap();
+    let d = data.to_str().unwrap();
+    let a = again.to_str().unwrap();
+    let printed = run(&[
+        "build",
+        "grain",
+        "--kind",
+        "rough",
+        "--radius",
+        "2.5",
+        "--time-scale",
+        "0.05",
+        "-o",
+        s,
+    ]);
+    assert!(printed.contains("roughness"), "{printed}");
+    run(&["export", s, "-o", d]);
+    run(&["import", d, "--boundary", "f", "f", "f", "-o", a]);
+    let (first, second) = (
+        bpm::scene::read_scene_unvalidated(&scene).unwrap(),
+        bpm::scene::read_scene_unvalidated(&again).unwrap(),
+    );
+    assert_eq!(first.particles.positions, second.particles.positions);
+    assert_eq!(first.bonds.pairs, second.bonds.pairs);
+    // A malformed file: exit 1, the line named.
+    std::fs::write(&data, "title\n\n2 atoms\n0 1 xlo xhi\n").unwrap();
+    let out = bpm().args(["import", d, "-o", a]).output().unwrap();
+    assert_eq!(out.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("ylo yhi"), "{err}");
+}

@@ -2,7 +2,9 @@
 //! force against overlap of a grain pressed between two flat walls,
 //! against Hertz's law for a sphere on a rigid plane,
 //!
-//!     3 f / (8 R^2 E_eff) = (delta / R)^(3/2),   E_eff = 3 K (1 - 2 nu) / (2 - 2 nu^2).
+//! ```text
+//! 3 f / (8 R^2 E_eff) = (delta / R)^(3/2),   E_eff = 3 K (1 - 2 nu) / (2 - 2 nu^2)
+//! ```
 //!
 //! The grain touches two walls, so the overlap at each contact is half the
 //! reduction of the wall separation, counted from the first record where

@@ -3,11 +3,15 @@
 use anyhow::{bail, Context, Result};
 use bpm::options::validate_threads;
 use bpm::scene::builders::bulk::{build_bulk, BulkBuild, BulkProtocol};
+use bpm::scene::builders::grain::{build_grain, GrainKind, GrainParams};
+use bpm::scene::datafile::{read_data_file, write_data_file};
 use bpm::scene::{
     final_scene as final_scene_of, read_scene, run_native_report, write_scene, DumpOptions,
     EngineInfo, OutputFiles, RunOptions, RunReport,
 };
+use bpm::scene::{read_scene_unvalidated, ForceField};
 use bpm::studies::bench::{self, BenchOptions};
+use bpm::studies::hertz::{run_hertz, GrainSource, HertzOptions, Moduli, SqueezeEngine};
 use bpm::studies::{calibration, upstream};
 use clap::{Parser, Subcommand, ValueEnum};
 use std::io::IsTerminal;
@@ -186,6 +190,79 @@ enum Command {
         #[arg(long, default_value_t = 1)]
         seed: u64,
     },
+    /// The Hertz sphere squeeze (docs/protocols.md "Hertz sphere squeeze"):
+    /// grains between two flat walls closing at 5e-4 d/tau each, the force
+    /// against the overlap, against Hertz's law; writes DIR/hertz.json and
+    /// DIR/hertz.svg.
+    Hertz {
+        /// Grain kind to build (ignored with --grain).
+        #[arg(long, value_enum, default_value = "smoother")]
+        kind: Kind,
+        /// Grain radius R (d): built grains' radius, and the nominal R of
+        /// the overlap and of the normalisation.
+        #[arg(long, default_value_t = 10.0)]
+        radius: f64,
+        /// Squeeze this grain (a scene JSON or a LAMMPS data file) as given.
+        #[arg(long)]
+        grain: Option<PathBuf>,
+        /// Multibody strength a_B (k d); the force field is the paper's.
+        #[arg(long = "a-b", allow_hyphen_values = true)]
+        a_b: f64,
+        /// The engine that squeezes.
+        #[arg(long, value_enum, default_value = "native")]
+        engine: Engine,
+        /// Overlap delta / R to reach.
+        #[arg(long, default_value_t = 0.3)]
+        max_overlap: f64,
+        /// Random rotations per grain (0: squeeze as given).
+        #[arg(long, default_value_t = 0)]
+        rotations: usize,
+        /// Seeds: one built grain per seed (comma separated).
+        #[arg(long, value_delimiter = ',', default_value = "1")]
+        seeds: Vec<u64>,
+        /// Scale of the grain build's times (1 = the full protocol).
+        #[arg(long, default_value_t = 1.0)]
+        time_scale: f64,
+        /// Bulk modulus K for E_eff (default: the paper's calibration fit at a_B).
+        #[arg(long)]
+        k: Option<f64>,
+        /// Poisson ratio for E_eff (default: the paper's calibration fits at a_B).
+        #[arg(long, allow_hyphen_values = true)]
+        nu: Option<f64>,
+        /// Records per squeeze.
+        #[arg(long, default_value_t = 1000)]
+        records: u64,
+        /// Output folder.
+        #[arg(short, long)]
+        output: PathBuf,
+    },
+    /// Read a LAMMPS data file (atom_style bond) as a scene: molecule ids
+    /// become grains, reference lengths are the file's bond lengths.
+    Import {
+        /// The data file.
+        data: PathBuf,
+        /// Periodicity per dimension, as LAMMPS's boundary (data files do
+        /// not record it): e.g. `p p p` or `f f f`.
+        #[arg(long, num_args = 3, default_values = ["p", "p", "p"])]
+        boundary: Vec<String>,
+        /// Multibody strength a_B of the scene's (paper) force field (k d).
+        #[arg(long = "a-b", default_value_t = 0.0, allow_hyphen_values = true)]
+        a_b: f64,
+        /// Seed recorded in the scene.
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+        /// Output scene (JSON).
+        #[arg(short, long)]
+        output: PathBuf,
+    },
+    /// Write a scene as a LAMMPS data file (atom_style bond).
+    Export {
+        /// The scene (JSON).
+        scene: PathBuf,
+        /// Output data file.
+        #[arg(short, long)]
+        output: PathBuf,
+    },
     /// Time the plugin's bond style against LAMMPS's bond_style harmonic on
     /// the same bulk solid, in one session (runs lmp-bpm).
     BenchLammps {
@@ -207,6 +284,23 @@ enum Engine {
     Native,
     /// LAMMPS with the plugin's styles, in this process.
     Lammps,
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+enum Kind {
+    /// Cut from the bonded solid.
+    Rough,
+    /// Cut before bonding, vibrated in an oscillating cage, then bonded.
+    Smoother,
+}
+
+impl From<Kind> for GrainKind {
+    fn from(k: Kind) -> Self {
+        match k {
+            Kind::Rough => GrainKind::Rough,
+            Kind::Smoother => GrainKind::Smoother,
+        }
+    }
 }
 
 #[derive(Clone, Copy, ValueEnum)]
@@ -252,6 +346,31 @@ enum BuildWhat {
         /// Output scene (JSON).
         #[arg(short, long)]
         output: PathBuf,
+    },
+    /// One grain (docs/protocols.md "Grains"): a sphere of radius R cut
+    /// from the bulk packing, rough or smoother; in a closed box, no stages.
+    Grain {
+        /// Rough (bonds of the solid kept) or smoother (vibrated, then bonded).
+        #[arg(long, value_enum, default_value = "smoother")]
+        kind: Kind,
+        /// Radius R (d); the paper's grains have R = 10 d, about 5,000 particles.
+        #[arg(long, default_value_t = 10.0)]
+        radius: f64,
+        /// Seed of the bulk packing.
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+        /// Multibody strength a_B of the scene's force field (k d).
+        #[arg(long = "a-b", default_value_t = 0.0, allow_hyphen_values = true)]
+        a_b: f64,
+        /// Scale of every time of the build (1 = the full protocol).
+        #[arg(long, default_value_t = 1.0)]
+        time_scale: f64,
+        /// Output scene (JSON).
+        #[arg(short, long)]
+        output: PathBuf,
+        /// Also write it as a LAMMPS data file.
+        #[arg(long)]
+        data: Option<PathBuf>,
     },
 }
 
@@ -314,6 +433,151 @@ fn real_main() -> Result<()> {
                 summary.seconds,
                 output.display()
             );
+        }
+        Command::Build {
+            what:
+                BuildWhat::Grain {
+                    kind,
+                    radius,
+                    seed,
+                    a_b,
+                    time_scale,
+                    output,
+                    data,
+                },
+        } => {
+            let mut params = GrainParams::new(kind.into(), radius, seed, a_b);
+            params.time_scale = time_scale;
+            let (scene, summary) = build_grain(&params, cli.threads, progress)?;
+            write_scene(&output, &scene)?;
+            if let Some(data) = data {
+                std::fs::write(&data, write_data_file(&scene))
+                    .with_context(|| format!("writing {}", data.display()))?;
+            }
+            let r = summary.roughness;
+            println!(
+                "{} grain R = {radius} d, seed {seed}: {} particles, {} bonds, {:.2} bonds per particle; surface height {:.3} +- {:.3} d (roughness, {} direction cells), farthest particle {:.3} d; built in {:.1} s -> {}",
+                scene.description.split(' ').next().unwrap_or(""),
+                summary.particles,
+                summary.bonds,
+                summary.mean_bonds_per_particle,
+                r.mean_height,
+                r.sd_height,
+                r.cells,
+                r.max_distance,
+                summary.seconds,
+                output.display()
+            );
+        }
+        Command::Import {
+            data,
+            boundary,
+            a_b,
+            seed,
+            output,
+        } => {
+            let periodic = parse_boundary(&boundary)?;
+            let scene = read_data_file(&data, periodic, ForceField::paper(a_b), seed)?;
+            write_scene(&output, &scene)?;
+            let grains = scene
+                .particles
+                .grain
+                .as_ref()
+                .map_or(1, |g| g.iter().max().map_or(0, |m| m + 1));
+            println!(
+                "{}: {} particles in {grains} grain(s), {} bonds -> {}",
+                data.display(),
+                scene.particles.positions.len(),
+                scene.bonds.pairs.len(),
+                output.display()
+            );
+        }
+        Command::Export { scene, output } => {
+            let scene = read_scene_unvalidated(&scene)
+                .with_context(|| format!("reading scene {}", scene.display()))?;
+            std::fs::write(&output, write_data_file(&scene))
+                .with_context(|| format!("writing {}", output.display()))?;
+            println!("wrote {}", output.display());
+        }
+        Command::Hertz {
+            kind,
+            radius,
+            grain,
+            a_b,
+            engine,
+            max_overlap,
+            rotations,
+            seeds,
+            time_scale,
+            k,
+            nu,
+            records,
+            output,
+        } => {
+            let mut moduli = Moduli::paper_fits(a_b);
+            if k.is_some() || nu.is_some() {
+                moduli.k = k.unwrap_or(moduli.k);
+                moduli.nu = nu.unwrap_or(moduli.nu);
+                moduli.source = format!(
+                    "given on the command line (K = {}, nu = {})",
+                    moduli.k, moduli.nu
+                );
+            }
+            let opts = HertzOptions {
+                source: match grain {
+                    Some(path) => GrainSource::File { path, radius },
+                    None => GrainSource::Build {
+                        kind: kind.into(),
+                        radius,
+                        time_scale,
+                    },
+                },
+                seeds,
+                a_b,
+                rotations,
+                max_overlap,
+                moduli,
+                engine: match engine {
+                    Engine::Native => SqueezeEngine::Native,
+                    Engine::Lammps => SqueezeEngine::Lammps,
+                },
+                records,
+                threads: cli.threads,
+            };
+            let launcher = bpm::verify::LammpsLauncher {
+                bpm: std::env::current_exe()?,
+                dir: output.join("lammps"),
+            };
+            println!(
+                "{:>6} {:>8} {:>9} {:>9} {:>10} {:>10} {:>8} {:>8}",
+                "seed", "rotation", "particles", "points", "rms", "rms rel", "slope", "seconds"
+            );
+            let report = run_hertz(&opts, &output, &launcher, &mut |s| {
+                let d = s.deviation;
+                println!(
+                    "{:>6} {:>8} {:>9} {:>9} {:>10.4} {:>10.4} {:>8.3} {:>8.1}",
+                    s.seed,
+                    s.rotation,
+                    s.particles,
+                    d.map_or(0, |d| d.points),
+                    d.map_or(f64::NAN, |d| d.rms),
+                    d.map_or(f64::NAN, |d| d.rms_relative),
+                    d.map_or(f64::NAN, |d| d.loglog_slope),
+                    s.seconds
+                );
+            })?;
+            if let Some(d) = report.ensemble.deviation {
+                println!(
+                    "ensemble of {}: rms deviation from Hertz {:.4} ({:.1}% relative), log-log slope {:.3} over delta/R in [0.02, 0.25]; E_eff = {:.4} from {}",
+                    report.squeezes.len(),
+                    d.rms,
+                    100.0 * d.rms_relative,
+                    d.loglog_slope,
+                    report.e_eff,
+                    report.options.moduli.source
+                );
+            }
+            println!("wrote {}/hertz.json and hertz.svg", output.display());
         }
         Command::Run {
             scene: path,
@@ -560,4 +824,17 @@ fn print_calibration_report(report: &calibration::StudyReport) {
     for f in &report.files {
         println!("wrote {}", f.display());
     }
+}
+
+/// `p`/`f` per dimension, as LAMMPS's `boundary` command.
+fn parse_boundary(words: &[String]) -> Result<[bool; 3]> {
+    let mut periodic = [true; 3];
+    for (d, w) in words.iter().enumerate().take(3) {
+        periodic[d] = match w.as_str() {
+            "p" => true,
+            "f" | "s" | "m" => false,
+            other => bail!("--boundary takes p or f per dimension, got `{other}`"),
+        };
+    }
+    Ok(periodic)
 }

@@ -421,9 +421,13 @@ mod tests {
 
     #[test]
     fn roughness_of_a_sampled_sphere_surface_is_small_and_of_a_cube_is_not() {
-        // Points on a sphere of radius 5 plus its interior: heights all 5.
-        let dirs = fibonacci_directions(2000);
-        let mut sphere: Vec<[f64; 3]> = dirs.iter().map(|u| u.map(|c| 5.0 * c)).collect();
+        // Points on a sphere of radius 5, each with its antipode so the
+        // centre of mass is exactly the centre: heights all 5.
+        let dirs = fibonacci_directions(1000);
+        let mut sphere: Vec<[f64; 3]> = dirs
+            .iter()
+            .flat_map(|u| [u.map(|c| 5.0 * c), u.map(|c| -5.0 * c)])
+            .collect();
         sphere.push([0.0; 3]);
         let r = roughness(&sphere, 1.0);
         assert!(
