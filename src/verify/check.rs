@@ -13,6 +13,8 @@ use crate::analysis::plot::{write_svg, Mark, Panel, PlotError, Series};
 use crate::lammps::LammpsVersion;
 use crate::options::{validate_a_b_values, InvalidOption};
 use crate::scene::builders::bulk::{build_bulk, BulkParams};
+use crate::scene::builders::grain::{build_grain, GrainKind, GrainParams};
+use crate::scene::protocols::{hertz_squeeze, SqueezeParams};
 use crate::scene::{ForceField, Scene, SceneError};
 use crate::studies::calibration::{measure_moduli, CalibrationEngine, Loading, Moduli};
 use serde::Serialize;
@@ -280,6 +282,15 @@ pub fn run_check(opts: &CheckOptions) -> Result<CheckReport> {
     let solid_name = format!("contact solid L={} a_B=-0.5", opts.solid_size);
     let grain_name = format!("grain pair R={} a_B=0.5", opts.grain_radius);
     let squeeze_name = format!("walls+tether R={} a_B=-0.5", opts.grain_radius);
+    // The Hertz squeeze of a small smoother grain (docs/protocols.md), at
+    // the paper's wall speed, to delta/R = 0.1.
+    let hertz = {
+        let mut p = GrainParams::new(GrainKind::Smoother, opts.grain_radius, opts.seed, 0.0);
+        p.time_scale = 0.2;
+        let (grain, _) = build_grain(&p, 1, false)?;
+        hertz_squeeze(&grain, &SqueezeParams::paper(opts.grain_radius, 0.1))
+    };
+    let hertz_name = format!("hertz squeeze smoother R={} a_B=0", opts.grain_radius);
     let mut divergence = Vec::new();
     let mut lammps_version = None;
     for (scene, name, ranks, newton) in [
@@ -288,6 +299,7 @@ pub fn run_check(opts: &CheckOptions) -> Result<CheckReport> {
         (&grains, &grain_name, 1, true),
         (&grains, &grain_name, 2, true),
         (&squeeze, &squeeze_name, 1, true),
+        (&hertz, &hertz_name, 1, true),
     ] {
         let series = trajectory(
             scene,
