@@ -88,6 +88,8 @@ pub struct System {
     pub report: StepReport,
     /// How many times positions were wrapped into the box.
     pub wraps: u64,
+    /// Simulated time at the start of the current stage (tau).
+    stage_start_time: f64,
 }
 
 impl System {
@@ -116,6 +118,7 @@ impl System {
             timers: Timers::default(),
             report: StepReport::default(),
             wraps: 0,
+            stage_start_time: 0.0,
         }
     }
 
@@ -232,6 +235,7 @@ impl System {
 
     /// Prepares a stage: forces the list build and evaluates forces once.
     pub fn setup(&mut self, drivers: &StageDrivers) {
+        self.stage_start_time = self.time;
         self.update_neighbours(true);
         self.compute_forces(drivers, 0.0, true);
     }
@@ -257,7 +261,9 @@ impl System {
             self.integrator.final_half(&mut self.particles, dt);
         }
         self.step += 1;
-        self.time += dt;
+        // Stage start plus steps times dt, not a running sum: no round-off
+        // grows with the step count, and LAMMPS's harness computes the same.
+        self.time = self.stage_start_time + stage_step as f64 * dt;
         if let Some(deformation) = &drivers.deformation {
             let new_box = deformation.box_at(stage_box, elapsed);
             self.remap_into(new_box);
