@@ -16,6 +16,7 @@
 pub mod analysis;
 pub mod engine;
 pub mod ffi;
+pub mod file_error;
 pub mod kernels;
 #[cfg(feature = "lammps")]
 pub mod lammps;

@@ -4,6 +4,7 @@
 //! [`run_bench_lammps`]).
 
 use crate::engine::{Stage, StageDrivers, System};
+use crate::file_error::FileError;
 use crate::scene::builders::bulk::{build_bulk, BulkParams};
 use crate::scene::{build_system, ForceField, Scene, StageSpec};
 use crate::verify::single_point::SinglePointError;
@@ -22,25 +23,9 @@ pub enum BenchError {
     /// LAMMPS's timing breakdown lacks a line.
     #[error("{0}")]
     Timing(String),
-    /// A folder or the report could not be written.
-    #[error("{action} {path}: {cause}")]
-    File {
-        /// "creating", "writing".
-        action: &'static str,
-        /// The folder or file.
-        path: String,
-        /// The cause.
-        cause: std::io::Error,
-    },
-}
-
-fn file_error(action: &'static str, path: &Path) -> impl FnOnce(std::io::Error) -> BenchError {
-    let path = path.display().to_string();
-    move |cause| BenchError::File {
-        action,
-        path,
-        cause,
-    }
+    /// A file or folder could not be created, written or read.
+    #[error(transparent)]
+    File(#[from] FileError),
 }
 
 /// What both benchmarks run: the bulk solid and the steps timed.
@@ -144,7 +129,7 @@ pub fn run_bench(
         let report = serde_json::json!({
             "program": "bpm bench", "version": crate::VERSION, "size": opts.size, "seed": opts.seed, "steps": opts.steps, "cases": cases,
         });
-        crate::verify::write_json(path, &report).map_err(file_error("writing", path))?;
+        crate::verify::write_json(path, &report).map_err(FileError::on("writing", path))?;
     }
     Ok(Bench { cases })
 }
@@ -324,7 +309,7 @@ pub fn run_bench_lammps(
 ) -> Result<LammpsBench, BenchError> {
     let solid = bench_solid(opts.size, opts.seed, threads)?;
     let dir = std::env::temp_dir().join(format!("bpm-bench-lammps-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).map_err(file_error("creating", &dir))?;
+    std::fs::create_dir_all(&dir).map_err(FileError::on("creating", &dir))?;
     let timings = LAMMPS_VARIANTS
         .iter()
         .map(|&(style, a_b)| {

@@ -8,6 +8,7 @@ use crate::analysis::moduli::{
     bulk_modulus, paper_bulk_modulus, paper_shear_to_bulk, poisson_ratio, shear_modulus,
 };
 use crate::analysis::plot::PlotError;
+use crate::file_error::FileError;
 use crate::options::{validate_a_b_values, validate_strain_and_rate, InvalidOption};
 use crate::scene::{protocols, ForceField, Scene};
 use crate::verify::engines::{run_native, EngineRun, HarnessError, LammpsLauncher};
@@ -27,16 +28,9 @@ pub enum CalibrationError {
     /// A plot could not be written.
     #[error(transparent)]
     Plot(#[from] PlotError),
-    /// A folder or file could not be created, written or read.
-    #[error("{action} {path}: {cause}")]
-    File {
-        /// "creating", "writing", "reading".
-        action: &'static str,
-        /// The folder or file.
-        path: String,
-        /// The cause.
-        cause: std::io::Error,
-    },
+    /// A file or folder could not be created, written or read.
+    #[error(transparent)]
+    File(#[from] FileError),
     /// An earlier `calibration.json` could not be parsed.
     #[error("{what}: {cause}")]
     Json {
@@ -45,18 +39,6 @@ pub enum CalibrationError {
         /// The cause.
         cause: serde_json::Error,
     },
-}
-
-fn file_error(
-    action: &'static str,
-    path: &Path,
-) -> impl FnOnce(std::io::Error) -> CalibrationError {
-    let path = path.display().to_string();
-    move |cause| CalibrationError::File {
-        action,
-        path,
-        cause,
-    }
 }
 
 /// Strain and rate of the calibration runs.
@@ -706,7 +688,7 @@ pub fn calibrate(
     log: &mut dyn FnMut(&str),
 ) -> Result<Calibration, CalibrationError> {
     opts.validate()?;
-    std::fs::create_dir_all(output).map_err(file_error("creating", output))?;
+    std::fs::create_dir_all(output).map_err(FileError::on("creating", output))?;
     let launcher = LammpsLauncher {
         bpm: bpm.to_path_buf(),
         dir: output.join("lammps"),
@@ -726,7 +708,7 @@ pub fn calibrate(
         "cases": cases,
     });
     let json = output.join("calibration.json");
-    crate::verify::write_json(&json, &doc).map_err(file_error("writing", &json))?;
+    crate::verify::write_json(&json, &doc).map_err(FileError::on("writing", &json))?;
     let report = write_report(output, opts, &cases, command)?;
     Ok(Calibration {
         cases,
@@ -738,7 +720,7 @@ pub fn calibrate(
 /// `bpm calibrate --from FILE`: the tables and plots of an earlier study
 /// (its calibration.json) into `output`, without running anything.
 pub fn replot(json: &Path, output: &Path) -> Result<StudyReport, CalibrationError> {
-    let text = std::fs::read_to_string(json).map_err(file_error("reading", json))?;
+    let text = std::fs::read_to_string(json).map_err(FileError::on("reading", json))?;
     let parse_error = |what: String| move |cause| CalibrationError::Json { what, cause };
     let doc: serde_json::Value =
         serde_json::from_str(&text).map_err(parse_error(format!("parsing {}", json.display())))?;
@@ -747,7 +729,7 @@ pub fn replot(json: &Path, output: &Path) -> Result<StudyReport, CalibrationErro
     let cases: Vec<Case> = serde_json::from_value(doc["cases"].clone())
         .map_err(parse_error("reading `cases`".into()))?;
     let command = doc["command"].as_str().unwrap_or("unknown").to_string();
-    std::fs::create_dir_all(output).map_err(file_error("creating", output))?;
+    std::fs::create_dir_all(output).map_err(FileError::on("creating", output))?;
     write_report(output, &opts, &cases, &command)
 }
 
@@ -765,7 +747,7 @@ pub fn write_report(
         crate::VERSION
     );
     let table = output.join("calibration.md");
-    std::fs::write(&table, header + &markdown).map_err(file_error("writing", &table))?;
+    std::fs::write(&table, header + &markdown).map_err(FileError::on("writing", &table))?;
     let moduli = output.join("moduli_vs_a_b.svg");
     crate::analysis::plot::write_svg(&moduli, &moduli_panels)?;
     let convergence = output.join("size_convergence.svg");

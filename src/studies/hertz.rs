@@ -8,7 +8,8 @@ use crate::analysis::hertz::{
     SqueezeCurve, CONTACT_THRESHOLD,
 };
 use crate::analysis::moduli::{paper_bulk_modulus, paper_shear_to_bulk, poisson_ratio};
-use crate::analysis::plot::{write_svg, Mark, Panel, Series};
+use crate::analysis::plot::{write_svg, Mark, Panel, PlotError, Series};
+use crate::file_error::FileError;
 use crate::scene::builders::grain::{build_grain, GrainKind, GrainParams, GrainSummary};
 use crate::scene::protocols::{hertz_squeeze, rotated, uniform_rotation, SqueezeParams};
 use crate::scene::{ForceField, Scene};
@@ -108,17 +109,15 @@ pub enum HertzError {
     /// A grain could not be built or read.
     #[error("grain: {0}")]
     Grain(String),
+    /// A plot could not be written.
+    #[error(transparent)]
+    Plot(#[from] PlotError),
     /// A squeeze failed in an engine.
     #[error(transparent)]
     Run(#[from] HarnessError),
-    /// A file could not be written.
-    #[error("{path}: {cause}")]
-    Io {
-        /// The file.
-        path: PathBuf,
-        /// The cause.
-        cause: std::io::Error,
-    },
+    /// A file or folder could not be written.
+    #[error(transparent)]
+    File(#[from] FileError),
 }
 
 impl HertzOptions {
@@ -406,22 +405,13 @@ fn ensemble(squeezes: &[Squeeze], max_overlap: f64) -> Ensemble {
 }
 
 fn write_report(report: &HertzReport, out: &Path) -> Result<(), HertzError> {
-    let io = |path: &Path| {
-        let path = path.to_path_buf();
-        move |cause| HertzError::Io { path, cause }
-    };
-    std::fs::create_dir_all(out).map_err(io(out))?;
+    std::fs::create_dir_all(out).map_err(FileError::on("creating", out))?;
     let json = out.join("hertz.json");
-    let text = serde_json::to_string_pretty(report).map_err(|e| HertzError::Io {
-        path: json.clone(),
-        cause: std::io::Error::other(e),
-    })?;
-    std::fs::write(&json, text).map_err(io(&json))?;
+    let text = serde_json::to_string_pretty(report)
+        .map_err(|e| FileError::on("writing", &json)(std::io::Error::other(e)))?;
+    std::fs::write(&json, text).map_err(FileError::on("writing", &json))?;
     let svg = out.join("hertz.svg");
-    write_svg(&svg, &panels(report)).map_err(|e| HertzError::Io {
-        path: svg.clone(),
-        cause: std::io::Error::other(e.to_string()),
-    })?;
+    write_svg(&svg, &panels(report))?;
     Ok(())
 }
 

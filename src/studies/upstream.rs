@@ -10,6 +10,7 @@
 //! into the work folder).
 
 use crate::engine::SimBox;
+use crate::file_error::FileError;
 use crate::kernels::Separation;
 use crate::lammps::{write_data_file, write_templates};
 use crate::scene::{Scene, SceneError};
@@ -32,16 +33,9 @@ pub enum UpstreamError {
     /// A scene of the comparison could not be built.
     #[error(transparent)]
     Scene(#[from] SceneError),
-    /// A file or folder could not be written or read.
-    #[error("{action} {path}: {cause}")]
-    File {
-        /// "creating", "writing", "reading".
-        action: &'static str,
-        /// The file or folder.
-        path: String,
-        /// The cause.
-        cause: std::io::Error,
-    },
+    /// A file or folder could not be created, written or read.
+    #[error(transparent)]
+    File(#[from] FileError),
     /// The embedded input templates could not be written.
     #[error("writing the LAMMPS input templates: {cause}")]
     Templates {
@@ -61,15 +55,6 @@ pub enum UpstreamError {
 
 type Result<T> = std::result::Result<T, UpstreamError>;
 
-fn file_error(action: &'static str, path: &Path) -> impl FnOnce(std::io::Error) -> UpstreamError {
-    let path = path.display().to_string();
-    move |cause| UpstreamError::File {
-        action,
-        path,
-        cause,
-    }
-}
-
 /// A modern LAMMPS with the PLUGIN and BPM packages, and our plugin for it.
 #[derive(Clone, Debug, Serialize)]
 pub struct ModernLammps {
@@ -88,7 +73,7 @@ impl ModernLammps {
     /// The modern LAMMPS and our plugin for it, found from the current
     /// directory; see [`ModernLammps::locate_from`].
     pub fn locate() -> Result<Self> {
-        let here = std::env::current_dir().map_err(|cause| UpstreamError::File {
+        let here = std::env::current_dir().map_err(|cause| FileError {
             action: "reading",
             path: "the current directory".into(),
             cause,
@@ -311,7 +296,8 @@ pub fn run_style(
         if ours { "ours" } else { "upstream" }
     );
     let data = dir.join(format!("{tag}.data"));
-    std::fs::write(&data, write_data_file(&config.scene)).map_err(file_error("writing", &data))?;
+    std::fs::write(&data, write_data_file(&config.scene))
+        .map_err(FileError::on("writing", &data))?;
     let dump = dir.join(format!("{tag}.dump"));
     let inputs = write_templates(dir).map_err(|cause| UpstreamError::Templates { cause })?;
     let input = inputs.join(if ours {
@@ -657,7 +643,7 @@ pub fn run_upstream_check(
 ) -> Result<UpstreamReport> {
     let lammps = ModernLammps::locate()?;
     let work = output.join("lammps");
-    std::fs::create_dir_all(&work).map_err(file_error("creating", &work))?;
+    std::fs::create_dir_all(&work).map_err(FileError::on("creating", &work))?;
     log(&row_header());
     let mut rows = Vec::new();
     let mut logged = 0;
@@ -716,7 +702,7 @@ pub fn run_upstream_check(
         "speed": speeds,
     });
     let json = output.join("upstream.json");
-    crate::verify::write_json(&json, &report).map_err(file_error("writing", &json))?;
+    crate::verify::write_json(&json, &report).map_err(FileError::on("writing", &json))?;
     Ok(UpstreamReport {
         lammps,
         rows,

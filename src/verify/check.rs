@@ -10,6 +10,7 @@ use super::single_point::{
 };
 use super::tolerances::tolerance;
 use crate::analysis::plot::{write_svg, Mark, Panel, PlotError, Series};
+use crate::file_error::FileError;
 use crate::lammps::LammpsVersion;
 use crate::options::{validate_a_b_values, InvalidOption};
 use crate::scene::builders::bulk::{build_bulk, BulkParams};
@@ -42,28 +43,12 @@ pub enum CheckError {
     /// A plot could not be written.
     #[error(transparent)]
     Plot(#[from] PlotError),
-    /// A folder or the report could not be written.
-    #[error("{action} {path}: {cause}")]
-    File {
-        /// "creating", "writing".
-        action: &'static str,
-        /// The folder or file.
-        path: String,
-        /// The cause.
-        cause: std::io::Error,
-    },
+    /// A file or folder could not be created, written or read.
+    #[error(transparent)]
+    File(#[from] FileError),
 }
 
 type Result<T> = std::result::Result<T, CheckError>;
-
-fn file_error(action: &'static str, path: &Path) -> impl FnOnce(std::io::Error) -> CheckError {
-    let path = path.display().to_string();
-    move |cause| CheckError::File {
-        action,
-        path,
-        cause,
-    }
-}
 
 /// What `bpm check` runs.
 #[derive(Clone, Debug, Serialize)]
@@ -267,7 +252,7 @@ pub fn run_check(opts: &CheckOptions) -> Result<CheckReport> {
     opts.validate()?;
     let dir = &opts.out_dir;
     let work = dir.join("lammps");
-    std::fs::create_dir_all(&work).map_err(file_error("creating", &work))?;
+    std::fs::create_dir_all(&work).map_err(FileError::on("creating", &work))?;
     let launcher = LammpsLauncher {
         bpm: opts.bpm.clone(),
         dir: work.clone(),
@@ -399,7 +384,7 @@ pub fn run_check(opts: &CheckOptions) -> Result<CheckReport> {
         })).collect::<Vec<_>>(),
         "report": report,
     });
-    super::write_json(&json, &doc).map_err(file_error("writing", &json))?;
+    super::write_json(&json, &doc).map_err(FileError::on("writing", &json))?;
     let mut report = report;
     report.files.push(json.display().to_string());
     Ok(report)

@@ -2,6 +2,7 @@
 
 use super::launch::{LammpsChild, LaunchError, Work};
 use crate::engine::StageDrivers;
+use crate::file_error::FileError;
 use crate::lammps::{write_data_file, write_reference_lengths, write_templates, ScriptVars};
 use crate::scene::{build_system, Scene};
 use serde::Serialize;
@@ -11,16 +12,9 @@ use std::path::Path;
 /// carries its cause (not chained again, so it prints once).
 #[derive(Debug, thiserror::Error)]
 pub enum SinglePointError {
-    /// A file could not be written or read.
-    #[error("{action} {path}: {cause}")]
-    File {
-        /// "writing", "reading".
-        action: &'static str,
-        /// The file.
-        path: String,
-        /// The cause.
-        cause: std::io::Error,
-    },
+    /// A file or folder could not be created, written or read.
+    #[error(transparent)]
+    File(#[from] FileError),
     /// The embedded input templates could not be written.
     #[error("writing the LAMMPS input templates: {cause}")]
     Templates {
@@ -33,18 +27,6 @@ pub enum SinglePointError {
     /// LAMMPS's output or dump lacks something or is malformed.
     #[error("{0}")]
     Output(String),
-}
-
-fn file_error(
-    action: &'static str,
-    path: &Path,
-) -> impl FnOnce(std::io::Error) -> SinglePointError {
-    let path = path.display().to_string();
-    move |cause| SinglePointError::File {
-        action,
-        path,
-        cause,
-    }
 }
 
 /// Forces, pressure tensor and energies of one evaluation.
@@ -78,9 +60,9 @@ pub fn run_lmp_bpm(
     steps: u64,
 ) -> Result<String, SinglePointError> {
     let data = dir.join(format!("{tag}.data"));
-    std::fs::write(&data, write_data_file(scene)).map_err(file_error("writing", &data))?;
+    std::fs::write(&data, write_data_file(scene)).map_err(FileError::on("writing", &data))?;
     let r0 = Path::new(&format!("{}.r0", data.display())).to_path_buf();
-    std::fs::write(&r0, write_reference_lengths(scene)).map_err(file_error("writing", &r0))?;
+    std::fs::write(&r0, write_reference_lengths(scene)).map_err(FileError::on("writing", &r0))?;
     let inputs = write_templates(dir).map_err(|cause| SinglePointError::Templates { cause })?;
     let vars = ScriptVars::of(scene, &data.display().to_string(), newton, &inputs);
     let input = if Path::new(input).is_absolute() {
@@ -106,7 +88,7 @@ pub fn run_lmp_bpm(
 
 /// Rows of a LAMMPS custom dump sorted by id, without the id column.
 pub fn read_dump(path: &Path) -> Result<Vec<Vec<f64>>, SinglePointError> {
-    let text = std::fs::read_to_string(path).map_err(file_error("reading", path))?;
+    let text = std::fs::read_to_string(path).map_err(FileError::on("reading", path))?;
     text.lines()
         .skip_while(|l| !l.starts_with("ITEM: ATOMS"))
         .skip(1)
