@@ -71,3 +71,69 @@ fn both_engines_squeeze_a_grain_file_to_the_same_curve() {
     }
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// The readable LAMMPS input `lammps_inputs/hertz_squeeze.in`, run by hand
+/// as a LAMMPS user would, gives the native squeeze's force to the digits
+/// it prints.
+#[test]
+fn the_readable_lammps_squeeze_input_gives_the_native_curve() {
+    use bpm::scene::protocols::{hertz_squeeze, SqueezeParams};
+    let dir = common::scratch_dir("hertz-input");
+    let mut p = GrainParams::new(GrainKind::Smoother, 3.0, 5, 0.0);
+    p.time_scale = 0.2;
+    let (mut grain, _) = build_grain(&p, 1, false).unwrap();
+    grain.force_field = bpm::scene::ForceField::paper(0.0);
+    let data = dir.join("grain.data");
+    std::fs::write(&data, bpm::scene::datafile::write_data_file(&grain)).unwrap();
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_lmp-bpm"))
+        .current_dir(&dir)
+        .args([
+            "-in",
+            concat!(
+                env!("CARGO_MANIFEST_DIR"),
+                "/lammps_inputs/hertz_squeeze.in"
+            ),
+        ])
+        .args([
+            "-log", "none", "-var", "aB", "0", "-var", "travel", "1.0", "-var", "every", "2000",
+        ])
+        .arg("-var")
+        .arg("data")
+        .arg(&data)
+        .output()
+        .unwrap();
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(out.status.success(), "{text}");
+    let rows: Vec<[f64; 3]> = text
+        .lines()
+        .skip_while(|l| !l.starts_with("Step v_gap v_force"))
+        .skip(1)
+        .map_while(|l| {
+            let v: Vec<f64> = l
+                .split_whitespace()
+                .filter_map(|w| w.parse().ok())
+                .collect();
+            (v.len() == 3).then(|| [v[0], v[1], v[2]])
+        })
+        .collect();
+    assert_eq!(rows.len(), 11, "{text}");
+    let mut params = SqueezeParams::paper(3.0, 0.2);
+    // 35,000 steps in 35 records: one every 1,000 steps, at LAMMPS's rows.
+    params.records = 35;
+    let scene = hertz_squeeze(&grain, &params);
+    let native = bpm::verify::run_native(&scene, "native", 1).unwrap();
+    let stage = &native.stages[0];
+    let step = stage.column("step").unwrap();
+    let f0 = stage.column("wall0_force").unwrap();
+    let f1 = stage.column("wall1_force").unwrap();
+    for [s, _, force] in &rows[1..] {
+        let k = step.iter().position(|t| t == s).unwrap();
+        let mean = 0.5 * (f0[k] + f1[k]);
+        // LAMMPS prints 10 significant digits.
+        assert!(
+            (force - mean).abs() <= 1e-9 * mean.abs(),
+            "step {s}: {force} vs {mean}"
+        );
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -22,6 +22,7 @@ macro_rules! templates {
 
 templates![
     "bench_bonds.in",
+    "hertz_squeeze.in",
     "plugin_load_example.in",
     "restart_read.in",
     "restart_write.in",
