@@ -64,7 +64,13 @@ fn a_small_smoother_grain_squeezed_between_walls_follows_hertz() {
     assert!(r0.iter().zip(&r1).all(|(a, b)| (a - b).abs() < 1e-12));
     let radius = 4.0;
     let scene = hertz_squeeze(&turned, &SqueezeParams::paper(radius, 0.25));
-    let run = bpm::verify::run_native(&scene, "squeeze", 1).unwrap();
+    let (run, _) = bpm::scene::run_native_report(
+        &scene,
+        std::path::Path::new("squeeze"),
+        0,
+        &bpm::scene::RunOptions::quiet(1),
+    );
+    assert!(run.error.is_none(), "{:?}", run.error);
     let stage = &run.stages[0];
     let f0 = stage.column("wall0_force").unwrap();
     let f1 = stage.column("wall1_force").unwrap();
