@@ -1,7 +1,8 @@
-//! The error of a file or folder operation, shared by the studies and the
-//! harness.
+//! Errors of file and folder operations and of the text formats read
+//! here (LAMMPS data files, dumps), shared by the scene, the studies and
+//! the harness.
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 /// A file or folder could not be created, written or read. The message
 /// carries the cause once (it is not also chained as a source).
@@ -26,4 +27,28 @@ impl FileError {
             cause,
         }
     }
+}
+
+/// A text file of a known format (LAMMPS data file, dump, thermo file)
+/// that could not be read, written or parsed.
+#[derive(Debug, thiserror::Error)]
+pub enum TextFileError {
+    /// The file could not be created, written or read.
+    #[error("{path}: {cause}")]
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// The cause (in the message, not chained, so it prints once).
+        cause: std::io::Error,
+    },
+    /// The file does not follow the format.
+    #[error("{path}, line {line}: {reason}")]
+    Malformed {
+        /// The file.
+        path: PathBuf,
+        /// Line number, from 1 (0: the file as a whole).
+        line: usize,
+        /// What is wrong.
+        reason: String,
+    },
 }

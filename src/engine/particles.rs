@@ -118,19 +118,6 @@ impl Particles {
         }
     }
 
-    /// Positions with the periodic images added back: grains that cross
-    /// periodic faces come out whole.
-    pub fn unwrapped(&self, simbox: &SimBox) -> Vec<[f64; 3]> {
-        self.x
-            .iter()
-            .zip(&self.image)
-            .map(|(x, n)| {
-                let s = simbox.image_vector(n);
-                [x[0] + s[0], x[1] + s[1], x[2] + s[2]]
-            })
-            .collect()
-    }
-
     /// Wraps every position into the box, updating the image counters.
     pub fn wrap(&mut self, simbox: &SimBox) {
         for (x, n) in self.x.iter_mut().zip(self.image.iter_mut()) {

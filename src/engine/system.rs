@@ -132,11 +132,6 @@ impl System {
         self.model.as_any_mut().downcast_mut::<M>()
     }
 
-    /// Positions.
-    pub fn x(&self) -> &[[f64; 3]] {
-        &self.particles.x
-    }
-
     /// Translational kinetic energy.
     pub fn kinetic_energy(&self) -> f64 {
         self.particles.kinetic_energy()

@@ -124,49 +124,52 @@ fn run_stage(
         (plan.positions_every > 0 && k % plan.positions_every == 0)
             || dump.is_some_and(|(every, _)| (step0 + k) % every == 0)
     };
+    // Positions and image flags are gathered once per step, whether a
+    // checkpoint, a dump frame or both need them.
     let mut gather =
         |lmp: &Lammps, k: u64, recorders: &mut Recorders| -> Result<(), LammpsRunError> {
             let (lo, hi, tilt) = lmp.box_geometry();
             let lengths = [hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]];
+            let x = lmp.gather_vectors("x")?;
+            let image = lmp.gather_images()?;
+            let frame_wanted = dump.filter(|(every, _)| (step0 + k) % every == 0);
+            if let Some((_, forces)) = frame_wanted {
+                let frame = Frame {
+                    step: step0 + k,
+                    simbox: crate::engine::SimBox {
+                        lo,
+                        lengths,
+                        tilt,
+                        periodic: lmp.periodicity(),
+                    },
+                    grain: lmp
+                        .gather_ints("molecule")?
+                        .into_iter()
+                        .map(|m| m.max(1) as u32 - 1)
+                        .collect(),
+                    kind: lmp
+                        .gather_ints("type")?
+                        .into_iter()
+                        .map(|t| t as u32)
+                        .collect(),
+                    x: x.clone(),
+                    image: image.clone(),
+                    v: lmp.gather_vectors("v")?,
+                    f: if forces {
+                        Some(lmp.gather_vectors("f")?)
+                    } else {
+                        None
+                    },
+                };
+                recorders.write_frame(&frame)?;
+            }
             if plan.positions_every > 0 && k % plan.positions_every == 0 {
                 checkpoints.push(Checkpoint {
                     step: step0 + k,
                     simbox: [lo, lengths, tilt],
-                    positions: lmp.gather_vectors("x")?,
-                    images: lmp.gather_images()?,
+                    positions: x,
+                    images: image,
                 });
-            }
-            if let Some((every, forces)) = dump {
-                if (step0 + k) % every == 0 {
-                    let frame = Frame {
-                        step: step0 + k,
-                        simbox: crate::engine::SimBox {
-                            lo,
-                            lengths,
-                            tilt,
-                            periodic: lmp.periodicity(),
-                        },
-                        grain: lmp
-                            .gather_ints("molecule")?
-                            .into_iter()
-                            .map(|m| m.max(1) as u32 - 1)
-                            .collect(),
-                        kind: lmp
-                            .gather_ints("type")?
-                            .into_iter()
-                            .map(|t| t as u32)
-                            .collect(),
-                        x: lmp.gather_vectors("x")?,
-                        image: lmp.gather_images()?,
-                        v: lmp.gather_vectors("v")?,
-                        f: if forces {
-                            Some(lmp.gather_vectors("f")?)
-                        } else {
-                            None
-                        },
-                    };
-                    recorders.write_frame(&frame)?;
-                }
             }
             Ok(())
         };

@@ -14,30 +14,10 @@ use super::model::{Bonds, BoxSpec, ForceField, Mass, ModelKind, Particles, Scene
 use crate::engine::Deformation;
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 /// Why a data file could not be read.
-#[derive(Debug, thiserror::Error)]
-pub enum DataFileError {
-    /// The file could not be read.
-    #[error("{path}: {cause}")]
-    Io {
-        /// The file.
-        path: PathBuf,
-        /// The cause (in the message, not chained, so it prints once).
-        cause: std::io::Error,
-    },
-    /// The file is not a data file this reader understands.
-    #[error("{path}, line {line}: {reason}")]
-    Malformed {
-        /// The file.
-        path: PathBuf,
-        /// Line number, from 1 (0: the file as a whole).
-        line: usize,
-        /// What is wrong.
-        reason: String,
-    },
-}
+pub use crate::file_error::TextFileError as DataFileError;
 
 const SKIPPED_SECTIONS: [&str; 14] = [
     "Pair Coeffs",

@@ -117,8 +117,8 @@ pub fn run_native_report(
     hash: u64,
     opts: &super::RunOptions,
 ) -> (RunReport, crate::engine::System) {
-    let mut sys = super::build_system(scene, opts.threads);
     let start = std::time::Instant::now();
+    let mut sys = super::build_system(scene, opts.threads);
     let (stages, error) = super::run_scene(&mut sys, scene, opts);
     let mut report = RunReport::new(
         EngineInfo::Native {

@@ -14,27 +14,7 @@ use std::io::{BufRead, BufWriter, Write};
 use std::path::{Path, PathBuf};
 
 /// Why a trajectory or thermo file could not be written or read.
-#[derive(Debug, thiserror::Error)]
-pub enum TrajectoryError {
-    /// The file could not be created, written or read.
-    #[error("{path}: {cause}")]
-    Io {
-        /// The file.
-        path: PathBuf,
-        /// The cause (in the message, not chained, so it prints once).
-        cause: std::io::Error,
-    },
-    /// A dump file is malformed.
-    #[error("{path}, line {line}: {reason}")]
-    Malformed {
-        /// The file.
-        path: PathBuf,
-        /// Line number, from 1.
-        line: usize,
-        /// What is wrong.
-        reason: String,
-    },
-}
+pub use crate::file_error::TextFileError as TrajectoryError;
 
 /// One state of the particles. Particle `i` is atom id `i + 1`.
 #[derive(Clone, Debug, PartialEq)]

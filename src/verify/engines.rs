@@ -5,10 +5,10 @@
 //! harness must turn that into an error value with LAMMPS's message.
 
 use super::launch::{LammpsChild, LaunchError, Work};
-use crate::scene::run::{run_scene, RunOptions, StageOutput};
-use crate::scene::{build_system, validate, write_scene, EngineInfo, RunReport, Scene};
+use crate::scene::run::{RunOptions, StageOutput};
+use crate::scene::{run_native_report, validate, write_scene, EngineInfo, RunReport, Scene};
 use std::ffi::OsStr;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 /// A failure of a harness run.
 #[derive(Debug, thiserror::Error)]
@@ -63,18 +63,16 @@ pub fn run_native(scene: &Scene, tag: &str, threads: usize) -> Result<EngineRun,
         scene: tag.into(),
         cause,
     })?;
-    let start = std::time::Instant::now();
-    let mut sys = build_system(scene, threads);
-    let (stages, error) = run_scene(&mut sys, scene, &RunOptions::quiet(threads));
-    if let Some(e) = error {
+    let (report, _) = run_native_report(scene, Path::new(tag), 0, &RunOptions::quiet(threads));
+    if let Some(message) = report.error {
         return Err(HarnessError::Native {
             scene: tag.into(),
-            message: e.to_string(),
+            message,
         });
     }
     Ok(EngineRun {
-        stages,
-        seconds: start.elapsed().as_secs_f64(),
+        stages: report.stages,
+        seconds: report.wall_seconds,
         lammps_version: None,
     })
 }

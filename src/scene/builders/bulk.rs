@@ -5,14 +5,12 @@
 //! speed 0.03, a quench with pair damping restored, then bonds between all
 //! pairs closer than 1.5 d and zero velocities.
 
-use crate::engine::{BondTopology, NeighbourList, System};
+use crate::engine::{BondTopology, NeighbourList, SimBox, System};
 use crate::kernels::PairCoeffs;
 use crate::kernels::Separation;
 use crate::options::{validate_strain_and_rate, InvalidOption};
-use crate::scene::load::build_system;
 use crate::scene::model::{Bonds, BoxSpec, ForceField, Particles, Scene, StageSpec, VelocityInit};
 use crate::scene::protocols;
-use crate::scene::run::{run_scene, RunOptions};
 use crate::scene::validate::SceneError;
 use rand::{Rng, SeedableRng};
 use serde::Serialize;
@@ -288,19 +286,7 @@ pub fn build_bulk(
         stages: vec![relax, thermal, quench],
         provenance: serde_json::json!({ "builder": "bulk", "version": crate::VERSION, "parameters": params }),
     };
-    crate::scene::validate::validate(&scene)?;
-    let mut sys = build_system(&scene, threads);
-    let opts = RunOptions {
-        progress,
-        ..RunOptions::quiet(threads)
-    };
-    let (_, err) = run_scene(&mut sys, &scene, &opts);
-    if let Some(e) = err {
-        return Err(SceneError::Invalid {
-            field: "bulk builder".into(),
-            reason: e.to_string(),
-        });
-    }
+    let mut sys = super::run_build_stages(&scene, "bulk builder", threads, progress)?;
     sys.particles.wrap(&sys.simbox);
     sort_spatially(&mut sys.particles.x, &sys.simbox, 2.0 * pair.d);
     let max_overlap = max_overlap(&sys, pair.d);
@@ -358,16 +344,16 @@ pub fn sort_spatially(x: &mut [[f64; 3]], simbox: &crate::engine::SimBox, cell: 
     x.sort_by_key(key);
 }
 
-/// Every pair of `sys` closer than `cutoff`, with its distance.
-fn pairs_within(sys: &System, cutoff: f64) -> Vec<(usize, usize, f64)> {
+/// Every pair of `x` in `simbox` closer than `cutoff`, once with
+/// `i < j`, with its (minimum-image) distance.
+pub fn pairs_within(simbox: &SimBox, x: &[[f64; 3]], cutoff: f64) -> Vec<(usize, usize, f64)> {
     let mut list = NeighbourList::default();
-    let x = &sys.particles.x;
-    list.build(&sys.simbox, x, cutoff, 0.0, None);
+    list.build(simbox, x, cutoff, 0.0, None);
     let mut pairs = Vec::new();
-    for i in 0..sys.len() {
+    for i in 0..x.len() {
         for &j in list.of(i) {
             let j = j as usize;
-            pairs.push((i, j, sys.simbox.distance(&x[i], &x[j])));
+            pairs.push((i, j, simbox.distance(&x[i], &x[j])));
         }
     }
     pairs
@@ -375,11 +361,14 @@ fn pairs_within(sys: &System, cutoff: f64) -> Vec<(usize, usize, f64)> {
 
 /// Bonds every pair of `sys` closer than `cutoff`, with that distance as `r0`.
 pub fn bond_within(sys: &System, cutoff: f64) -> BondTopology {
-    BondTopology::new(sys.len(), &pairs_within(sys, cutoff))
+    BondTopology::new(
+        sys.len(),
+        &pairs_within(&sys.simbox, &sys.particles.x, cutoff),
+    )
 }
 
 fn max_overlap(sys: &System, d: f64) -> f64 {
-    pairs_within(sys, d)
+    pairs_within(&sys.simbox, &sys.particles.x, d)
         .iter()
         .fold(0.0, |worst, &(_, _, r)| f64::max(worst, d - r))
 }

@@ -11,12 +11,11 @@
 //! at rest, with no protocol stages; studies (the Hertz squeeze, packings)
 //! add their own.
 
-use super::bulk::{build_bulk, BulkParams};
-use crate::engine::{BondTopology, NeighbourList, SimBox, SphereWall};
+use super::bulk::{build_bulk, pairs_within, BulkParams};
+use crate::engine::SphereWall;
 use crate::kernels::Separation;
-use crate::scene::load::{build_system, reference_lengths};
+use crate::scene::load::reference_lengths;
 use crate::scene::model::{Bonds, BoxSpec, Scene, StageSpec};
-use crate::scene::run::{run_scene, RunOptions};
 use crate::scene::validate::{simbox_of, SceneError};
 use serde::{Deserialize, Serialize};
 
@@ -223,21 +222,6 @@ pub fn roughness(x: &[[f64; 3]], area: f64) -> Roughness {
     }
 }
 
-/// Pairs of `x` closer than `cutoff` (open boundaries), with their
-/// distances, each once with `i < j`.
-fn pairs_within(simbox: &SimBox, x: &[[f64; 3]], cutoff: f64) -> Vec<(usize, usize, f64)> {
-    let mut list = NeighbourList::default();
-    list.build(simbox, x, cutoff, 0.0, None);
-    let mut pairs = Vec::new();
-    for i in 0..x.len() {
-        for &j in list.of(i) {
-            let j = j as usize;
-            pairs.push((i, j, simbox.distance(&x[i], &x[j])));
-        }
-    }
-    pairs
-}
-
 /// A closed box with `margin` around the points, and the points moved so
 /// their bounding box is centred in it.
 fn closed_box_around(x: &mut [[f64; 3]], margin: f64) -> BoxSpec {
@@ -335,19 +319,11 @@ pub fn build_grain(
         r0: Some(lengths),
     };
     scene.stages = Vec::new();
-    let bonds = BondTopology::new(
-        n,
-        &scene
-            .bonds
-            .pairs
-            .iter()
-            .map(|&[i, j]| (i, j, 0.0))
-            .collect::<Vec<_>>(),
-    );
+    let bonds = scene.bonds.pairs.len();
     let summary = GrainSummary {
         particles: n,
-        bonds: bonds.len(),
-        mean_bonds_per_particle: 2.0 * bonds.len() as f64 / n.max(1) as f64,
+        bonds,
+        mean_bonds_per_particle: 2.0 * bonds as f64 / n.max(1) as f64,
         roughness: roughness(&scene.particles.positions, 4.0),
         seconds: start.elapsed().as_secs_f64(),
     };
@@ -399,20 +375,8 @@ fn vibrate_in_cage(
     );
     settle.viscous = params.cage_viscous;
     cage.stages = vec![stage, settle];
-    crate::scene::validate::validate(&cage)?;
-    let mut sys = build_system(&cage, threads);
-    let opts = RunOptions {
-        progress,
-        ..RunOptions::quiet(threads)
-    };
-    let (_, err) = run_scene(&mut sys, &cage, &opts);
-    if let Some(e) = err {
-        return Err(SceneError::Invalid {
-            field: "grain builder (cage vibration)".into(),
-            reason: e.to_string(),
-        });
-    }
-    Ok(sys.particles.x.clone())
+    let sys = super::run_build_stages(&cage, "grain builder (cage vibration)", threads, progress)?;
+    Ok(sys.particles.x)
 }
 
 #[cfg(test)]
