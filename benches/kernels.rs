@@ -51,12 +51,16 @@ fn kernels(c: &mut Criterion) {
     accumulate_reference_volumes(&bonds, &r0, own, &mut vol0);
     accumulate_volumes(&Unwrapped, &x, &bonds, own, &mut vol);
     let mut f = vec![[0.0; 3]; n];
-    c.bench_function("bond::volumes", |b| {
-        b.iter(|| {
-            vol.fill(0.0);
-            accumulate_volumes(&Unwrapped, &x, &bonds, own, &mut vol)
-        })
-    });
+    for isa in [Isa::Portable, Isa::Avx2] {
+        if isa.available() {
+            c.bench_function(&format!("bond::volumes/{}", isa.name()), |b| {
+                b.iter(|| {
+                    vol.fill(0.0);
+                    accumulate_volumes_on(isa, &Unwrapped, &x, &bonds, own, &mut vol)
+                })
+            });
+        }
+    }
     for (name, a, tally) in [
         ("bond::spring", 0.0, false),
         ("bond::multibody", -0.5, false),
@@ -76,9 +80,45 @@ fn kernels(c: &mut Criterion) {
             volumes: (a != 0.0).then_some((&vol[..], &vol0[..])),
             tally,
         };
-        c.bench_function(name, |b| {
-            b.iter(|| bond_forces(&Unwrapped, &inputs, own, &mut f))
-        });
+        for isa in [Isa::Portable, Isa::Avx2] {
+            if isa.available() {
+                c.bench_function(&format!("{name}/{}", isa.name()), |b| {
+                    b.iter(|| bond_forces_on(isa, &Unwrapped, &inputs, own, &mut f))
+                });
+            }
+        }
+        if !tally {
+            c.bench_function(&format!("{name}/per-bond loop"), |b| {
+                b.iter(|| per_bond_loop(&inputs, &mut f))
+            });
+        }
+    }
+}
+
+/// The force law bond by bond, as a plain loop: what the blocked kernel is
+/// measured against (same terms, no tally, every atom owned).
+fn per_bond_loop(inputs: &BondInputs, f: &mut [[f64; 3]]) {
+    let x = inputs.x;
+    let v = inputs.v.unwrap_or(&[]);
+    for (b, &r0) in inputs.bonds.iter().zip(inputs.r0) {
+        let (i, j) = (b.i as usize, b.j as usize);
+        let c = &inputs.coeffs[(b.ty - 1) as usize];
+        let del = [x[i][0] - x[j][0], x[i][1] - x[j][1], x[i][2] - x[j][2]];
+        let r = (del[0] * del[0] + del[1] * del[1] + del[2] * del[2]).sqrt();
+        let rinv = 1.0 / r;
+        let mut fmag = -c.k * (r - r0);
+        if let Some((vol, vol0)) = inputs.volumes {
+            fmag += c.a * (dilation(vol[i], vol[j], vol0[i], vol0[j]) - r / r0);
+        }
+        if inputs.v.is_some() {
+            let dv = [v[i][0] - v[j][0], v[i][1] - v[j][1], v[i][2] - v[j][2]];
+            fmag -= c.gamma * (del[0] * dv[0] + del[1] * dv[1] + del[2] * dv[2]) * rinv;
+        }
+        let fpair = fmag * rinv;
+        for d in 0..3 {
+            f[i][d] += del[d] * fpair;
+            f[j][d] -= del[d] * fpair;
+        }
     }
 }
 

@@ -37,6 +37,7 @@ fn stage(pxx: [f64; 4], positions: [[f64; 3]; 4]) -> StageOutput {
         wall_seconds: 0.0,
         timers: Default::default(),
         neighbour_builds: 0,
+        stopped_at: None,
     }
 }
 

@@ -274,7 +274,17 @@ fn an_unstable_run_stops_with_an_error_and_keeps_finished_stages() {
     let scene = solid_with(ff, vec![ok, bad]);
     let mut sys = build_system(&scene, 1);
     let (out, err) = run_scene(&mut sys, &scene, &opts(1));
-    assert_eq!(out.len(), 1, "the finished stage is kept");
+    assert_eq!(
+        out.len(),
+        2,
+        "the finished stage and the failed one are kept"
+    );
+    assert_eq!(out[0].stopped_at, None);
+    assert_eq!(out[0].rows.len(), 3);
+    let stopped = out[1]
+        .stopped_at
+        .expect("the failed stage says where it stopped");
+    assert!((1..2000).contains(&stopped), "stopped at {stopped}");
     let msg = err.expect("dt = 50 must blow up").to_string();
     assert!(msg.contains("unstable"), "{msg}");
 }

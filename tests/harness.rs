@@ -181,3 +181,38 @@ fn scenes_lammps_rejects_or_cannot_express_are_clear_harness_errors() {
     }
     let _ = std::fs::remove_dir_all(&l.dir);
 }
+
+/// Walls driven through a grain faster than its particles can get out of
+/// the way: a particle reaches a wall's plane. LAMMPS's `fix wall/harmonic`
+/// stops there; the native engine gives the same verdict and keeps the
+/// stage's records up to the step it stopped at.
+#[test]
+fn both_engines_stop_when_a_particle_reaches_a_wall_plane() {
+    let scene = grain_squeeze(3.0, 1, 0.0, 1.0, 400).unwrap();
+    let (report, _) = bpm::scene::run_native_report(
+        &scene,
+        std::path::Path::new("through-wall"),
+        0,
+        &bpm::scene::RunOptions::quiet(1),
+    );
+    let native = report.error.expect("the native engine must stop");
+    assert!(native.contains("plane of flat wall"), "{native}");
+    let stage = &report.stages[0];
+    let stopped = stage.stopped_at.expect("the stopped stage is kept");
+    assert!(
+        stopped < 400 && !stage.rows.is_empty(),
+        "stopped at {stopped}"
+    );
+    let l = launcher("through-wall");
+    match l.run(&scene, "through-wall", 1, true) {
+        Err(e) => {
+            let msg = e.to_string();
+            assert!(
+                msg.contains("Particle on or inside fix wall surface"),
+                "{msg}"
+            );
+        }
+        Ok(_) => panic!("LAMMPS ran through the wall; the native engine stopped at {stopped}"),
+    }
+    let _ = std::fs::remove_dir_all(&l.dir);
+}

@@ -137,3 +137,65 @@ fn the_readable_lammps_squeeze_input_gives_the_native_curve() {
     }
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// `bpm hertz-sweep` in miniature: one case per radius and a_B, each with
+/// its deviation and run times, and the saved grain squeezed again by
+/// `bpm hertz --grain` repeats the sweep's curve exactly.
+#[test]
+fn the_sweep_saves_grains_that_squeeze_to_the_same_curve_again() {
+    use bpm::scene::builders::grain::GrainKind;
+    use bpm::studies::hertz_sweep::{run_hertz_sweep, SweepOptions};
+    let dir = common::scratch_dir("hertz-sweep");
+    let launcher = LammpsLauncher {
+        bpm: env!("CARGO_BIN_EXE_bpm").into(),
+        dir: dir.join("lammps"),
+    };
+    let opts = SweepOptions {
+        kind: GrainKind::Smoother,
+        radii: vec![3.0, 4.0],
+        a_bs: vec![0.0, -0.5],
+        seed: 3,
+        rotations: 1,
+        max_overlap: 0.1,
+        records: 200,
+        engine: SqueezeEngine::Native,
+        threads: 1,
+        time_scale: 0.05,
+    };
+    let report = run_hertz_sweep(&opts, &dir, &launcher, &mut |_| {}).unwrap();
+    assert_eq!(report.cases.len(), 4);
+    for c in &report.cases {
+        assert!(c.deviation.is_some(), "R = {} a_B = {}", c.radius, c.a_b);
+        assert!(c.seconds_per_squeeze > 0.0 && c.grain.seconds > 0.0);
+        assert!(dir.join(&c.folder).join("hertz.json").exists());
+    }
+    assert!(dir.join("sweep.json").exists() && dir.join("sweep.svg").exists());
+    let case = &report.cases[3];
+    assert_eq!((case.radius, case.a_b), (4.0, -0.5));
+    let again = run_hertz(
+        &HertzOptions {
+            source: GrainSource::File {
+                path: dir.join("grains/smoother-R4-s3.json"),
+                radius: 4.0,
+            },
+            seeds: vec![3],
+            a_b: -0.5,
+            rotations: 1,
+            max_overlap: 0.1,
+            moduli: Moduli::paper_fits(-0.5),
+            engine: SqueezeEngine::Native,
+            records: 200,
+            threads: 1,
+        },
+        &dir.join("again"),
+        &launcher,
+        &mut |_| {},
+    )
+    .unwrap();
+    let swept: bpm::studies::hertz::HertzReport = serde_json::from_str(
+        &std::fs::read_to_string(dir.join(&case.folder).join("hertz.json")).unwrap(),
+    )
+    .unwrap();
+    assert_eq!(again.squeezes[0].curve.force, swept.squeezes[0].curve.force);
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -162,6 +162,7 @@ mod tests {
             wall_seconds: 0.0,
             timers: Default::default(),
             neighbour_builds: 0,
+            stopped_at: None,
         }
     }
 

@@ -11,7 +11,10 @@ use bpm::scene::{
 };
 use bpm::scene::{read_scene_unvalidated, ForceField};
 use bpm::studies::bench::{self, BenchOptions};
-use bpm::studies::hertz::{run_hertz, GrainSource, HertzOptions, Moduli, SqueezeEngine};
+use bpm::studies::hertz::{
+    run_hertz, EngineAgreement, GrainSource, HertzOptions, Moduli, SqueezeEngine,
+};
+use bpm::studies::hertz_sweep::{run_hertz_sweep, SweepOptions};
 use bpm::studies::{calibration, upstream};
 use clap::{Parser, Subcommand, ValueEnum};
 use std::io::IsTerminal;
@@ -210,7 +213,7 @@ enum Command {
         a_b: f64,
         /// The engine that squeezes.
         #[arg(long, value_enum, default_value = "native")]
-        engine: Engine,
+        engine: SqueezeWith,
         /// Overlap delta / R to reach.
         #[arg(long, default_value_t = 0.3)]
         max_overlap: f64,
@@ -229,6 +232,46 @@ enum Command {
         /// Poisson ratio for E_eff (default: the paper's calibration fits at a_B).
         #[arg(long, allow_hyphen_values = true)]
         nu: Option<f64>,
+        /// Records per squeeze.
+        #[arg(long, default_value_t = 1000)]
+        records: u64,
+        /// Output folder.
+        #[arg(short, long)]
+        output: PathBuf,
+    },
+    /// Deviation from Hertz against grain size, with run times: one grain
+    /// per radius, built once and squeezed at every a_B; writes
+    /// DIR/sweep.json, DIR/sweep.svg, one folder per case and the grains.
+    HertzSweep {
+        /// Grain kind.
+        #[arg(long, value_enum, default_value = "smoother")]
+        kind: Kind,
+        /// Radii R (d), comma separated.
+        #[arg(long, value_delimiter = ',', default_value = "4,6,8,10")]
+        radii: Vec<f64>,
+        /// Multibody strengths a_B (k d), comma separated.
+        #[arg(
+            long = "a-b",
+            value_delimiter = ',',
+            allow_hyphen_values = true,
+            default_value = "0"
+        )]
+        a_b: Vec<f64>,
+        /// Seed of every grain and of its rotations.
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+        /// Random rotations per squeeze (0: as built).
+        #[arg(long, default_value_t = 4)]
+        rotations: usize,
+        /// Overlap delta / R to reach.
+        #[arg(long, default_value_t = 0.3)]
+        max_overlap: f64,
+        /// The engine that squeezes.
+        #[arg(long, value_enum, default_value = "native")]
+        engine: SqueezeWith,
+        /// Scale of the grain builds' times (1 = the full protocol).
+        #[arg(long, default_value_t = 1.0)]
+        time_scale: f64,
         /// Records per squeeze.
         #[arg(long, default_value_t = 1000)]
         records: u64,
@@ -284,6 +327,27 @@ enum Engine {
     Native,
     /// LAMMPS with the plugin's styles, in this process.
     Lammps,
+}
+
+#[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
+enum SqueezeWith {
+    /// The native Rust engine.
+    Native,
+    /// LAMMPS with this project's styles (a child process).
+    Lammps,
+    /// Both; the curve is the native one, and each squeeze reports how far
+    /// LAMMPS's forces are from it.
+    Both,
+}
+
+impl From<SqueezeWith> for SqueezeEngine {
+    fn from(e: SqueezeWith) -> Self {
+        match e {
+            SqueezeWith::Native => SqueezeEngine::Native,
+            SqueezeWith::Lammps => SqueezeEngine::Lammps,
+            SqueezeWith::Both => SqueezeEngine::Both,
+        }
+    }
 }
 
 #[derive(Clone, Copy, ValueEnum)]
@@ -537,10 +601,7 @@ fn real_main() -> Result<()> {
                 rotations,
                 max_overlap,
                 moduli,
-                engine: match engine {
-                    Engine::Native => SqueezeEngine::Native,
-                    Engine::Lammps => SqueezeEngine::Lammps,
-                },
+                engine: engine.into(),
                 records,
                 threads: cli.threads,
             };
@@ -565,6 +626,29 @@ fn real_main() -> Result<()> {
                     d.map_or(f64::NAN, |d| d.loglog_slope),
                     s.seconds
                 );
+                if let Some(reason) = &s.stopped {
+                    println!(
+                        "{:>6} stopped at delta/R = {:.3}: {reason}",
+                        "",
+                        s.curve.overlap_over_r.last().copied().unwrap_or(f64::NAN)
+                    );
+                }
+                match &s.engines {
+                    Some(EngineAgreement {
+                        force_deviation: Some(f),
+                        gap_deviation: Some(g),
+                        lammps_seconds,
+                        ..
+                    }) => println!(
+                        "{:>6} LAMMPS against native: largest force difference {f:.2e} of the largest force, wall gaps {g:.1e} d apart; LAMMPS {lammps_seconds:.1} s",
+                        ""
+                    ),
+                    Some(EngineAgreement {
+                        lammps_error: Some(e),
+                        ..
+                    }) => println!("{:>6} LAMMPS stopped too: {e}", ""),
+                    _ => {}
+                }
             })?;
             if let Some(d) = report.ensemble.deviation {
                 println!(
@@ -578,6 +662,70 @@ fn real_main() -> Result<()> {
                 );
             }
             println!("wrote {}/hertz.json and hertz.svg", output.display());
+        }
+        Command::HertzSweep {
+            kind,
+            radii,
+            a_b,
+            seed,
+            rotations,
+            max_overlap,
+            engine,
+            time_scale,
+            records,
+            output,
+        } => {
+            let opts = SweepOptions {
+                kind: kind.into(),
+                radii,
+                a_bs: a_b,
+                seed,
+                rotations,
+                max_overlap,
+                records,
+                engine: engine.into(),
+                threads: cli.threads,
+                time_scale,
+            };
+            let launcher = bpm::verify::LammpsLauncher {
+                bpm: std::env::current_exe()?,
+                dir: output.join("lammps"),
+            };
+            println!(
+                "{:>5} {:>5} {:>6} {:>9} {:>9} {:>8} {:>9} {:>9} {:>8} {:>10}",
+                "R",
+                "a_B",
+                "nu",
+                "particles",
+                "roughness",
+                "build s",
+                "squeeze s",
+                "rms rel",
+                "slope",
+                "worst rel"
+            );
+            let report = run_hertz_sweep(&opts, &output, &launcher, &mut |c| {
+                let d = c.deviation;
+                println!(
+                    "{:>5} {:>5} {:>6.3} {:>9} {:>9.4} {:>8.1} {:>9.1} {:>9.4} {:>8.3} {:>10.4}",
+                    c.radius,
+                    c.a_b,
+                    c.nu,
+                    c.grain.particles,
+                    c.grain.roughness.sd_height,
+                    c.grain.seconds,
+                    c.seconds_per_squeeze,
+                    d.map_or(f64::NAN, |d| d.rms_relative),
+                    d.map_or(f64::NAN, |d| d.loglog_slope),
+                    c.worst_squeeze_rms_relative
+                );
+            })?;
+            println!(
+                "{} cases in {:.0} s; wrote {}/sweep.json and sweep.svg",
+                report.cases.len(),
+                report.wall_seconds,
+                output.display()
+            );
         }
         Command::Run {
             scene: path,

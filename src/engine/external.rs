@@ -43,26 +43,46 @@ impl FlatWall {
         self.position + self.velocity * elapsed
     }
 
-    /// Adds wall forces; returns (normal force on the wall, energy).
-    pub fn apply(&self, elapsed: f64, x: &[[f64; 3]], f: &mut [[f64; 3]]) -> (f64, f64) {
+    /// Adds wall forces; returns the normal force on the wall, the energy,
+    /// and the first particle found on or behind the wall's plane.
+    ///
+    /// A particle there has got through the wall: like LAMMPS's
+    /// `fix wall/harmonic`, the engine stops rather than push it on from
+    /// the wrong side. (The wall holds a particle off its plane with at
+    /// most `k cutoff`; a grain squeezed hard enough overcomes that.)
+    pub fn apply(&self, elapsed: f64, x: &[[f64; 3]], f: &mut [[f64; 3]]) -> WallContact {
         let wall = self.position_at(elapsed);
         let sign = match self.side {
             WallSide::Lo => 1.0,
             WallSide::Hi => -1.0,
         };
-        let (mut total, mut energy) = (0.0, 0.0);
-        for (xi, fi) in x.iter().zip(f.iter_mut()) {
+        let mut contact = WallContact::default();
+        for (i, (xi, fi)) in x.iter().zip(f.iter_mut()).enumerate() {
             let s = sign * (xi[self.axis] - wall);
             if s < self.cutoff {
+                if s <= 0.0 && contact.through.is_none() {
+                    contact.through = Some(i);
+                }
                 let overlap = self.cutoff - s;
                 let force = self.stiffness * overlap;
                 fi[self.axis] += sign * force;
-                total += force;
-                energy += 0.5 * self.stiffness * overlap * overlap;
+                contact.force += force;
+                contact.energy += 0.5 * self.stiffness * overlap * overlap;
             }
         }
-        (total, energy)
+        contact
     }
+}
+
+/// What a flat wall did in one force evaluation.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct WallContact {
+    /// Normal force on the wall (k d, >= 0).
+    pub force: f64,
+    /// Energy.
+    pub energy: f64,
+    /// The first particle on or behind the wall's plane, if any.
+    pub through: Option<usize>,
 }
 
 /// A harmonic spherical wall that confines particles inside a sphere whose

@@ -56,6 +56,17 @@ pub enum EngineError {
         /// Dimension (0 = x).
         dimension: usize,
     },
+    /// A particle reached the plane of a flat wall (LAMMPS's
+    /// `fix wall/harmonic` stops there too).
+    #[error("particle {particle} reached the plane of flat wall {wall} at step {step}: a harmonic wall holds a particle off its plane with at most k times its cutoff, and the grain pressed harder (LAMMPS stops here too: \"Particle on or inside fix wall surface\")")]
+    ThroughWall {
+        /// Step of the force evaluation that found it.
+        step: u64,
+        /// Index of the wall in the stage's `walls`.
+        wall: usize,
+        /// Particle index.
+        particle: usize,
+    },
     /// The stage asks the model for something it does not have.
     #[error("the particle model does not support {what}")]
     Unsupported {

@@ -7,6 +7,7 @@
 
 use super::simbox::SimBox;
 use crate::kernels::Separation;
+use nalgebra::{Matrix3, Vector3};
 
 /// Pairs a pair list leaves out: for each particle its sorted partners
 /// (both directions), in CSR form. The bonded particle model excludes its
@@ -55,7 +56,7 @@ impl Exclusions {
 }
 
 /// A half neighbour list (`j > i`) in CSR form.
-#[derive(Clone, Debug, Default)]
+#[derive(Clone, Debug)]
 pub struct NeighbourList {
     /// `offsets[i]..offsets[i + 1]` index the neighbours of atom `i`.
     pub offsets: Vec<usize>,
@@ -67,9 +68,33 @@ pub struct NeighbourList {
     box_at_build: Option<SimBox>,
     /// How many times the list was built.
     pub builds: u64,
+    /// How many times a rigid motion of the reference positions saved a
+    /// build since the last one (closed boxes only).
+    pub reanchors: u64,
+    /// Whether the rebuild test in a closed box discounts rigid motion
+    /// (default; off only to measure what it saves).
+    pub follow_rigid_motion: bool,
     bin_of: Vec<usize>,
     bin_start: Vec<usize>,
     bin_atoms: Vec<usize>,
+}
+
+impl Default for NeighbourList {
+    fn default() -> Self {
+        Self {
+            offsets: Vec::new(),
+            neighbours: Vec::new(),
+            list_cutoff: 0.0,
+            x_at_build: Vec::new(),
+            box_at_build: None,
+            builds: 0,
+            reanchors: 0,
+            follow_rigid_motion: true,
+            bin_of: Vec::new(),
+            bin_start: Vec::new(),
+            bin_atoms: Vec::new(),
+        }
+    }
 }
 
 impl NeighbourList {
@@ -85,19 +110,36 @@ impl NeighbourList {
 
     /// Whether an atom may have moved into range of one not listed: twice the
     /// largest displacement plus the drift of periodic images exceeds the skin.
-    pub fn needs_rebuild(&self, simbox: &SimBox, x: &[[f64; 3]], skin: f64) -> bool {
+    ///
+    /// In a closed box only distances matter, so displacements are measured
+    /// from the rigid image of the positions at the build that best fits the
+    /// current ones: a grain that turns or drifts as a whole (a lone grain
+    /// between walls does both) keeps its list. When the plain test fails but
+    /// the rigid one passes, that rigid image becomes the new reference.
+    pub fn needs_rebuild(&mut self, simbox: &SimBox, x: &[[f64; 3]], skin: f64) -> bool {
         let Some(old_box) = &self.box_at_build else {
             return true;
         };
         if self.x_at_build.len() != x.len() {
             return true;
         }
-        let mut max_sq: f64 = 0.0;
-        for (a, b) in x.iter().zip(&self.x_at_build) {
-            let d = [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
-            max_sq = max_sq.max(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+        let drift = simbox.periodic_drift(old_box);
+        if 2.0 * max_displacement(x, &self.x_at_build) + drift <= skin {
+            return false;
         }
-        2.0 * max_sq.sqrt() + simbox.periodic_drift(old_box) > skin
+        if !self.follow_rigid_motion || simbox.periodic.iter().any(|&p| p) || x.is_empty() {
+            return true;
+        }
+        let moved = rigid_image(&self.x_at_build, x);
+        // The reference drifts from an exact rigid image by round-off at each
+        // re-anchoring; the margin keeps the test conservative.
+        let margin = 1e-12 * (self.reanchors + 1) as f64;
+        if 2.0 * max_displacement(x, &moved) + margin > skin {
+            return true;
+        }
+        self.x_at_build = moved;
+        self.reanchors += 1;
+        false
     }
 
     /// Rebuilds the list for `cutoff + skin`, leaving out the pairs of
@@ -219,7 +261,51 @@ impl NeighbourList {
         self.x_at_build.extend_from_slice(x);
         self.box_at_build = Some(simbox.clone());
         self.builds += 1;
+        self.reanchors = 0;
     }
+
+    /// Whether no pair is listed, so a pair pass has nothing to do.
+    pub fn is_empty(&self) -> bool {
+        self.neighbours.is_empty()
+    }
+}
+
+/// Largest distance between matching points of `a` and `b`.
+fn max_displacement(a: &[[f64; 3]], b: &[[f64; 3]]) -> f64 {
+    let mut max_sq: f64 = 0.0;
+    for (p, q) in a.iter().zip(b) {
+        let d = [p[0] - q[0], p[1] - q[1], p[2] - q[2]];
+        max_sq = max_sq.max(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+    }
+    max_sq.sqrt()
+}
+
+/// The rigid motion (rotation about the centroid, then translation) of
+/// `from` that best fits `to` in least squares (Kabsch), applied to `from`.
+fn rigid_image(from: &[[f64; 3]], to: &[[f64; 3]]) -> Vec<[f64; 3]> {
+    let centroid = |p: &[[f64; 3]]| {
+        let sum = p
+            .iter()
+            .fold(Vector3::zeros(), |s, q| s + Vector3::from(*q));
+        sum / p.len() as f64
+    };
+    let (c_from, c_to) = (centroid(from), centroid(to));
+    let mut cov = Matrix3::zeros();
+    for (p, q) in from.iter().zip(to) {
+        cov += (Vector3::from(*p) - c_from) * (Vector3::from(*q) - c_to).transpose();
+    }
+    let svd = cov.svd(true, true);
+    let (Some(u), Some(v_t)) = (svd.u, svd.v_t) else {
+        return from.to_vec();
+    };
+    let mut v = v_t.transpose();
+    if (v * u.transpose()).determinant() < 0.0 {
+        v.column_mut(2).neg_mut();
+    }
+    let rotation = v * u.transpose();
+    from.iter()
+        .map(|p| (rotation * (Vector3::from(*p) - c_from) + c_to).into())
+        .collect()
 }
 
 #[cfg(test)]
@@ -290,5 +376,85 @@ mod tests {
         let mut list = NeighbourList::default();
         list.build(&simbox, &x, 1.0, 0.2, Some(&bonds));
         assert_eq!(listed(&list, 3), vec![(0, 2), (1, 2)]);
+    }
+
+    fn closed_grain(seed: u64) -> (SimBox, Vec<[f64; 3]>) {
+        let simbox = SimBox {
+            lo: [-20.0; 3],
+            lengths: [40.0; 3],
+            tilt: [0.0; 3],
+            periodic: [false; 3],
+        };
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
+        let x = (0..200)
+            .map(|_| [0.0; 3].map(|_: f64| rng.gen_range(-3.0..3.0)))
+            .collect();
+        (simbox, x)
+    }
+
+    fn turned(x: &[[f64; 3]], angle: f64, shift: [f64; 3]) -> Vec<[f64; 3]> {
+        let (s, c) = angle.sin_cos();
+        x.iter()
+            .map(|p| {
+                [
+                    c * p[0] - s * p[1] + shift[0],
+                    s * p[0] + c * p[1] + shift[1],
+                    p[2] + shift[2],
+                ]
+            })
+            .collect()
+    }
+
+    #[test]
+    fn rigid_motion_in_a_closed_box_keeps_the_list_and_it_stays_exact() {
+        let (simbox, x) = closed_grain(3);
+        let mut list = NeighbourList::default();
+        list.build(&simbox, &x, 1.0, 0.3, None);
+        // A turn of 0.2 rad moves points 3 d out by 0.6 d, far beyond the
+        // skin; done in steps, the reference re-anchors whenever the plain
+        // test fails (about every other step).
+        let mut current = x.clone();
+        for step in 1..=10 {
+            current = turned(&x, 0.02 * step as f64, [0.05 * step as f64, 0.0, -0.1]);
+            assert!(!list.needs_rebuild(&simbox, &current, 0.3), "step {step}");
+        }
+        assert_eq!(list.builds, 1);
+        assert!(list.reanchors >= 4, "{} re-anchorings", list.reanchors);
+        // Every pair within the cutoff is still listed.
+        let listed_now = listed(&list, x.len());
+        for pair in brute_force(&simbox, &current, 1.0) {
+            assert!(listed_now.binary_search(&pair).is_ok(), "{pair:?} lost");
+        }
+        // Without the rigid fit the same motion forces a rebuild.
+        let mut plain = NeighbourList {
+            follow_rigid_motion: false,
+            ..NeighbourList::default()
+        };
+        plain.build(&simbox, &x, 1.0, 0.3, None);
+        assert!(plain.needs_rebuild(&simbox, &turned(&x, 0.1, [0.0; 3]), 0.3));
+    }
+
+    #[test]
+    fn deformation_beyond_half_the_skin_still_rebuilds() {
+        let (simbox, x) = closed_grain(4);
+        let mut list = NeighbourList::default();
+        list.build(&simbox, &x, 1.0, 0.3, None);
+        let mut moved = turned(&x, 0.3, [1.0, 0.0, 0.0]);
+        moved[17][2] += 0.16;
+        assert!(list.needs_rebuild(&simbox, &moved, 0.3));
+        moved[17][2] -= 0.02;
+        assert!(!list.needs_rebuild(&simbox, &moved, 0.3));
+    }
+
+    #[test]
+    fn periodic_boxes_do_not_discount_rotation() {
+        let (mut simbox, x) = closed_grain(5);
+        simbox.periodic = [true, true, false];
+        let x: Vec<[f64; 3]> = x.iter().map(|p| [p[0] + 20.0, p[1] + 20.0, p[2]]).collect();
+        let mut list = NeighbourList::default();
+        list.build(&simbox, &x, 1.0, 0.3, None);
+        let centre: Vec<[f64; 3]> = x.iter().map(|p| [p[0] - 20.0, p[1] - 20.0, p[2]]).collect();
+        let back: Vec<[f64; 3]> = turned(&centre, 0.05, [20.0, 20.0, 0.0]);
+        assert!(list.needs_rebuild(&simbox, &back, 0.3));
     }
 }

@@ -59,6 +59,9 @@ pub struct StepReport {
     /// Whether energies and virials were summed in this evaluation; when
     /// not, `interactions` is zero and the pressure tensor is not available.
     pub tallied: bool,
+    /// `(wall, particle)`: the first particle found on or behind the plane
+    /// of a flat wall.
+    pub through_wall: Option<(usize, usize)>,
 }
 
 /// Particles, box and model, with the state of a run.
@@ -208,11 +211,14 @@ impl System {
             tallied: tally,
             ..StepReport::default()
         };
-        for wall in &drivers.walls {
-            let (force, energy) = wall.apply(elapsed, &p.x, &mut p.f);
-            report.wall_forces.push(force);
+        for (w, wall) in drivers.walls.iter().enumerate() {
+            let contact = wall.apply(elapsed, &p.x, &mut p.f);
+            report.wall_forces.push(contact.force);
             report.wall_positions.push(wall.position_at(elapsed));
-            report.external_energy += energy;
+            report.external_energy += contact.energy;
+            if let (Some(particle), None) = (contact.through, report.through_wall) {
+                report.through_wall = Some((w, particle));
+            }
         }
         if let Some(sphere) = &drivers.sphere_wall {
             let (force, energy) = sphere.apply(elapsed, &p.x, &mut p.f);
@@ -251,11 +257,12 @@ impl System {
         self.update_neighbours(false);
         let elapsed = stage_step as f64 * dt;
         self.compute_forces(drivers, elapsed, drivers.tally_at(stage_step));
+        self.step += 1;
+        self.check_walls()?;
         {
             let _t = self.timers.start(Stage::Integrate);
             self.integrator.final_half(&mut self.particles, dt);
         }
-        self.step += 1;
         // Stage start plus steps times dt, not a running sum: no round-off
         // grows with the step count, and LAMMPS's harness computes the same.
         self.time = self.stage_start_time + stage_step as f64 * dt;
@@ -275,6 +282,19 @@ impl System {
             self.remap_into(new_box);
         }
         Ok(())
+    }
+
+    /// The verdict of the last force evaluation's flat walls: an error if
+    /// a particle was on or behind a wall's plane.
+    pub fn check_walls(&self) -> Result<(), EngineError> {
+        match self.report.through_wall {
+            Some((wall, particle)) => Err(EngineError::ThroughWall {
+                step: self.step,
+                wall,
+                particle,
+            }),
+            None => Ok(()),
+        }
     }
 
     /// Changes the box and maps positions affinely into it.

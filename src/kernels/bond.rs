@@ -5,6 +5,7 @@
 //! atoms apart. The multibody term has no potential; the reported energy is
 //! the spring proxy `k (r - r0)^2 / 2`.
 
+use super::isa::Isa;
 use super::tally::{apply_pair_force, Ownership, Tally};
 use super::{dot, sub, Separation};
 
@@ -61,11 +62,8 @@ pub fn dilation(vi: f64, vj: f64, v0i: f64, v0j: f64) -> f64 {
 #[inline(always)]
 pub fn cube_root(q: f64) -> f64 {
     let x = q - 1.0;
-    if x.abs() <= 1.0 / 32.0 {
-        // The common case (volume strains of a few percent): degree 9,
-        // truncation error below 1.1e-17, no division at all.
-        let x4 = (x * x) * (x * x);
-        return series_to_degree_7(x) + (x4 * x4) * (CBRT_SERIES[8] + CBRT_SERIES[9] * x);
+    if x.abs() <= CLOSE_TO_ONE {
+        return cube_root_near_one(x);
     }
     let y = if x.abs() <= 0.25 {
         series_to_degree_7(x)
@@ -79,6 +77,18 @@ pub fn cube_root(q: f64) -> f64 {
         return q.cbrt();
     };
     halley_cbrt_step(y, q)
+}
+
+/// `|q - 1|` up to which [`cube_root_near_one`] is exact to round-off.
+const CLOSE_TO_ONE: f64 = 1.0 / 32.0;
+
+/// `(1 + x)^(1/3)` for `|x| <= 1/32`, the common case (volume strains of a
+/// few percent): degree 9, truncation error below 1.1e-17, no division and
+/// no branch.
+#[inline(always)]
+fn cube_root_near_one(x: f64) -> f64 {
+    let x4 = (x * x) * (x * x);
+    series_to_degree_7(x) + (x4 * x4) * (CBRT_SERIES[8] + CBRT_SERIES[9] * x)
 }
 
 /// Binomial coefficients C(1/3, n), n = 0 .. 9: the series of `(1 + x)^(1/3)`.
@@ -138,43 +148,137 @@ pub struct BondInputs<'a> {
 
 /// Adds the bond forces of `inputs.bonds` to `f` and returns energy and virial.
 ///
-/// The choice of terms (multibody, damping) is made once here, not per bond:
-/// each combination is its own monomorphised loop.
+/// Runs on the widest instruction set this processor has ([`Isa::detect`]);
+/// every instruction set gives the same result bit for bit.
 pub fn bond_forces<S: Separation>(
     sep: &S,
     inputs: &BondInputs,
     own: Ownership,
     f: &mut [[f64; 3]],
 ) -> Tally {
-    let flags = (inputs.volumes.is_some(), inputs.v.is_some(), ());
-    match (flags, inputs.tally) {
-        ((true, true, _), true) => bond_loop::<S, true, true, true>(sep, inputs, own, f),
-        ((true, false, _), true) => bond_loop::<S, true, false, true>(sep, inputs, own, f),
-        ((false, true, _), true) => bond_loop::<S, false, true, true>(sep, inputs, own, f),
-        ((false, false, _), true) => bond_loop::<S, false, false, true>(sep, inputs, own, f),
-        ((true, true, _), false) => bond_loop::<S, true, true, false>(sep, inputs, own, f),
-        ((true, false, _), false) => bond_loop::<S, true, false, false>(sep, inputs, own, f),
-        ((false, true, _), false) => bond_loop::<S, false, true, false>(sep, inputs, own, f),
-        ((false, false, _), false) => bond_loop::<S, false, false, false>(sep, inputs, own, f),
-    }
+    bond_forces_on(Isa::detect(), sep, inputs, own, f)
 }
 
-#[inline(always)]
-fn bond_loop<S: Separation, const MULTIBODY: bool, const DAMPED: bool, const TALLY: bool>(
+/// [`bond_forces`] compiled for `isa` (the portable build when this
+/// processor lacks it): for benchmarks and for the test that the builds
+/// agree.
+pub fn bond_forces_on<S: Separation>(
+    isa: Isa,
     sep: &S,
     inputs: &BondInputs,
     own: Ownership,
     f: &mut [[f64; 3]],
 ) -> Tally {
+    #[cfg(target_arch = "x86_64")]
+    if isa == Isa::Avx2 && Isa::Avx2.available() {
+        // SAFETY: the processor has AVX2 and FMA (checked just above).
+        return unsafe { bond_forces_avx2(sep, inputs, own, f) };
+    }
+    let _ = isa;
+    bond_terms(sep, inputs, own, f)
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,fma")]
+unsafe fn bond_forces_avx2<S: Separation>(
+    sep: &S,
+    inputs: &BondInputs,
+    own: Ownership,
+    f: &mut [[f64; 3]],
+) -> Tally {
+    bond_terms(sep, inputs, own, f)
+}
+
+/// The choice of terms (multibody, damping, tally, ownership) is made once
+/// here, not per bond: each combination is its own monomorphised loop.
+#[inline(always)]
+fn bond_terms<S: Separation>(
+    sep: &S,
+    inputs: &BondInputs,
+    own: Ownership,
+    f: &mut [[f64; 3]],
+) -> Tally {
+    let flags = (inputs.volumes.is_some(), inputs.v.is_some(), inputs.tally);
     if own.newton {
-        bond_loop_owned::<S, MULTIBODY, DAMPED, TALLY, true>(sep, inputs, own, f)
+        match flags {
+            (true, true, true) => bond_blocks::<S, true, true, true, true>(sep, inputs, own, f),
+            (true, false, true) => bond_blocks::<S, true, false, true, true>(sep, inputs, own, f),
+            (false, true, true) => bond_blocks::<S, false, true, true, true>(sep, inputs, own, f),
+            (false, false, true) => bond_blocks::<S, false, false, true, true>(sep, inputs, own, f),
+            (true, true, false) => bond_blocks::<S, true, true, false, true>(sep, inputs, own, f),
+            (true, false, false) => bond_blocks::<S, true, false, false, true>(sep, inputs, own, f),
+            (false, true, false) => bond_blocks::<S, false, true, false, true>(sep, inputs, own, f),
+            (false, false, false) => {
+                bond_blocks::<S, false, false, false, true>(sep, inputs, own, f)
+            }
+        }
     } else {
-        bond_loop_owned::<S, MULTIBODY, DAMPED, TALLY, false>(sep, inputs, own, f)
+        // Plugin runs with `newton_bond off`: always tallied, rarely hot.
+        match flags {
+            (true, true, _) => bond_blocks::<S, true, true, true, false>(sep, inputs, own, f),
+            (true, false, _) => bond_blocks::<S, true, false, true, false>(sep, inputs, own, f),
+            (false, true, _) => bond_blocks::<S, false, true, true, false>(sep, inputs, own, f),
+            (false, false, _) => bond_blocks::<S, false, false, true, false>(sep, inputs, own, f),
+        }
     }
 }
 
+/// Bonds computed together. The loop over a block's bonds runs in three
+/// passes: gather (scalar loads by index into per-lane arrays), arithmetic
+/// (lane by lane over plain arrays, with no loads by index and no branch,
+/// so the compiler uses vector instructions and many bonds' square roots
+/// and divisions are in flight at once), scatter (scalar). The arithmetic
+/// is the same expression per bond as a scalar loop would evaluate, in
+/// the same order, so results do not depend on the vector width.
+const LANES: usize = 8;
+
+/// One block's bonds, lane by lane.
+struct BondBlock {
+    i: [usize; LANES],
+    j: [usize; LANES],
+    dx: [f64; LANES],
+    dy: [f64; LANES],
+    dz: [f64; LANES],
+    r0: [f64; LANES],
+    k: [f64; LANES],
+    a: [f64; LANES],
+    gamma: [f64; LANES],
+    /// `V_i + V_j` and `V0_i + V0_j`.
+    vsum: [f64; LANES],
+    v0sum: [f64; LANES],
+    /// `n . dv` times r (the dot product of the separation and the
+    /// velocity difference).
+    del_dot_dv: [f64; LANES],
+    /// Outputs: force over distance, and the spring energy proxy.
+    fpair: [f64; LANES],
+    energy: [f64; LANES],
+}
+
+impl BondBlock {
+    fn new() -> Self {
+        Self {
+            i: [0; LANES],
+            j: [0; LANES],
+            dx: [0.0; LANES],
+            dy: [0.0; LANES],
+            dz: [0.0; LANES],
+            r0: [0.0; LANES],
+            k: [0.0; LANES],
+            a: [0.0; LANES],
+            gamma: [0.0; LANES],
+            vsum: [0.0; LANES],
+            v0sum: [0.0; LANES],
+            del_dot_dv: [0.0; LANES],
+            fpair: [0.0; LANES],
+            energy: [0.0; LANES],
+        }
+    }
+}
+
+// Lane loops index several per-lane arrays at once; that form vectorises.
+#[allow(clippy::needless_range_loop)]
 #[inline(always)]
-fn bond_loop_owned<
+fn bond_blocks<
     S: Separation,
     const MULTIBODY: bool,
     const DAMPED: bool,
@@ -190,33 +294,98 @@ fn bond_loop_owned<
     let (vol, vol0) = inputs.volumes.unwrap_or((&[], &[]));
     let v = inputs.v.unwrap_or(&[]);
     let mut tally = Tally::default();
-    for (bond, &r0) in inputs.bonds.iter().zip(inputs.r0) {
-        let (i, j) = (bond.i as usize, bond.j as usize);
-        let c = &inputs.coeffs[(bond.ty - 1) as usize];
-        let del = sep.delta(&x[i], &x[j]);
-        let rsq = dot(&del, &del);
-        let r = rsq.sqrt();
-        let rinv = 1.0 / r;
-        let dstretch = r - r0;
-        let mut fmag = -c.k * dstretch;
+    let mut b = BondBlock::new();
+    let n = inputs.bonds.len().min(inputs.r0.len());
+    let mut start = 0;
+    while start < n {
+        let lanes = LANES.min(n - start);
+        // Gather. Unused lanes of the last block keep a harmless bond
+        // (unit length and ratios, no stiffness) and are not scattered.
+        for l in 0..LANES {
+            if l >= lanes {
+                b.dx[l] = 1.0;
+                b.dy[l] = 0.0;
+                b.dz[l] = 0.0;
+                b.r0[l] = 1.0;
+                b.k[l] = 0.0;
+                b.a[l] = 0.0;
+                b.gamma[l] = 0.0;
+                b.vsum[l] = 1.0;
+                b.v0sum[l] = 1.0;
+                b.del_dot_dv[l] = 0.0;
+                continue;
+            }
+            let bond = &inputs.bonds[start + l];
+            let (i, j) = (bond.i as usize, bond.j as usize);
+            let c = &inputs.coeffs[(bond.ty - 1) as usize];
+            let del = sep.delta(&x[i], &x[j]);
+            b.i[l] = i;
+            b.j[l] = j;
+            b.dx[l] = del[0];
+            b.dy[l] = del[1];
+            b.dz[l] = del[2];
+            b.r0[l] = inputs.r0[start + l];
+            b.k[l] = c.k;
+            b.a[l] = c.a;
+            b.gamma[l] = c.gamma;
+            if MULTIBODY {
+                b.vsum[l] = vol[i] + vol[j];
+                b.v0sum[l] = vol0[i] + vol0[j];
+            }
+            if DAMPED {
+                b.del_dot_dv[l] = dot(&del, &sub(&v[i], &v[j]));
+            }
+        }
+        // Arithmetic, lane by lane.
+        let mut far = false;
+        let mut dilation = [0.0; LANES];
         if MULTIBODY {
-            let d = dilation(vol[i], vol[j], vol0[i], vol0[j]);
-            fmag += c.a * (d - r / r0);
+            for l in 0..LANES {
+                let x = b.vsum[l] / b.v0sum[l] - 1.0;
+                far |= x.abs() > CLOSE_TO_ONE;
+                dilation[l] = cube_root_near_one(x);
+            }
+            if far {
+                for l in 0..LANES {
+                    let q = b.vsum[l] / b.v0sum[l];
+                    if (q - 1.0).abs() > CLOSE_TO_ONE {
+                        dilation[l] = cube_root(q);
+                    }
+                }
+            }
         }
-        if DAMPED {
-            let dv = sub(&v[i], &v[j]);
-            fmag -= c.gamma * dot(&del, &dv) * rinv;
+        for l in 0..LANES {
+            let rsq = b.dx[l] * b.dx[l] + b.dy[l] * b.dy[l] + b.dz[l] * b.dz[l];
+            let r = rsq.sqrt();
+            let rinv = 1.0 / r;
+            let dstretch = r - b.r0[l];
+            let mut fmag = -b.k[l] * dstretch;
+            if MULTIBODY {
+                fmag += b.a[l] * (dilation[l] - r / b.r0[l]);
+            }
+            if DAMPED {
+                fmag -= b.gamma[l] * b.del_dot_dv[l] * rinv;
+            }
+            b.fpair[l] = fmag * rinv;
+            if TALLY {
+                b.energy[l] = 0.5 * b.k[l] * dstretch * dstretch;
+            }
         }
-        let fpair = fmag * rinv;
-        let (on_i, on_j, frac) = if NEWTON {
-            (true, true, 1.0)
-        } else {
-            own.split(i, j)
-        };
-        apply_pair_force(f, i, j, on_i, on_j, &del, fpair);
-        if TALLY {
-            tally.add(frac, 0.5 * c.k * dstretch * dstretch, &del, fpair);
+        // Scatter.
+        for l in 0..lanes {
+            let (i, j) = (b.i[l], b.j[l]);
+            let del = [b.dx[l], b.dy[l], b.dz[l]];
+            let (on_i, on_j, frac) = if NEWTON {
+                (true, true, 1.0)
+            } else {
+                own.split(i, j)
+            };
+            apply_pair_force(f, i, j, on_i, on_j, &del, b.fpair[l]);
+            if TALLY {
+                tally.add(frac, b.energy[l], &del, b.fpair[l]);
+            }
         }
+        start += lanes;
     }
     tally
 }

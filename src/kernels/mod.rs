@@ -11,17 +11,20 @@
 
 mod bond;
 mod geometry;
+mod isa;
 mod pair;
 mod tally;
 mod volume;
 
 pub use bond::{
-    bond_force_magnitude, bond_forces, cube_root, dilation, BondCoeffs, BondEntry, BondInputs,
+    bond_force_magnitude, bond_forces, bond_forces_on, cube_root, dilation, BondCoeffs, BondEntry,
+    BondInputs,
 };
 pub use geometry::{Separation, Unwrapped};
+pub use isa::Isa;
 pub use pair::{pair_energy, pair_force_magnitude, pair_forces, PairCoeffs, PairInputs};
 pub use tally::{Ownership, Tally};
-pub use volume::{accumulate_reference_volumes, accumulate_volumes};
+pub use volume::{accumulate_reference_volumes, accumulate_volumes, accumulate_volumes_on};
 
 /// Bits of a LAMMPS neighbour index that carry the special-bond class.
 pub const SPECIAL_SHIFT: u32 = 30;

@@ -249,5 +249,6 @@ fn run_stage(
         wall_seconds: start.elapsed().as_secs_f64(),
         timers: Default::default(),
         neighbour_builds: 0,
+        stopped_at: None,
     })
 }

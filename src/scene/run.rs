@@ -33,6 +33,10 @@ pub struct StageOutput {
     pub timers: std::collections::BTreeMap<String, f64>,
     /// How many times the pair list was built.
     pub neighbour_builds: u64,
+    /// The step within the stage at which it failed, if it did; the rows
+    /// and checkpoints run up to it.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub stopped_at: Option<u64>,
 }
 
 impl StageOutput {
@@ -134,6 +138,15 @@ pub enum RunError {
     /// A trajectory or thermo file could not be written.
     #[error(transparent)]
     Output(#[from] TrajectoryError),
+    /// A stage stopped part of the way: the error, and what the stage had
+    /// recorded until then.
+    #[error("{error}")]
+    Stopped {
+        /// Why it stopped.
+        error: Box<RunError>,
+        /// The stage's records up to the failure (`stopped_at` set).
+        partial: Box<StageOutput>,
+    },
 }
 
 /// The open output files of a run.
@@ -309,6 +322,7 @@ pub fn run_stage(
         wall_seconds: 0.0,
         timers: Default::default(),
         neighbour_builds: 0,
+        stopped_at: None,
     };
     let dump = out_files.dump_schedule();
     let record = |sys: &System,
@@ -339,6 +353,7 @@ pub fn run_stage(
         }
         Ok(())
     };
+    sys.check_walls()?;
     record(sys, &mut out, out_files, 0)?;
     let bar = if opts.progress && spec.steps >= 1000 {
         let bar = ProgressBar::new(spec.steps);
@@ -354,19 +369,35 @@ pub fn run_stage(
     } else {
         ProgressBar::hidden()
     };
-    for k in 1..=spec.steps {
-        sys.step(&drivers, k, &stage_box)?;
-        record(sys, &mut out, out_files, k)?;
-        if k % 256 == 0 {
-            sys.check_finite()?;
-            bar.set_position(k);
+    let mut k = 0;
+    let mut steps = || -> Result<(), RunError> {
+        while k < spec.steps {
+            k += 1;
+            sys.step(&drivers, k, &stage_box)?;
+            record(sys, &mut out, out_files, k)?;
+            if k % 256 == 0 {
+                sys.check_finite()?;
+                bar.set_position(k);
+            }
         }
-    }
-    sys.check_finite()?;
+        sys.check_finite()?;
+        Ok(())
+    };
+    let result = steps();
+    bar.finish_and_clear();
     if let Some(t) = out_files.thermo() {
         t.flush()?;
     }
-    bar.finish_and_clear();
+    if let Err(error) = result {
+        // The records up to the failure are kept: a squeeze that ends
+        // early still has its curve.
+        out.wall_seconds = start.elapsed().as_secs_f64();
+        out.stopped_at = Some(k);
+        return Err(RunError::Stopped {
+            error: Box::new(error),
+            partial: Box::new(out),
+        });
+    }
     out.wall_seconds = start.elapsed().as_secs_f64();
     for s in Stage::ALL {
         let secs = (sys.timers.total(s) - timers_before.total(s)).as_secs_f64();
@@ -391,6 +422,10 @@ pub fn run_scene(
     for (i, stage) in scene.stages.iter().enumerate() {
         match run_stage(sys, stage, i, scene.seed, opts, &mut files) {
             Ok(out) => done.push(out),
+            Err(RunError::Stopped { error, partial }) => {
+                done.push(*partial);
+                return (done, Some(*error));
+            }
             Err(e) => return (done, Some(e)),
         }
     }

@@ -12,8 +12,9 @@ use crate::analysis::plot::{write_svg, Mark, Panel, PlotError, Series};
 use crate::file_error::FileError;
 use crate::scene::builders::grain::{build_grain, GrainKind, GrainParams, GrainSummary};
 use crate::scene::protocols::{hertz_squeeze, rotated, uniform_rotation, SqueezeParams};
+use crate::scene::{run_native_report, RunOptions, StageOutput};
 use crate::scene::{ForceField, Scene};
-use crate::verify::{run_native, HarnessError, LammpsLauncher};
+use crate::verify::{HarnessError, LammpsLauncher};
 use rand::{Rng, SeedableRng};
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
@@ -74,6 +75,9 @@ pub enum SqueezeEngine {
     Native,
     /// LAMMPS with this project's styles (child process).
     Lammps,
+    /// Both: the curve is the native one, and each squeeze records how far
+    /// LAMMPS's force curve is from it.
+    Both,
 }
 
 /// Options of the study.
@@ -189,6 +193,78 @@ pub struct Squeeze {
     pub deviation: Option<HertzDeviation>,
     /// Wall-clock seconds of the squeeze.
     pub seconds: f64,
+    /// With both engines: the largest difference between their wall
+    /// forces, relative to the largest force, and LAMMPS's wall-clock
+    /// seconds.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub engines: Option<EngineAgreement>,
+    /// Why the squeeze stopped before the overlap asked for, if it did;
+    /// the curve runs up to there.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub stopped: Option<String>,
+}
+
+/// How closely LAMMPS repeats the native squeeze.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct EngineAgreement {
+    /// Largest |f_native - f_lammps| over the records, over the largest |f|
+    /// (none when LAMMPS failed).
+    pub force_deviation: Option<f64>,
+    /// Largest |gap_native - gap_lammps| (d): the walls are prescribed.
+    pub gap_deviation: Option<f64>,
+    /// LAMMPS's wall-clock seconds.
+    pub lammps_seconds: f64,
+    /// LAMMPS's error, when it stopped.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub lammps_error: Option<String>,
+}
+
+/// The squeeze's wall gap and mean wall force per record.
+fn gap_and_force(stage: &StageOutput) -> (Vec<f64>, Vec<f64>) {
+    let col = |name: &str| stage.column(name).unwrap_or_default();
+    let force = col("wall0_force")
+        .iter()
+        .zip(col("wall1_force"))
+        .map(|(a, b)| 0.5 * (a + b))
+        .collect();
+    let gap = col("wall0_position")
+        .iter()
+        .zip(col("wall1_position"))
+        .map(|(a, b)| b - a)
+        .collect();
+    (gap, force)
+}
+
+/// Squeezes natively. A squeeze that stops part of the way (a particle
+/// pushed onto a wall's plane) keeps its records up to there, with the
+/// reason.
+fn squeeze_native(
+    scene: &Scene,
+    tag: &str,
+    threads: usize,
+) -> Result<(StageOutput, Option<String>), HertzError> {
+    crate::scene::validate(scene).map_err(|cause| HarnessError::Scene {
+        scene: tag.into(),
+        cause,
+    })?;
+    let (report, _) = run_native_report(scene, Path::new(tag), 0, &RunOptions::quiet(threads));
+    match (report.stages.into_iter().next(), report.error) {
+        (Some(stage), error) if stage.rows.len() > 1 => Ok((stage, error)),
+        (_, error) => Err(HertzError::Run(HarnessError::Native {
+            scene: tag.into(),
+            message: error.unwrap_or_else(|| "the squeeze recorded nothing".into()),
+        })),
+    }
+}
+
+fn largest_difference(a: &[f64], b: &[f64]) -> f64 {
+    if a.len() != b.len() {
+        return f64::INFINITY;
+    }
+    a.iter()
+        .zip(b)
+        .map(|(x, y)| (x - y).abs())
+        .fold(0.0, f64::max)
 }
 
 /// The ensemble on a common overlap grid.
@@ -232,7 +308,19 @@ pub struct HertzReport {
 /// Window of the deviation from Hertz.
 pub const HERTZ_WINDOW: (f64, f64) = (0.02, 0.25);
 
-fn grains(opts: &HertzOptions) -> Result<Vec<(u64, Scene, Option<GrainSummary>)>, HertzError> {
+/// A grain to squeeze: its seed (also the seed of its rotations), the
+/// scene, and the builder's summary when it was built here.
+#[derive(Clone, Debug)]
+pub struct Grain {
+    /// Seed.
+    pub seed: u64,
+    /// The grain (positions, bonds; no stages).
+    pub scene: Scene,
+    /// The builder's summary.
+    pub summary: Option<GrainSummary>,
+}
+
+fn grains(opts: &HertzOptions) -> Result<Vec<Grain>, HertzError> {
     match &opts.source {
         GrainSource::Build {
             kind,
@@ -246,7 +334,11 @@ fn grains(opts: &HertzOptions) -> Result<Vec<(u64, Scene, Option<GrainSummary>)>
                 p.time_scale = *time_scale;
                 let (scene, summary) = build_grain(&p, opts.threads, false)
                     .map_err(|e| HertzError::Grain(e.to_string()))?;
-                Ok((seed, scene, Some(summary)))
+                Ok(Grain {
+                    seed,
+                    scene,
+                    summary: Some(summary),
+                })
             })
             .collect(),
         GrainSource::File { path, .. } => {
@@ -262,7 +354,11 @@ fn grains(opts: &HertzOptions) -> Result<Vec<(u64, Scene, Option<GrainSummary>)>
                 )
                 .map_err(|e| HertzError::Grain(e.to_string()))?
             };
-            Ok(vec![(opts.seeds[0], scene, None)])
+            Ok(vec![Grain {
+                seed: opts.seeds[0],
+                scene,
+                summary: None,
+            }])
         }
     }
 }
@@ -277,13 +373,32 @@ pub fn run_hertz(
 ) -> Result<HertzReport, HertzError> {
     opts.validate()?;
     let start = std::time::Instant::now();
+    let mut report = squeeze_grains(opts, grains(opts)?, launcher, progress)?;
+    report.wall_seconds = start.elapsed().as_secs_f64();
+    write_report(&report, out)?;
+    Ok(report)
+}
+
+/// Squeezes `grains` (every rotation the options ask for) in the chosen
+/// engine. The options must be valid; `wall_seconds` counts the squeezes.
+pub fn squeeze_grains(
+    opts: &HertzOptions,
+    grains: Vec<Grain>,
+    launcher: &LammpsLauncher,
+    progress: &mut dyn FnMut(&Squeeze),
+) -> Result<HertzReport, HertzError> {
+    let start = std::time::Instant::now();
     let radius = opts.radius();
     let e_eff = effective_modulus(opts.moduli.k, opts.moduli.nu);
     let mut params = SqueezeParams::paper(radius, opts.max_overlap);
     params.records = opts.records;
     let mut squeezes = Vec::new();
-    for (seed, grain, summary) in grains(opts)? {
-        let mut grain = grain;
+    for Grain {
+        seed,
+        scene: mut grain,
+        summary,
+    } in grains
+    {
         grain.force_field = ForceField::paper(opts.a_b);
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed ^ 0x4E27_0000);
         let draws: Vec<Option<[f64; 3]>> = if opts.rotations == 0 {
@@ -301,22 +416,45 @@ pub fn run_hertz(
             let scene = hertz_squeeze(&g, &params);
             let tag = format!("seed{seed}-rot{r}");
             let t = std::time::Instant::now();
-            let run = match opts.engine {
-                SqueezeEngine::Native => run_native(&scene, &tag, opts.threads)?,
-                SqueezeEngine::Lammps => launcher.run(&scene, &tag, 1, true)?,
+            let (stage, stopped) = match opts.engine {
+                SqueezeEngine::Native | SqueezeEngine::Both => {
+                    squeeze_native(&scene, &tag, opts.threads)?
+                }
+                SqueezeEngine::Lammps => {
+                    let mut run = launcher.run(&scene, &tag, 1, true)?;
+                    (run.stages.remove(0), None)
+                }
             };
-            let stage = &run.stages[0];
-            let col = |name: &str| stage.column(name).unwrap_or_default();
-            let force: Vec<f64> = col("wall0_force")
-                .iter()
-                .zip(col("wall1_force"))
-                .map(|(a, b)| 0.5 * (a + b))
-                .collect();
-            let gap: Vec<f64> = col("wall0_position")
-                .iter()
-                .zip(col("wall1_position"))
-                .map(|(a, b)| b - a)
-                .collect();
+            let seconds = t.elapsed().as_secs_f64();
+            let (gap, force) = gap_and_force(&stage);
+            let engines = if opts.engine == SqueezeEngine::Both {
+                let t = std::time::Instant::now();
+                let lammps = launcher.run(&scene, &tag, 1, true);
+                let lammps_seconds = t.elapsed().as_secs_f64();
+                Some(match lammps {
+                    Ok(run) => {
+                        let (gap_l, force_l) = gap_and_force(&run.stages[0]);
+                        let scale = force.iter().fold(0.0f64, |m, f| m.max(f.abs()));
+                        EngineAgreement {
+                            force_deviation: Some(largest_difference(&force, &force_l) / scale),
+                            gap_deviation: Some(largest_difference(&gap, &gap_l)),
+                            lammps_seconds,
+                            lammps_error: None,
+                        }
+                    }
+                    // Only a native squeeze that stopped too may see LAMMPS
+                    // stop: otherwise the engines disagree.
+                    Err(e) if stopped.is_some() => EngineAgreement {
+                        force_deviation: None,
+                        gap_deviation: None,
+                        lammps_seconds,
+                        lammps_error: Some(e.to_string()),
+                    },
+                    Err(e) => return Err(e.into()),
+                })
+            } else {
+                None
+            };
             let curve = squeeze_curve(&gap, &force, radius, e_eff);
             let deviation = hertz_deviation(
                 &curve.overlap_over_r,
@@ -332,14 +470,16 @@ pub fn run_hertz(
                 particles: g.particles.positions.len(),
                 curve,
                 deviation,
-                seconds: t.elapsed().as_secs_f64(),
+                seconds,
+                engines,
+                stopped,
             };
             progress(&s);
             squeezes.push(s);
         }
     }
     let ensemble = ensemble(&squeezes, opts.max_overlap);
-    let report = HertzReport {
+    Ok(HertzReport {
         program: "bpm hertz".into(),
         version: crate::VERSION.into(),
         options: opts.clone(),
@@ -349,9 +489,7 @@ pub fn run_hertz(
         squeezes,
         ensemble,
         wall_seconds: start.elapsed().as_secs_f64(),
-    };
-    write_report(&report, out)?;
-    Ok(report)
+    })
 }
 
 /// Linear interpolation of the curve at `x` (None outside it).
@@ -404,7 +542,8 @@ fn ensemble(squeezes: &[Squeeze], max_overlap: f64) -> Ensemble {
     }
 }
 
-fn write_report(report: &HertzReport, out: &Path) -> Result<(), HertzError> {
+/// Writes `hertz.json` and `hertz.svg` into `out`.
+pub fn write_report(report: &HertzReport, out: &Path) -> Result<(), HertzError> {
     std::fs::create_dir_all(out).map_err(FileError::on("creating", out))?;
     let json = out.join("hertz.json");
     let text = serde_json::to_string_pretty(report)

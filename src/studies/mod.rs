@@ -15,4 +15,5 @@
 pub mod bench;
 pub mod calibration;
 pub mod hertz;
+pub mod hertz_sweep;
 pub mod upstream;

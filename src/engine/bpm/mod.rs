@@ -272,7 +272,7 @@ impl BpmModel {
             })
         };
         let pair_tally = match (self.terms.pairs, self.pair) {
-            (true, Some(p)) => {
+            (true, Some(p)) if !neighbours.is_empty() => {
                 let _t = timers.start(Stage::Pairs);
                 let coeffs = [p];
                 let inputs = PairInputs {
