@@ -387,3 +387,57 @@ fn bond_split_into_interior_and_boundary_matches_minimum_image_after_wraps() {
         );
     }
 }
+
+/// Copies of a periodic solid side by side are the same solid: every bond
+/// keeps its length across the new periodic faces, every particle its bond
+/// count, and under the same strain the stress is the same.
+#[test]
+fn a_replicated_solid_has_the_same_bonds_and_stress() {
+    use bpm::kernels::Separation;
+    use bpm::scene::builders::replicate::replicate;
+    let base = solid_with(ForceField::paper(-0.5), vec![]);
+    let copies = [2, 3, 1];
+    let big = replicate(&base, copies).unwrap();
+    let (n, m) = (base.particles.positions.len(), base.bonds.pairs.len());
+    assert_eq!(big.particles.positions.len(), 6 * n);
+    assert_eq!(big.bonds.pairs.len(), 6 * m);
+    let r0 = big.bonds.r0.as_ref().unwrap();
+    let big_box = bpm::scene::validate::simbox_of(&big);
+    let x = &big.particles.positions;
+    for (k, &[i, j]) in big.bonds.pairs.iter().enumerate() {
+        let r = big_box.distance(&x[i], &x[j]);
+        assert!(
+            (r - r0[k]).abs() < 1e-12,
+            "bond {k}: {r} against r0 {}",
+            r0[k]
+        );
+    }
+    let mut degree = vec![0usize; 6 * n];
+    for &[i, j] in &big.bonds.pairs {
+        degree[i] += 1;
+        degree[j] += 1;
+    }
+    for (i, d) in degree.iter().enumerate() {
+        assert_eq!(*d, degree[i % n], "particle {i}");
+    }
+    let strained_pressure = |scene: &Scene| {
+        let mut sys = build_system(scene, 1);
+        let mut b = sys.simbox.clone();
+        b.resize_about_centre(b.lengths.map(|l| l * 0.995), [0.0; 3]);
+        sys.remap_into(b);
+        sys.setup(&bpm::engine::StageDrivers {
+            dt: 0.1,
+            ..Default::default()
+        });
+        sys.pressure_tensor()
+    };
+    let (p1, p6) = (strained_pressure(&base), strained_pressure(&big));
+    assert!(p1[0] > 1e-3, "the strain loads the solid: {p1:?}");
+    for k in 0..6 {
+        assert!(
+            (p1[k] - p6[k]).abs() < 1e-12 * p1[0].abs(),
+            "{p1:?} against {p6:?}"
+        );
+    }
+    assert!(replicate(&base, [0, 1, 1]).is_err());
+}

@@ -295,21 +295,27 @@ fn bond_blocks<
     let v = inputs.v.unwrap_or(&[]);
     let mut tally = Tally::default();
     let mut b = BondBlock::new();
+    // One bond type (the usual case): its coefficients fill every lane once
+    // here instead of being looked up bond by bond.
+    let single_type = inputs.coeffs.len() == 1;
+    if let [c] = inputs.coeffs {
+        b.k = [c.k; LANES];
+        b.a = [c.a; LANES];
+        b.gamma = [c.gamma; LANES];
+    }
     let n = inputs.bonds.len().min(inputs.r0.len());
     let mut start = 0;
     while start < n {
         let lanes = LANES.min(n - start);
-        // Gather. Unused lanes of the last block keep a harmless bond
-        // (unit length and ratios, no stiffness) and are not scattered.
+        // Gather. Unused lanes of the last block keep a harmless bond (unit
+        // length, unit volume ratio, no velocity: zero force, finite
+        // arithmetic) and are not scattered.
         for l in 0..LANES {
             if l >= lanes {
                 b.dx[l] = 1.0;
                 b.dy[l] = 0.0;
                 b.dz[l] = 0.0;
                 b.r0[l] = 1.0;
-                b.k[l] = 0.0;
-                b.a[l] = 0.0;
-                b.gamma[l] = 0.0;
                 b.vsum[l] = 1.0;
                 b.v0sum[l] = 1.0;
                 b.del_dot_dv[l] = 0.0;
@@ -317,7 +323,6 @@ fn bond_blocks<
             }
             let bond = &inputs.bonds[start + l];
             let (i, j) = (bond.i as usize, bond.j as usize);
-            let c = &inputs.coeffs[(bond.ty - 1) as usize];
             let del = sep.delta(&x[i], &x[j]);
             b.i[l] = i;
             b.j[l] = j;
@@ -325,9 +330,12 @@ fn bond_blocks<
             b.dy[l] = del[1];
             b.dz[l] = del[2];
             b.r0[l] = inputs.r0[start + l];
-            b.k[l] = c.k;
-            b.a[l] = c.a;
-            b.gamma[l] = c.gamma;
+            if !single_type {
+                let c = &inputs.coeffs[(bond.ty - 1) as usize];
+                b.k[l] = c.k;
+                b.a[l] = c.a;
+                b.gamma[l] = c.gamma;
+            }
             if MULTIBODY {
                 b.vsum[l] = vol[i] + vol[j];
                 b.v0sum[l] = vol0[i] + vol0[j];

@@ -2,6 +2,7 @@
 
 pub mod bulk;
 pub mod grain;
+pub mod replicate;
 
 use crate::engine::System;
 use crate::scene::load::build_system;
