@@ -27,6 +27,9 @@ pub enum BenchError {
     /// LAMMPS's timing breakdown lacks a line.
     #[error("{0}")]
     Timing(String),
+    /// A bad option (the message names it).
+    #[error("{0}")]
+    Options(String),
     /// A file or folder could not be created, written or read.
     #[error(transparent)]
     File(#[from] FileError),
@@ -281,6 +284,12 @@ pub fn run_bench(
     output: Option<&Path>,
     log: &mut dyn FnMut(&str),
 ) -> Result<Bench, BenchError> {
+    if opts.replicas.is_empty() || opts.replicas.contains(&0) {
+        return Err(BenchError::Options(format!(
+            "--replicas needs copies per side of at least 1, got {:?}",
+            opts.replicas
+        )));
+    }
     let solid = bench_solid(opts.size, opts.seed, threads)?;
     let mut cases = Vec::new();
     for &k in &opts.replicas {

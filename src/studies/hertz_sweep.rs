@@ -95,6 +95,11 @@ pub fn run_hertz_sweep(
             "--radii and --a-b need at least one value each".into(),
         ));
     }
+    if let Some(r) = opts.radii.iter().find(|r| !(r.is_finite() && **r >= 1.5)) {
+        return Err(HertzError::Options(format!(
+            "--radii must all be at least 1.5 (d), got {r}"
+        )));
+    }
     let start = std::time::Instant::now();
     let grains_dir = out.join("grains");
     std::fs::create_dir_all(&grains_dir).map_err(FileError::on("creating", &grains_dir))?;
