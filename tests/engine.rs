@@ -285,6 +285,10 @@ fn an_unstable_run_stops_with_an_error_and_keeps_finished_stages() {
         .stopped_at
         .expect("the failed stage says where it stopped");
     assert!((1..2000).contains(&stopped), "stopped at {stopped}");
+    assert!(
+        out[1].rows.iter().flatten().all(|v| v.is_finite()),
+        "the kept records are the finite ones"
+    );
     let msg = err.expect("dt = 50 must blow up").to_string();
     assert!(msg.contains("unstable"), "{msg}");
 }

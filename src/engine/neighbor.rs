@@ -131,6 +131,9 @@ impl NeighbourList {
             return true;
         }
         let moved = rigid_image(&self.x_at_build, x);
+        if !moved.iter().flatten().all(|c| c.is_finite()) {
+            return true;
+        }
         // The reference drifts from an exact rigid image by round-off at each
         // re-anchoring; the margin keeps the test conservative.
         let margin = 1e-12 * (self.reanchors + 1) as f64;

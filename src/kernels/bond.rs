@@ -330,6 +330,7 @@ fn bond_blocks<
             b.dy[l] = del[1];
             b.dz[l] = del[2];
             b.r0[l] = inputs.r0[start + l];
+            debug_assert!(!single_type || bond.ty == 1, "bond type {}", bond.ty);
             if !single_type {
                 let c = &inputs.coeffs[(bond.ty - 1) as usize];
                 b.k[l] = c.k;

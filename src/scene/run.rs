@@ -385,25 +385,39 @@ pub fn run_stage(
     };
     let result = steps();
     bar.finish_and_clear();
-    if let Some(t) = out_files.thermo() {
-        t.flush()?;
-    }
-    if let Err(error) = result {
-        // The records up to the failure are kept: a squeeze that ends
-        // early still has its curve.
-        out.wall_seconds = start.elapsed().as_secs_f64();
-        out.stopped_at = Some(k);
-        return Err(RunError::Stopped {
-            error: Box::new(error),
-            partial: Box::new(out),
-        });
-    }
+    // A failed flush must not hide why the stage stopped.
+    let flushed = match out_files.thermo() {
+        Some(t) => t.flush(),
+        None => Ok(()),
+    };
     out.wall_seconds = start.elapsed().as_secs_f64();
     for s in Stage::ALL {
         let secs = (sys.timers.total(s) - timers_before.total(s)).as_secs_f64();
         out.timers.insert(s.name().to_string(), secs);
     }
     out.neighbour_builds = sys.neighbours.builds - builds_before;
+    if let Err(error) = result {
+        // The records up to the failure are kept (a squeeze that ends early
+        // still has its curve), except those a blow-up had already made
+        // non-finite: finiteness is checked every 256 steps.
+        let finite = |v: &[f64]| v.iter().all(|c| c.is_finite());
+        while out.rows.last().is_some_and(|r| !finite(r)) {
+            out.rows.pop();
+        }
+        while out
+            .checkpoints
+            .last()
+            .is_some_and(|c| !c.positions.iter().all(|p| finite(p)))
+        {
+            out.checkpoints.pop();
+        }
+        out.stopped_at = Some(k);
+        return Err(RunError::Stopped {
+            error: Box::new(error),
+            partial: Box::new(out),
+        });
+    }
+    flushed?;
     Ok(out)
 }
 

@@ -264,9 +264,10 @@ impl Bench {
 /// L = 14).
 pub const DEFAULT_REPLICAS: [usize; 4] = [1, 2, 4, 7];
 
-/// Bytes per particle that a step touches: positions, velocities, forces
-/// (3 x 8 each), two volume proxies, and per bond (half of about 14.8 per
-/// particle) its entry, reference length and the interior/boundary copy.
+/// Bytes a step touches at least: positions, velocities, forces (3 x 8
+/// each), two volume proxies, and per bond its entry and reference length,
+/// twice (the topology and its interior/boundary copy). The pair list and
+/// the scratch buffers of extra threads come on top.
 pub fn working_set_bytes(particles: usize, bonds: usize) -> usize {
     particles * (3 * 24 + 16) + bonds * 2 * (12 + 8)
 }

@@ -219,6 +219,10 @@ pub struct EngineAgreement {
     pub lammps_error: Option<String>,
 }
 
+/// LAMMPS's error when a particle reaches a flat wall's plane: the one
+/// way a squeeze may stop in both engines.
+const LAMMPS_WALL_ERROR: &str = "Particle on or inside fix wall surface";
+
 /// The squeeze's wall gap and mean wall force per record.
 fn gap_and_force(stage: &StageOutput) -> (Vec<f64>, Vec<f64>) {
     let col = |name: &str| stage.column(name).unwrap_or_default();
@@ -432,6 +436,15 @@ pub fn squeeze_grains(
                 let lammps = launcher.run(&scene, &tag, 1, true);
                 let lammps_seconds = t.elapsed().as_secs_f64();
                 Some(match lammps {
+                    Ok(_) if stopped.is_some() => {
+                        return Err(HertzError::Run(HarnessError::Native {
+                            scene: tag.clone(),
+                            message: format!(
+                                "the engines disagree: LAMMPS ran the squeeze through, the native engine stopped ({})",
+                                stopped.unwrap_or_default()
+                            ),
+                        }))
+                    }
                     Ok(run) => {
                         let (gap_l, force_l) = gap_and_force(&run.stages[0]);
                         let scale = force.iter().fold(0.0f64, |m, f| m.max(f.abs()));
@@ -444,12 +457,17 @@ pub fn squeeze_grains(
                     }
                     // Only a native squeeze that stopped too may see LAMMPS
                     // stop: otherwise the engines disagree.
-                    Err(e) if stopped.is_some() => EngineAgreement {
+                    Err(e)
+                        if stopped.is_some()
+                            && e.to_string().contains(LAMMPS_WALL_ERROR) =>
+                    {
+                        EngineAgreement {
                         force_deviation: None,
                         gap_deviation: None,
-                        lammps_seconds,
-                        lammps_error: Some(e.to_string()),
-                    },
+                            lammps_seconds,
+                            lammps_error: Some(e.to_string()),
+                        }
+                    }
                     Err(e) => return Err(e.into()),
                 })
             } else {

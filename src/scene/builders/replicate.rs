@@ -9,8 +9,9 @@ use crate::scene::validate::{simbox_of, SceneError};
 
 /// `scene` repeated `copies[d]` times along each axis. The box must be
 /// orthogonal and periodic in every replicated dimension. Particles come
-/// copy by copy (each copy's particles contiguous, in the original order);
-/// bonds keep their reference lengths; stages are kept.
+/// copy by copy (each copy's particles contiguous, in the original order),
+/// each copy's grains renumbered after the previous copy's; bonds keep
+/// their reference lengths; stages are kept.
 pub fn replicate(scene: &Scene, copies: [usize; 3]) -> Result<Scene, SceneError> {
     let bad = |reason: String| SceneError::Invalid {
         field: "replicate".into(),
@@ -50,7 +51,13 @@ pub fn replicate(scene: &Scene, copies: [usize; 3]) -> Result<Scene, SceneError>
         .collect();
     let times = cells.len();
     p.velocities = scene.particles.velocities.as_ref().map(|v| tiled(v, times));
-    p.grain = scene.particles.grain.as_ref().map(|v| tiled(v, times));
+    // Each copy's grains are grains of their own.
+    p.grain = scene.particles.grain.as_ref().map(|g| {
+        let per_copy = g.iter().max().map_or(0, |m| m + 1);
+        (0..times as u32)
+            .flat_map(|c| g.iter().map(move |id| id + c * per_copy))
+            .collect()
+    });
     p.radius = scene.particles.radius.as_ref().map(|v| tiled(v, times));
     p.kind = scene.particles.kind.as_ref().map(|v| tiled(v, times));
     if let Mass::PerParticle(m) = &scene.particles.mass {
