@@ -303,7 +303,9 @@ fn rigid_image(from: &[[f64; 3]], to: &[[f64; 3]]) -> Vec<[f64; 3]> {
     };
     let mut v = v_t.transpose();
     if (v * u.transpose()).determinant() < 0.0 {
-        v.column_mut(2).neg_mut();
+        // A reflection fits better than any rotation: turn the axis of the
+        // smallest singular value round.
+        v.column_mut(svd.singular_values.imin()).neg_mut();
     }
     let rotation = v * u.transpose();
     from.iter()

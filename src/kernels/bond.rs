@@ -230,7 +230,7 @@ fn bond_terms<S: Separation>(
 /// and divisions are in flight at once), scatter (scalar). The arithmetic
 /// is the same expression per bond as a scalar loop would evaluate, in
 /// the same order, so results do not depend on the vector width.
-const LANES: usize = 8;
+pub(super) const LANES: usize = 8;
 
 /// One block's bonds, lane by lane.
 struct BondBlock {

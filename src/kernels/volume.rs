@@ -6,7 +6,7 @@
 //! off, only owned atoms are written, and every rank that holds the bond
 //! computes it, so each owner still sees all of its bonds.
 
-use super::bond::BondEntry;
+use super::bond::{BondEntry, LANES};
 use super::isa::Isa;
 use super::tally::Ownership;
 use super::{dot, Separation};
@@ -56,11 +56,9 @@ unsafe fn volumes_avx2<S: Separation>(
     volume_blocks(sep, x, bonds, own, vol)
 }
 
-/// Bonds per block: separations gathered, `r^3` computed lane by lane (the
-/// square roots in vector instructions), then added to the atoms in bond
-/// order, as a scalar loop would.
-const LANES: usize = 8;
-
+/// Blocks of [`LANES`] bonds, as in the bond pass: separations gathered,
+/// `r^3` computed lane by lane (the square roots in vector instructions),
+/// then added to the atoms in bond order, as a scalar loop would.
 #[inline(always)]
 fn volume_blocks<S: Separation>(
     sep: &S,

@@ -259,11 +259,6 @@ impl Bench {
     }
 }
 
-/// Copies of the solid per side in the cost-against-size sweep of
-/// `bpm bench`: 1, 8, 64 and 343 copies (about 3e3 to 1.2e6 particles at
-/// L = 14).
-pub const DEFAULT_REPLICAS: [usize; 4] = [1, 2, 4, 7];
-
 /// Bytes a step touches at least: positions, velocities, forces (3 x 8
 /// each), two volume proxies, and per bond its entry and reference length,
 /// twice (the topology and its interior/boundary copy). The pair list and

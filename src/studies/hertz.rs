@@ -14,6 +14,7 @@ use crate::scene::builders::grain::{build_grain, GrainKind, GrainParams, GrainSu
 use crate::scene::protocols::{hertz_squeeze, rotated, uniform_rotation, SqueezeParams};
 use crate::scene::{run_native_report, RunOptions, StageOutput};
 use crate::scene::{ForceField, Scene};
+use crate::verify::single_point::nan_max;
 use crate::verify::{HarnessError, LammpsLauncher};
 use rand::{Rng, SeedableRng};
 use serde::{Deserialize, Serialize};
@@ -139,8 +140,10 @@ impl HertzOptions {
             }
             GrainSource::File { radius, .. } => *radius,
         };
-        if !(radius.is_finite() && radius >= 1.5) {
-            return bad(format!("--radius must be at least 1.5 (d), got {radius}"));
+        if !(radius.is_finite() && radius >= MIN_GRAIN_RADIUS) {
+            return bad(format!(
+                "--radius must be at least {MIN_GRAIN_RADIUS} (d), got {radius}"
+            ));
         }
         if !(self.a_b.is_finite() && self.a_b > -1.0) {
             return bad(format!(
@@ -261,6 +264,8 @@ fn squeeze_native(
     }
 }
 
+/// Largest |a - b| (NaN if any difference is NaN; infinite when the
+/// series differ in length).
 fn largest_difference(a: &[f64], b: &[f64]) -> f64 {
     if a.len() != b.len() {
         return f64::INFINITY;
@@ -268,7 +273,7 @@ fn largest_difference(a: &[f64], b: &[f64]) -> f64 {
     a.iter()
         .zip(b)
         .map(|(x, y)| (x - y).abs())
-        .fold(0.0, f64::max)
+        .fold(0.0, nan_max)
 }
 
 /// The ensemble on a common overlap grid.
@@ -308,6 +313,10 @@ pub struct HertzReport {
     /// Wall-clock seconds of the study.
     pub wall_seconds: f64,
 }
+
+/// The smallest grain radius (d) a squeeze accepts: below it a grain is a
+/// handful of particles.
+pub const MIN_GRAIN_RADIUS: f64 = 1.5;
 
 /// Window of the deviation from Hertz.
 pub const HERTZ_WINDOW: (f64, f64) = (0.02, 0.25);
@@ -437,17 +446,18 @@ pub fn squeeze_grains(
                 let lammps_seconds = t.elapsed().as_secs_f64();
                 Some(match lammps {
                     Ok(_) if stopped.is_some() => {
+                        let why = stopped.unwrap_or_default();
                         return Err(HertzError::Run(HarnessError::Native {
                             scene: tag.clone(),
                             message: format!(
-                                "the engines disagree: LAMMPS ran the squeeze through, the native engine stopped ({})",
-                                stopped.unwrap_or_default()
+                                "the engines disagree: LAMMPS ran the squeeze \
+                                 through, the native engine stopped ({why})"
                             ),
-                        }))
+                        }));
                     }
                     Ok(run) => {
                         let (gap_l, force_l) = gap_and_force(&run.stages[0]);
-                        let scale = force.iter().fold(0.0f64, |m, f| m.max(f.abs()));
+                        let scale = force.iter().map(|f| f.abs()).fold(0.0, nan_max);
                         EngineAgreement {
                             force_deviation: Some(largest_difference(&force, &force_l) / scale),
                             gap_deviation: Some(largest_difference(&gap, &gap_l)),
@@ -457,13 +467,10 @@ pub fn squeeze_grains(
                     }
                     // Only a native squeeze that stopped too may see LAMMPS
                     // stop: otherwise the engines disagree.
-                    Err(e)
-                        if stopped.is_some()
-                            && e.to_string().contains(LAMMPS_WALL_ERROR) =>
-                    {
+                    Err(e) if stopped.is_some() && e.to_string().contains(LAMMPS_WALL_ERROR) => {
                         EngineAgreement {
-                        force_deviation: None,
-                        gap_deviation: None,
+                            force_deviation: None,
+                            gap_deviation: None,
                             lammps_seconds,
                             lammps_error: Some(e.to_string()),
                         }
@@ -564,9 +571,7 @@ fn ensemble(squeezes: &[Squeeze], max_overlap: f64) -> Ensemble {
 pub fn write_report(report: &HertzReport, out: &Path) -> Result<(), HertzError> {
     std::fs::create_dir_all(out).map_err(FileError::on("creating", out))?;
     let json = out.join("hertz.json");
-    let text = serde_json::to_string_pretty(report)
-        .map_err(|e| FileError::on("writing", &json)(std::io::Error::other(e)))?;
-    std::fs::write(&json, text).map_err(FileError::on("writing", &json))?;
+    crate::verify::write_json(&json, report).map_err(FileError::on("writing", &json))?;
     let svg = out.join("hertz.svg");
     write_svg(&svg, &panels(report))?;
     Ok(())

@@ -10,7 +10,7 @@ use crate::scene::builders::grain::{build_grain, GrainKind, GrainParams, GrainSu
 use crate::scene::write_scene;
 use crate::studies::hertz::{
     squeeze_grains, write_report, Grain, GrainSource, HertzError, HertzOptions, Moduli,
-    SqueezeEngine,
+    SqueezeEngine, MIN_GRAIN_RADIUS,
 };
 use crate::verify::LammpsLauncher;
 use serde::{Deserialize, Serialize};
@@ -95,45 +95,52 @@ pub fn run_hertz_sweep(
             "--radii and --a-b need at least one value each".into(),
         ));
     }
-    if let Some(r) = opts.radii.iter().find(|r| !(r.is_finite() && **r >= 1.5)) {
+    if let Some(r) = opts
+        .radii
+        .iter()
+        .find(|r| !(r.is_finite() && **r >= MIN_GRAIN_RADIUS))
+    {
         return Err(HertzError::Options(format!(
-            "--radii must all be at least 1.5 (d), got {r}"
+            "--radii must all be at least {MIN_GRAIN_RADIUS} (d), got {r}"
         )));
+    }
+    let case_opts = |radius: f64, a_b: f64| HertzOptions {
+        source: GrainSource::Build {
+            kind: opts.kind,
+            radius,
+            time_scale: opts.time_scale,
+        },
+        seeds: vec![opts.seed],
+        a_b,
+        rotations: opts.rotations,
+        max_overlap: opts.max_overlap,
+        moduli: Moduli::paper_fits(a_b),
+        engine: opts.engine,
+        records: opts.records,
+        threads: opts.threads,
+    };
+    // Every case's options are checked before the first grain is built.
+    for &radius in &opts.radii {
+        for &a_b in &opts.a_bs {
+            case_opts(radius, a_b).validate()?;
+        }
     }
     let start = std::time::Instant::now();
     let grains_dir = out.join("grains");
     std::fs::create_dir_all(&grains_dir).map_err(FileError::on("creating", &grains_dir))?;
     let mut cases = Vec::new();
     for &radius in &opts.radii {
-        let case_opts = |a_b: f64| HertzOptions {
-            source: GrainSource::Build {
-                kind: opts.kind,
-                radius,
-                time_scale: opts.time_scale,
-            },
-            seeds: vec![opts.seed],
-            a_b,
-            rotations: opts.rotations,
-            max_overlap: opts.max_overlap,
-            moduli: Moduli::paper_fits(a_b),
-            engine: opts.engine,
-            records: opts.records,
-            threads: opts.threads,
-        };
-        for &a_b in &opts.a_bs {
-            case_opts(a_b).validate()?;
-        }
         // The grain's build has no bonds in force until it is bonded, and
         // its a_B only sets the force field it is written with.
         let mut params = GrainParams::new(opts.kind, radius, opts.seed, opts.a_bs[0]);
         params.time_scale = opts.time_scale;
         let (scene, summary) = build_grain(&params, opts.threads, false)
             .map_err(|e| HertzError::Grain(e.to_string()))?;
-        let kind = match opts.kind {
-            GrainKind::Rough => "rough",
-            GrainKind::Smoother => "smoother",
-        };
-        let grain_file = grains_dir.join(format!("{kind}-R{radius}-s{}.json", opts.seed));
+        let grain_file = grains_dir.join(format!(
+            "{}-R{radius}-s{}.json",
+            opts.kind.name(),
+            opts.seed
+        ));
         write_scene(&grain_file, &scene).map_err(|e| HertzError::Grain(e.to_string()))?;
         let grain = Grain {
             seed: opts.seed,
@@ -141,7 +148,7 @@ pub fn run_hertz_sweep(
             summary: Some(summary.clone()),
         };
         for &a_b in &opts.a_bs {
-            let hertz_opts = case_opts(a_b);
+            let hertz_opts = case_opts(radius, a_b);
             let report = squeeze_grains(&hertz_opts, vec![grain.clone()], launcher, &mut |_| {})?;
             let folder = format!("R{radius}-aB{a_b}");
             write_report(&report, &out.join(&folder))?;
@@ -174,9 +181,7 @@ pub fn run_hertz_sweep(
         wall_seconds: start.elapsed().as_secs_f64(),
     };
     let json = out.join("sweep.json");
-    let text = serde_json::to_string_pretty(&report)
-        .map_err(|e| FileError::on("writing", &json)(std::io::Error::other(e)))?;
-    std::fs::write(&json, text).map_err(FileError::on("writing", &json))?;
+    crate::verify::write_json(&json, &report).map_err(FileError::on("writing", &json))?;
     write_svg(&out.join("sweep.svg"), &sweep_panels(&report))?;
     Ok(report)
 }
@@ -210,8 +215,8 @@ pub fn sweep_panels(report: &SweepReport) -> Vec<Panel> {
             .collect()
     };
     let title = format!(
-        "{:?} grains, seed {}, {} rotations each: deviation of the mean curve from Hertz over delta/R in [0.02, 0.25]",
-        report.options.kind, report.options.seed, report.options.rotations
+        "{} grains, seed {}, {} rotations each: deviation of the mean curve from Hertz over delta/R in [0.02, 0.25]",
+        report.options.kind.name(), report.options.seed, report.options.rotations
     );
     vec![
         Panel {

@@ -29,6 +29,16 @@ pub enum GrainKind {
     Smoother,
 }
 
+impl GrainKind {
+    /// The kind as written in file names, descriptions and the CLI.
+    pub fn name(self) -> &'static str {
+        match self {
+            GrainKind::Rough => "rough",
+            GrainKind::Smoother => "smoother",
+        }
+    }
+}
+
 /// Parameters of a grain (lengths in d, times in tau).
 #[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct GrainParams {
@@ -279,10 +289,7 @@ pub fn build_grain(
     let mut scene = bulk.clone();
     scene.description = format!(
         "{} grain R = {r} d, seed {}, a_B = {}",
-        match params.kind {
-            GrainKind::Rough => "rough",
-            GrainKind::Smoother => "smoother",
-        },
+        params.kind.name(),
         params.seed,
         params.a_b
     );
