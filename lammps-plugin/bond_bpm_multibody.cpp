@@ -118,7 +118,8 @@ void BondBPMMultibody::compute(int eflag, int vflag)
   bpm_tally tally;
   int status = bpm_bond_forces(x, damped ? atom->v[0] : nullptr, nall, bonds, nbonds, r0,
                                coeffs.data(), (int64_t) coeffs.size(), vol, vol0, nlocal,
-                               newton_bond, atom->f[0], &tally);
+                               newton_bond, atom->f[0],
+                               (eflag_global || vflag_global) ? &tally : nullptr);
   if (status != BPM_OK)
     error->one(FLERR, "bond_style bpm/multibody: force kernel failed with status " + std::to_string(status));
   if (eflag_global) energy += tally.energy;

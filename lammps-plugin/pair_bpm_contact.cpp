@@ -105,7 +105,7 @@ void PairBPMContact::compute(int eflag, int vflag)
   int status = bpm_pair_forces(atom->x[0], damped ? atom->v[0] : nullptr, atom->type, nall,
                                atom->ntypes, table.data(), list->inum, list->ilist, list->numneigh,
                                list->firstneigh, force->special_lj, nlocal, force->newton_pair,
-                               atom->f[0], &tally);
+                               atom->f[0], (eflag_global || vflag_global) ? &tally : nullptr);
   if (status != BPM_OK)
     error->one(FLERR, "pair_style bpm/contact: kernel failed with status " + std::to_string(status));
   if (eflag_global) eng_vdwl += tally.energy;

@@ -121,13 +121,15 @@ pub unsafe extern "C" fn bpm_bond_volumes(
     })
 }
 
-/// Adds bond forces to `f` and writes energy and virial to `tally`; see
+/// Adds bond forces to `f` and writes energy and virial to `tally` (a
+/// null `tally` skips summing them, as on steps that record nothing); see
 /// [`bond_forces`]. A null `v` drops damping; null `vol` drops the
 /// multibody term.
 ///
 /// # Safety
 /// Array sizes as for [`bpm_bond_volumes`]; `coeffs` holds `ncoeffs`
-/// entries (index = type - 1); `f` holds `3 nall` doubles; `tally` is valid.
+/// entries (index = type - 1); `f` holds `3 nall` doubles; `tally` is
+/// null or valid.
 #[no_mangle]
 pub unsafe extern "C" fn bpm_bond_forces(
     x: *const f64,
@@ -151,8 +153,7 @@ pub unsafe extern "C" fn bpm_bond_forces(
         else {
             return BPM_ERR_NULL;
         };
-        if tally.is_null()
-            || (nall > 0 && (x.is_null() || f.is_null()))
+        if (nall > 0 && (x.is_null() || f.is_null()))
             || (nbonds > 0 && (bonds.is_null() || r0.is_null() || coeffs.is_null()))
             || (!vol.is_null() && vol0.is_null())
         {
@@ -171,19 +172,23 @@ pub unsafe extern "C" fn bpm_bond_forces(
             r0: list(r0, nbonds),
             coeffs: list(coeffs, ncoeffs),
             volumes,
-            tally: true,
+            tally: !tally.is_null(),
         };
         let own = Ownership {
             n_owned,
             newton: newton != 0,
         };
         let f = slice::from_raw_parts_mut(f as *mut [f64; 3], nall);
-        *tally = bond_forces(&Unwrapped, &inputs, own, f);
+        let sums = bond_forces(&Unwrapped, &inputs, own, f);
+        if let Some(tally) = tally.as_mut() {
+            *tally = sums;
+        }
         BPM_OK
     })
 }
 
-/// Adds pair forces over a LAMMPS half neighbour list to `f`; see
+/// Adds pair forces over a LAMMPS half neighbour list to `f` and writes
+/// energy and virial to `tally` (a null `tally` skips summing them); see
 /// [`pair_forces`]. A null `v` drops damping; a null `types` means all
 /// atoms are type 1.
 ///
@@ -215,7 +220,7 @@ pub unsafe extern "C" fn bpm_pair_forces(
         else {
             return BPM_ERR_NULL;
         };
-        if tally.is_null() || special.is_null() || coeffs.is_null() || ntypes == 0 {
+        if special.is_null() || coeffs.is_null() || ntypes == 0 {
             return BPM_ERR_NULL;
         }
         if inum > 0
@@ -265,14 +270,17 @@ pub unsafe extern "C" fn bpm_pair_forces(
             ntypes,
             coeffs: list(coeffs, ntypes * ntypes),
             special: [special[0], special[1], special[2], special[3]],
-            tally: true,
+            tally: !tally.is_null(),
         };
         let own = Ownership {
             n_owned,
             newton: newton != 0,
         };
         let f = slice::from_raw_parts_mut(f as *mut [f64; 3], nall);
-        *tally = pair_forces(&Unwrapped, &inputs, rows_in, own, f);
+        let sums = pair_forces(&Unwrapped, &inputs, rows_in, own, f);
+        if let Some(tally) = tally.as_mut() {
+            *tally = sums;
+        }
         BPM_OK
     })
 }

