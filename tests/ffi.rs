@@ -36,27 +36,33 @@ fn bond_abi_matches_the_kernel_with_volumes_and_damping() {
         )
     };
     assert_eq!(st, BPM_OK);
-    let mut f = vec![[0.0; 3]; n];
-    let mut tally = Tally::default();
-    let st = unsafe {
-        bpm_bond_forces(
-            x.as_ptr() as *const f64,
-            v.as_ptr() as *const f64,
-            n as i64,
-            bonds.as_ptr(),
-            bonds.len() as i64,
-            r0.as_ptr(),
-            coeffs.as_ptr(),
-            1,
-            vol.as_ptr(),
-            vol0.as_ptr(),
-            n as i64,
-            1,
-            f.as_mut_ptr() as *mut f64,
-            &mut tally,
-        )
+    // The forces through the C ABI, with energy and virial into `tally`
+    // (or not summed when it is null).
+    let forces = |tally: *mut Tally| {
+        let mut f = vec![[0.0; 3]; n];
+        let st = unsafe {
+            bpm_bond_forces(
+                x.as_ptr() as *const f64,
+                v.as_ptr() as *const f64,
+                n as i64,
+                bonds.as_ptr(),
+                bonds.len() as i64,
+                r0.as_ptr(),
+                coeffs.as_ptr(),
+                1,
+                vol.as_ptr(),
+                vol0.as_ptr(),
+                n as i64,
+                1,
+                f.as_mut_ptr() as *mut f64,
+                tally,
+            )
+        };
+        assert_eq!(st, BPM_OK);
+        f
     };
-    assert_eq!(st, BPM_OK);
+    let mut tally = Tally::default();
+    let f = forces(&mut tally);
     let mut fr = vec![[0.0; 3]; n];
     let inputs = BondInputs {
         x: &x,
@@ -73,27 +79,7 @@ fn bond_abi_matches_the_kernel_with_volumes_and_damping() {
     assert!(max_abs(&f) > 1e-3);
     assert!(tally.energy > 0.0);
     // A null tally (a step that records nothing) gives the same forces.
-    let mut f_untallied = vec![[0.0; 3]; n];
-    let st = unsafe {
-        bpm_bond_forces(
-            x.as_ptr() as *const f64,
-            v.as_ptr() as *const f64,
-            n as i64,
-            bonds.as_ptr(),
-            bonds.len() as i64,
-            r0.as_ptr(),
-            coeffs.as_ptr(),
-            1,
-            vol.as_ptr(),
-            vol0.as_ptr(),
-            n as i64,
-            1,
-            f_untallied.as_mut_ptr() as *mut f64,
-            std::ptr::null_mut(),
-        )
-    };
-    assert_eq!(st, BPM_OK);
-    assert_eq!(f_untallied, f);
+    assert_eq!(forces(std::ptr::null_mut()), f);
 }
 
 #[test]
@@ -174,56 +160,41 @@ fn pair_abi_reads_a_lammps_style_neighbour_list() {
     let numneigh = [2i32, 1, 0];
     let firstneigh = [n0.as_ptr(), n1.as_ptr(), std::ptr::null()];
     let special = [1.0, 0.0, 0.0, 0.0];
-    let mut f = vec![[0.0f64; 3]; 3];
-    let mut tally = Tally::default();
-    let st = unsafe {
-        bpm_pair_forces(
-            x.as_ptr() as *const f64,
-            std::ptr::null(),
-            std::ptr::null(),
-            3,
-            1,
-            coeffs.as_ptr(),
-            3,
-            ilist.as_ptr(),
-            numneigh.as_ptr(),
-            firstneigh.as_ptr(),
-            special.as_ptr(),
-            3,
-            1,
-            f.as_mut_ptr() as *mut f64,
-            &mut tally,
-        )
+    // The forces through the C ABI, with energy and virial into `tally`
+    // (or not summed when it is null).
+    let forces = |tally: *mut Tally| {
+        let mut f = vec![[0.0f64; 3]; 3];
+        let st = unsafe {
+            bpm_pair_forces(
+                x.as_ptr() as *const f64,
+                std::ptr::null(),
+                std::ptr::null(),
+                3,
+                1,
+                coeffs.as_ptr(),
+                3,
+                ilist.as_ptr(),
+                numneigh.as_ptr(),
+                firstneigh.as_ptr(),
+                special.as_ptr(),
+                3,
+                1,
+                f.as_mut_ptr() as *mut f64,
+                tally,
+            )
+        };
+        assert_eq!(st, BPM_OK);
+        f
     };
-    assert_eq!(st, BPM_OK);
+    let mut tally = Tally::default();
+    let f = forces(&mut tally);
     // Pair 0-1 at r = 0.8: F = 0.2 + 50 * 0.008 = 0.6, pushing 0 towards -x.
     // Pair 0-2 at r = 0.9: F = 0.1 + 50 * 0.001 = 0.15; pair 1-2 at r > 1: none.
     assert!((f[0][0] + 0.6).abs() < 1e-14 && (f[0][1] + 0.15).abs() < 1e-14);
     assert!((f[1][0] - 0.6).abs() < 1e-14 && (f[2][1] - 0.15).abs() < 1e-14);
     assert!(tally.energy > 0.0 && tally.virial[0] > 0.0);
     // A null tally (a step that records nothing) gives the same forces.
-    let mut f_untallied = vec![[0.0f64; 3]; 3];
-    let st = unsafe {
-        bpm_pair_forces(
-            x.as_ptr() as *const f64,
-            std::ptr::null(),
-            std::ptr::null(),
-            3,
-            1,
-            coeffs.as_ptr(),
-            3,
-            ilist.as_ptr(),
-            numneigh.as_ptr(),
-            firstneigh.as_ptr(),
-            special.as_ptr(),
-            3,
-            1,
-            f_untallied.as_mut_ptr() as *mut f64,
-            std::ptr::null_mut(),
-        )
-    };
-    assert_eq!(st, BPM_OK);
-    assert_eq!(f_untallied, f);
+    assert_eq!(forces(std::ptr::null_mut()), f);
 }
 
 /// `bpm_bond_single`, behind LAMMPS's `Bond::single` (e.g. `compute
