@@ -115,7 +115,7 @@ void BondBPMMultibody::compute(int eflag, int vflag)
     vol = reference->vol;
     vol0 = reference->vol0;
   }
-  bpm_tally tally;
+  bpm_tally tally{};
   int status = bpm_bond_forces(x, damped ? atom->v[0] : nullptr, nall, bonds, nbonds, r0,
                                coeffs.data(), (int64_t) coeffs.size(), vol, vol0, nlocal,
                                newton_bond, atom->f[0],

@@ -37,7 +37,8 @@ int bpm_bond_volumes(const double *x, int64_t nall, const bpm_bond_entry *bonds,
                      const double *r0, int64_t n_owned, int32_t newton, double *vol, double *vol0);
 
 /* Adds bond forces to f (3 nall doubles) and writes energy and virial to tally
- * (tally == NULL skips summing them, for steps that record nothing).
+ * (tally == NULL: not written, for steps that record nothing; with newton on
+ * they are then not summed at all).
  * v == NULL drops damping; vol == NULL drops the multibody term.
  * coeffs[type - 1] holds the coefficients of bond type `type`. */
 int bpm_bond_forces(const double *x, const double *v, int64_t nall, const bpm_bond_entry *bonds,
@@ -49,7 +50,7 @@ int bpm_bond_forces(const double *x, const double *v, int64_t nall, const bpm_bo
  * firstneigh; special bits in the top two bits of each neighbour index).
  * types == NULL: every atom is type 1. coeffs is ntypes x ntypes, row-major,
  * 0-based ((ti-1) * ntypes + (tj-1)). special holds LAMMPS's special_lj[4].
- * Energy and virial go to tally; tally == NULL skips summing them. */
+ * Energy and virial go to tally; tally == NULL: not summed or written. */
 int bpm_pair_forces(const double *x, const double *v, const int32_t *types, int64_t nall,
                     int64_t ntypes, const bpm_pair_coeffs *coeffs, int64_t inum, const int32_t *ilist,
                     const int32_t *numneigh, const int32_t *const *firstneigh, const double *special,

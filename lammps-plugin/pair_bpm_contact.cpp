@@ -101,7 +101,7 @@ void PairBPMContact::compute(int eflag, int vflag)
     error->all(FLERR, std::string("pair_style bpm/contact does not compute per-atom energy or virial"));
   int nlocal = atom->nlocal;
   int nall = nlocal + atom->nghost;
-  bpm_tally tally;
+  bpm_tally tally{};
   int status = bpm_pair_forces(atom->x[0], damped ? atom->v[0] : nullptr, atom->type, nall,
                                atom->ntypes, table.data(), list->inum, list->ilist, list->numneigh,
                                list->firstneigh, force->special_lj, nlocal, force->newton_pair,

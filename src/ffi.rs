@@ -122,7 +122,8 @@ pub unsafe extern "C" fn bpm_bond_volumes(
 }
 
 /// Adds bond forces to `f` and writes energy and virial to `tally` (a
-/// null `tally` skips summing them, as on steps that record nothing); see
+/// null `tally`, for steps that record nothing, is not written; with
+/// `newton` on, the sums are then skipped too); see
 /// [`bond_forces`]. A null `v` drops damping; null `vol` drops the
 /// multibody term.
 ///
@@ -188,7 +189,8 @@ pub unsafe extern "C" fn bpm_bond_forces(
 }
 
 /// Adds pair forces over a LAMMPS half neighbour list to `f` and writes
-/// energy and virial to `tally` (a null `tally` skips summing them); see
+/// energy and virial to `tally` (a null `tally` skips summing and writing
+/// them); see
 /// [`pair_forces`]. A null `v` drops damping; a null `types` means all
 /// atoms are type 1.
 ///

