@@ -142,8 +142,7 @@ pub struct BondInputs<'a> {
     /// `(V, V0)` per atom; `None` drops the multibody term (as if every a_B were 0).
     pub volumes: Option<(&'a [f64], &'a [f64])>,
     /// Whether to sum energy and virial (LAMMPS's `eflag_global ||
-    /// vflag_global`); steps
-    /// that record nothing skip it.
+    /// vflag_global`); steps that record nothing skip it.
     pub tally: bool,
 }
 

