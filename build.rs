@@ -53,6 +53,7 @@ fn main() {
         "bond_bpm_multibody.h",
         "pair_bpm_contact.h",
         "fix_bpm_reference.h",
+        "fault_message.h",
     ] {
         println!("cargo:rerun-if-changed=lammps-plugin/{h}");
     }

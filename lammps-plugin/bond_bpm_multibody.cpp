@@ -1,6 +1,7 @@
 #include "fmt_compat.h"
 
 #include "bond_bpm_multibody.h"
+#include "fault_message.h"
 #include "fix_bpm_reference.h"
 
 #include "atom.h"
@@ -116,10 +117,14 @@ void BondBPMMultibody::compute(int eflag, int vflag)
     vol0 = reference->vol0;
   }
   bpm_tally tally{};
+  bpm_fault fault{};
   int status = bpm_bond_forces(x, damped ? atom->v[0] : nullptr, nall, bonds, nbonds, r0,
                                coeffs.data(), (int64_t) coeffs.size(), vol, vol0, nlocal,
                                newton_bond, atom->f[0],
-                               (eflag_global || vflag_global) ? &tally : nullptr);
+                               (eflag_global || vflag_global) ? &tally : nullptr, &fault);
+  if (status == BPM_ERR_UNSTABLE)
+    bpm_stop_on_fault(lmp, "bond_style bpm/multibody", fault,
+                      &coeffs[neighbor->bondlist[fault.bond][2] - 1]);
   if (status != BPM_OK)
     error->one(FLERR, "bond_style bpm/multibody: force kernel failed with status " + std::to_string(status));
   if (eflag_global) energy += tally.energy;

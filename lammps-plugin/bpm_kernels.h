@@ -15,8 +15,27 @@ enum {
   BPM_ERR_NULL = 1,  /* a required pointer was null or a count negative */
   BPM_ERR_INDEX = 2, /* an atom index outside 0..nall */
   BPM_ERR_TYPE = 3,  /* a bond or atom type without coefficients */
-  BPM_ERR_PANIC = 4  /* internal error in the kernels (a bug) */
+  BPM_ERR_PANIC = 4, /* internal error in the kernels (a bug) */
+  BPM_ERR_UNSTABLE = 5 /* forces computed, but an interaction left the model's range (fault) */
 };
+
+/* Kinds of fault: the first sign of a blow-up, caught while values are finite. */
+enum {
+  BPM_FAULT_NON_FINITE = 1,         /* a NaN or infinite position, velocity or force */
+  BPM_FAULT_BOND_COLLAPSED = 2,     /* bond shorter than 0.2 r0 */
+  BPM_FAULT_BOND_OVERSTRETCHED = 3  /* bond longer than 3 r0 */
+};
+
+/* The first faulty interaction of a call: kind, local atom indices, distance,
+ * reference length (bond) or contact distance (pair), bonded or not, and the
+ * bond's row in the bond list (-1 for a pair). */
+typedef struct {
+  int32_t kind;
+  int64_t i, j;
+  double r, reference;
+  uint8_t bonded;
+  int64_t bond;
+} bpm_fault;
 
 /* One bond: the layout of a row of LAMMPS's neighbor->bondlist (int[3]). */
 typedef struct { int32_t i, j, type; } bpm_bond_entry;
@@ -38,23 +57,34 @@ int bpm_bond_volumes(const double *x, int64_t nall, const bpm_bond_entry *bonds,
 
 /* Adds bond forces to f (3 nall doubles) and writes energy and virial to tally
  * (tally == NULL: not written, for steps that record nothing; with newton on
- * they are then not summed at all).
+ * they are then not summed at all). Returns BPM_ERR_UNSTABLE and writes the
+ * first faulty bond to fault (if not NULL) when a bond left the model's range.
  * v == NULL drops damping; vol == NULL drops the multibody term.
  * coeffs[type - 1] holds the coefficients of bond type `type`. */
 int bpm_bond_forces(const double *x, const double *v, int64_t nall, const bpm_bond_entry *bonds,
                     int64_t nbonds, const double *r0, const bpm_bond_coeffs *coeffs, int64_t ncoeffs,
                     const double *vol, const double *vol0, int64_t n_owned, int32_t newton, double *f,
-                    bpm_tally *tally);
+                    bpm_tally *tally, bpm_fault *fault);
 
 /* Adds contact forces over a LAMMPS half neighbour list (ilist, numneigh,
  * firstneigh; special bits in the top two bits of each neighbour index).
  * types == NULL: every atom is type 1. coeffs is ntypes x ntypes, row-major,
  * 0-based ((ti-1) * ntypes + (tj-1)). special holds LAMMPS's special_lj[4].
- * Energy and virial go to tally; tally == NULL: not summed or written. */
+ * Energy and virial go to tally; tally == NULL: not summed or written.
+ * BPM_ERR_UNSTABLE and fault as for bpm_bond_forces (a non-finite pair force). */
 int bpm_pair_forces(const double *x, const double *v, const int32_t *types, int64_t nall,
                     int64_t ntypes, const bpm_pair_coeffs *coeffs, int64_t inum, const int32_t *ilist,
                     const int32_t *numneigh, const int32_t *const *firstneigh, const double *special,
-                    int64_t n_owned, int32_t newton, double *f, bpm_tally *tally);
+                    int64_t n_owned, int32_t newton, double *f, bpm_tally *tally,
+                    bpm_fault *fault);
+
+/* The message for a fault (what happened at step, naming the atoms name_i and
+ * name_j, and the likely cause at timestep dt for the bond's coefficients,
+ * NULL for a pair, and the first atom's mass) into buf, NUL-terminated, cut
+ * to len bytes. Returns the full length, or minus a BPM_ERR_* status. */
+int64_t bpm_describe_fault(const bpm_fault *fault, int64_t name_i, int64_t name_j, int64_t step,
+                           double dt, const bpm_bond_coeffs *bond, double mass, char *buf,
+                           int64_t len);
 
 /* Force over distance (written to fforce) and spring-proxy energy of one
  * bond without damping, for LAMMPS's Bond::single. */

@@ -1,6 +1,7 @@
 #include "fmt_compat.h"
 
 #include "pair_bpm_contact.h"
+#include "fault_message.h"
 
 #include "atom.h"
 #include "comm.h"
@@ -102,10 +103,12 @@ void PairBPMContact::compute(int eflag, int vflag)
   int nlocal = atom->nlocal;
   int nall = nlocal + atom->nghost;
   bpm_tally tally{};
+  bpm_fault fault{};
   int status = bpm_pair_forces(atom->x[0], damped ? atom->v[0] : nullptr, atom->type, nall,
                                atom->ntypes, table.data(), list->inum, list->ilist, list->numneigh,
                                list->firstneigh, force->special_lj, nlocal, force->newton_pair,
-                               atom->f[0], (eflag_global || vflag_global) ? &tally : nullptr);
+                               atom->f[0], (eflag_global || vflag_global) ? &tally : nullptr, &fault);
+  if (status == BPM_ERR_UNSTABLE) bpm_stop_on_fault(lmp, "pair_style bpm/contact", fault, nullptr);
   if (status != BPM_OK)
     error->one(FLERR, "pair_style bpm/contact: kernel failed with status " + std::to_string(status));
   if (eflag_global) eng_vdwl += tally.energy;

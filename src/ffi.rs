@@ -7,7 +7,8 @@
 
 use crate::kernels::{
     accumulate_reference_volumes, accumulate_volumes, bond_forces, pair_forces, BondCoeffs,
-    BondEntry, BondInputs, Ownership, PairCoeffs, PairInputs, Tally, Unwrapped, NEIGHMASK,
+    BondEntry, BondInputs, Fault, FaultKind, ForcePass, Ownership, PairCoeffs, PairInputs, Tally,
+    Unwrapped, NEIGHMASK,
 };
 use std::panic::{catch_unwind, AssertUnwindSafe};
 use std::slice;
@@ -22,6 +23,32 @@ pub const BPM_ERR_INDEX: i32 = 2;
 pub const BPM_ERR_TYPE: i32 = 3;
 /// A Rust panic was caught (a bug: please report).
 pub const BPM_ERR_PANIC: i32 = 4;
+/// The forces were computed, but an interaction was outside the model's
+/// range ([`Fault`], written to the `fault` argument): the run is blowing up.
+pub const BPM_ERR_UNSTABLE: i32 = 5;
+
+/// Writes the first fault of `pass` to `fault` (if not null) and returns
+/// the status of the call.
+unsafe fn report(pass: &ForcePass, tally: *mut Tally, fault: *mut Fault) -> i32 {
+    if let Some(t) = tally.as_mut() {
+        *t = pass.tally;
+    }
+    match pass.fault {
+        None => BPM_OK,
+        Some(found) => {
+            if !fault.is_null() {
+                // A write, not a reference: the caller's memory may hold
+                // no valid fault yet.
+                fault.write(found);
+            }
+            BPM_ERR_UNSTABLE
+        }
+    }
+}
+
+// `bpm_fault` in bpm_kernels.h has this layout (checked there too).
+const _: () = assert!(std::mem::size_of::<Fault>() == 56 && std::mem::align_of::<Fault>() == 8);
+const _: () = assert!(std::mem::size_of::<RawFault>() == 56);
 
 fn guard(f: impl FnOnce() -> i32) -> i32 {
     catch_unwind(AssertUnwindSafe(f)).unwrap_or(BPM_ERR_PANIC)
@@ -147,6 +174,7 @@ pub unsafe extern "C" fn bpm_bond_forces(
     newton: i32,
     f: *mut f64,
     tally: *mut Tally,
+    fault: *mut Fault,
 ) -> i32 {
     guard(|| {
         let Some([nall, nbonds, ncoeffs, n_owned]) =
@@ -180,11 +208,7 @@ pub unsafe extern "C" fn bpm_bond_forces(
             newton: newton != 0,
         };
         let f = slice::from_raw_parts_mut(f as *mut [f64; 3], nall);
-        let sums = bond_forces(&Unwrapped, &inputs, own, f);
-        if let Some(tally) = tally.as_mut() {
-            *tally = sums;
-        }
-        BPM_OK
+        report(&bond_forces(&Unwrapped, &inputs, own, f), tally, fault)
     })
 }
 
@@ -215,6 +239,7 @@ pub unsafe extern "C" fn bpm_pair_forces(
     newton: i32,
     f: *mut f64,
     tally: *mut Tally,
+    fault: *mut Fault,
 ) -> i32 {
     guard(|| {
         let Some([nall, ntypes, inum, n_owned]) =
@@ -279,11 +304,11 @@ pub unsafe extern "C" fn bpm_pair_forces(
             newton: newton != 0,
         };
         let f = slice::from_raw_parts_mut(f as *mut [f64; 3], nall);
-        let sums = pair_forces(&Unwrapped, &inputs, rows_in, own, f);
-        if let Some(tally) = tally.as_mut() {
-            *tally = sums;
-        }
-        BPM_OK
+        report(
+            &pair_forces(&Unwrapped, &inputs, rows_in, own, f),
+            tally,
+            fault,
+        )
     })
 }
 
@@ -309,4 +334,80 @@ pub unsafe extern "C" fn bpm_bond_single(
     let c = &*coeffs;
     *fforce = crate::kernels::bond_force_magnitude(r, r0, dilation, 0.0, c) / r;
     0.5 * c.k * (r - r0) * (r - r0)
+}
+
+/// [`Fault`] as C hands it back: every field a plain number, checked before
+/// use.
+#[repr(C)]
+#[derive(Clone, Copy, Debug)]
+pub struct RawFault {
+    /// [`FaultKind`] code.
+    pub kind: i32,
+    /// First particle (local index).
+    pub i: i64,
+    /// Second particle (local index).
+    pub j: i64,
+    /// Their distance.
+    pub r: f64,
+    /// Reference length or contact distance.
+    pub reference: f64,
+    /// Non-zero for a bond.
+    pub bonded: u8,
+    /// The bond's position in its list (-1 for a pair).
+    pub bond: i64,
+}
+
+/// Writes the message for a fault the force calls reported (what happened
+/// at `step`, naming the atoms `name_i` and `name_j`, and the likely cause
+/// at timestep `dt` with the bond coefficients of the interaction (null
+/// for a pair) and the first atom's `mass`) into `buf` as a NUL-terminated
+/// string cut to `len` bytes. Returns the full message length in bytes, or
+/// a negative status.
+///
+/// # Safety
+/// `fault` points to a fault; `bond` is null or valid; `buf` holds `len`
+/// bytes.
+#[no_mangle]
+pub unsafe extern "C" fn bpm_describe_fault(
+    fault: *const RawFault,
+    name_i: i64,
+    name_j: i64,
+    step: i64,
+    dt: f64,
+    bond: *const BondCoeffs,
+    mass: f64,
+    buf: *mut std::ffi::c_char,
+    len: i64,
+) -> i64 {
+    if fault.is_null() || buf.is_null() || len <= 0 {
+        return -(BPM_ERR_NULL as i64);
+    }
+    let raw = *fault;
+    let Some(kind) = FaultKind::from_code(raw.kind) else {
+        return -(BPM_ERR_TYPE as i64);
+    };
+    let found = Fault {
+        kind,
+        i: raw.i,
+        j: raw.j,
+        r: raw.r,
+        reference: raw.reference,
+        bonded: raw.bonded != 0,
+        bond: raw.bond,
+    };
+    let bond = bond.as_ref();
+    let Ok(message) = catch_unwind(|| {
+        format!(
+            "simulation became unstable at step {step}: {}. Likely cause: {}",
+            found.what(&format!("atoms with IDs {name_i} and {name_j}")),
+            found.likely_cause(dt, bond, mass, f64::NAN)
+        )
+    }) else {
+        return -(BPM_ERR_PANIC as i64);
+    };
+    let bytes = message.as_bytes();
+    let n = bytes.len().min(len as usize - 1);
+    std::ptr::copy_nonoverlapping(bytes.as_ptr(), buf as *mut u8, n);
+    *buf.add(n) = 0;
+    bytes.len() as i64
 }

@@ -263,7 +263,7 @@ fn bench_prints_every_goal_and_writes_them_as_json() {
     assert!(goals.iter().all(|g| g["goal"].is_string()));
     // lmp-bpm is built with bpm, so Debian's LAMMPS is always measured.
     let debian = report["debian"]["timings"].as_array().unwrap();
-    assert_eq!(debian.len(), 6);
+    assert_eq!(debian.len(), 7);
     assert!(debian.iter().all(|t| t["bond_ns"].as_f64().unwrap() > 0.0));
     assert!(out.with_extension("svg").is_file());
 }

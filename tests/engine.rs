@@ -352,7 +352,7 @@ fn bond_split_into_interior_and_boundary_matches_minimum_image_after_wraps() {
         volumes: Some((&vol_ref, &vol0)),
         tally: true,
     };
-    let tb = bond_forces(&sep, &inputs, Ownership::all(n), &mut f);
+    let tb = bond_forces(&sep, &inputs, Ownership::all(n), &mut f).tally;
     let pcoeffs = [ff.pair.unwrap()];
     let pin = PairInputs {
         x: &sys.particles.x,

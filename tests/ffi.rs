@@ -56,6 +56,7 @@ fn bond_abi_matches_the_kernel_with_volumes_and_damping() {
                 1,
                 f.as_mut_ptr() as *mut f64,
                 tally,
+                std::ptr::null_mut(),
             )
         };
         assert_eq!(st, BPM_OK);
@@ -73,7 +74,7 @@ fn bond_abi_matches_the_kernel_with_volumes_and_damping() {
         volumes: Some((&vol, &vol0)),
         tally: true,
     };
-    let tr = bond_forces(&Unwrapped, &inputs, Ownership::all(n), &mut fr);
+    let tr = bond_forces(&Unwrapped, &inputs, Ownership::all(n), &mut fr).tally;
     assert_eq!(f, fr);
     assert_eq!(tally, tr);
     assert!(max_abs(&f) > 1e-3);
@@ -109,6 +110,7 @@ fn bad_indices_types_and_nulls_return_status_codes() {
             1,
             f.as_mut_ptr() as *mut f64,
             tally,
+            std::ptr::null_mut(),
         )
     };
     assert_eq!(
@@ -140,6 +142,7 @@ fn bad_indices_types_and_nulls_return_status_codes() {
             1,
             f.as_mut_ptr() as *mut f64,
             &mut tally,
+            std::ptr::null_mut(),
         )
     };
     assert_eq!(st, BPM_ERR_NULL);
@@ -181,6 +184,7 @@ fn pair_abi_reads_a_lammps_style_neighbour_list() {
                 1,
                 f.as_mut_ptr() as *mut f64,
                 tally,
+                std::ptr::null_mut(),
             )
         };
         assert_eq!(st, BPM_OK);
@@ -237,7 +241,7 @@ fn single_bond_abi_equals_the_bulk_bond_loop_without_damping() {
             volumes: multibody.then_some((vol.as_slice(), vol0.as_slice())),
             tally: true,
         };
-        let tally = bond_forces(&Unwrapped, &inputs, Ownership::all(n), &mut f);
+        let tally = bond_forces(&Unwrapped, &inputs, Ownership::all(n), &mut f).tally;
         assert_eq!(f[b.j as usize], f[b.i as usize].map(|c| -c));
         (f[b.i as usize], tally.energy)
     };

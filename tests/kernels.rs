@@ -88,7 +88,7 @@ fn forces(
         tally: true,
     };
     let mut f = vec![[0.0; 3]; n];
-    let t = bond_forces(&Unwrapped, &inputs, own, &mut f);
+    let t = bond_forces(&Unwrapped, &inputs, own, &mut f).tally;
     (f, t)
 }
 
@@ -117,7 +117,8 @@ fn pair_on(
         rows.iter().map(|(i, js)| (*i, &js[..])),
         Ownership::all(x.len()),
         &mut f,
-    );
+    )
+    .tally;
     (f, t)
 }
 
@@ -587,7 +588,7 @@ fn blocked_bond_kernel_matches_the_force_law_bond_by_bond_on_every_instruction_s
         accumulate_volumes_on(isa, &Unwrapped, &x, &bonds, all, &mut vol_isa);
         assert_eq!(vol_isa, vol, "{isa:?} volumes");
         let mut f = vec![[0.0; 3]; n];
-        let tally = bond_forces_on(isa, &Unwrapped, &inputs, all, &mut f);
+        let tally = bond_forces_on(isa, &Unwrapped, &inputs, all, &mut f).tally;
         let worst = f
             .iter()
             .zip(&expected)

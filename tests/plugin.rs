@@ -266,3 +266,24 @@ fn an_atom_style_without_bonds_is_refused() {
     assert!(!out.status.success(), "{text}");
     assert!(text.contains("bonds"), "{text}");
 }
+
+#[test]
+fn a_blow_up_stops_lammps_naming_the_step_the_atoms_and_the_timestep() {
+    // rms speed 0.03 (T = m v^2 / 3 per component in LJ units) at five
+    // times the paper's timestep: past the stable limit, about 0.19 tau at
+    // this scene's a_B = -0.5 (results/stability).
+    let tail = "velocity all create 0.0003 7 mom yes\nfix 1 all nve\ntimestep 0.5\nrun 2000\n";
+    let err = error_of_edited_setup("blow_up", &[], tail);
+    for words in [
+        "bond_style bpm/multibody: simulation became unstable at step",
+        "atoms with IDs",
+        "Likely cause: the timestep dt = 0.5 tau is near or above",
+    ] {
+        assert!(err.contains(words), "`{words}` missing from:\n{err}");
+    }
+    assert!(
+        !err.contains("Segmentation") && !err.contains("panicked"),
+        "{err}"
+    );
+    eprintln!("{err}");
+}

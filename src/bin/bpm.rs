@@ -15,7 +15,7 @@ use bpm::studies::hertz::{
     run_hertz, EngineAgreement, GrainSource, HertzOptions, Moduli, SqueezeEngine,
 };
 use bpm::studies::hertz_sweep::{run_hertz_sweep, SweepOptions};
-use bpm::studies::{calibration, upstream};
+use bpm::studies::{calibration, stability, upstream};
 use clap::{Parser, Subcommand, ValueEnum};
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
@@ -328,6 +328,55 @@ enum Command {
         #[arg(long, default_value_t = 1000)]
         steps: u64,
     },
+    /// The stability map (docs/protocols.md "Stability map"): the largest
+    /// stable timestep of the bulk solid against a_B and damping, by
+    /// bisection, beside the stiffest-mode prediction, and K, G, nu near the
+    /// incompressible limit; writes DIR/stability.json and DIR/stability.svg.
+    Stability {
+        /// Output folder.
+        #[arg(short, long, default_value = "results/stability")]
+        output: PathBuf,
+        /// Box side L of the bulk solid (d).
+        #[arg(long, default_value_t = 10.0)]
+        size: f64,
+        /// Seeds of the solids (one solid per seed).
+        #[arg(long, value_delimiter = ',', default_value = "1")]
+        seeds: Vec<u64>,
+        /// a_B values (k d).
+        #[arg(
+            long = "a-b",
+            value_delimiter = ',',
+            allow_hyphen_values = true,
+            default_value = "3,2,1,0.5,0,-0.25,-0.5,-0.75,-0.9,-1,-1.1,-1.2"
+        )]
+        a_b: Vec<f64>,
+        /// Damping values Gamma of bonds and contacts (sqrt(k m)).
+        #[arg(long, value_delimiter = ',', default_value = "1,0")]
+        gamma: Vec<f64>,
+        /// Smallest timestep of the bisection (tau).
+        #[arg(long, default_value_t = 0.005)]
+        dt_min: f64,
+        /// Largest timestep of the bisection (tau).
+        #[arg(long, default_value_t = 1.0)]
+        dt_max: f64,
+        /// Simulated time of every trial (tau).
+        #[arg(long, default_value_t = 100.0)]
+        time: f64,
+        /// Energy over the initial kinetic plus imposed strain energy that
+        /// counts as unstable.
+        #[arg(long, default_value_t = 10.0)]
+        growth: f64,
+        /// Largest bond strain left at the end (beyond the imposed strain)
+        /// that still counts as stable.
+        #[arg(long, default_value_t = 0.1)]
+        residual_strain: f64,
+        /// Relative width of the final bracket.
+        #[arg(long, default_value_t = 0.02)]
+        precision: f64,
+        /// Skip the moduli at each a_B.
+        #[arg(long)]
+        no_moduli: bool,
+    },
 }
 
 #[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
@@ -550,6 +599,9 @@ fn real_main() -> Result<()> {
             output,
         } => {
             let periodic = parse_boundary(&boundary)?;
+            if !a_b.is_finite() {
+                bail!("--a-b must be finite, got {a_b}");
+            }
             let scene = read_data_file(&data, periodic, ForceField::paper(a_b), seed)?;
             write_scene(&output, &scene)?;
             let grains = scene
@@ -928,6 +980,50 @@ fn real_main() -> Result<()> {
                 bail!("{failed} comparisons with upstream failed");
             }
             println!("all {} judged comparisons pass", report.judged());
+        }
+        Command::Stability {
+            output,
+            size,
+            seeds,
+            a_b,
+            gamma,
+            dt_min,
+            dt_max,
+            time,
+            growth,
+            residual_strain,
+            precision,
+            no_moduli,
+        } => {
+            let opts = stability::StabilityOptions {
+                size,
+                seeds,
+                a_b,
+                gammas: gamma,
+                dt_range: (dt_min, dt_max),
+                growth_limit: growth,
+                residual_strain_limit: residual_strain,
+                time,
+                precision,
+                moduli: !no_moduli,
+                ..Default::default()
+            };
+            opts.validate()?;
+            std::fs::create_dir_all(&output)
+                .with_context(|| format!("creating {}", output.display()))?;
+            let report = stability::run_stability(&opts, cli.threads, &command(), &mut print)?;
+            stability::write_report(&report, &output)?;
+            println!(
+                "\n{:>6} {:>6} {:>5} {:>10} {:>11} {:>7}",
+                "a_B", "Gamma", "seed", "dt stable", "dt unstable", "trials"
+            );
+            for limit in &report.limits {
+                println!("{}", limit.row());
+            }
+            println!(
+                "wrote {}/stability.json and stability.svg",
+                output.display()
+            );
         }
         Command::BenchLammps { size, seed, steps } => {
             let opts = BenchOptions {

@@ -46,6 +46,20 @@ pub enum EngineError {
         /// First offending particle.
         particle: usize,
     },
+    /// An interaction left the model's range: a bond collapsed or tore, or
+    /// a force turned non-finite (kernels' `Fault`), caught while the state
+    /// is still finite.
+    #[error("simulation became unstable at step {step}: {what}. Likely cause: {cause}")]
+    Unstable {
+        /// Step of the force evaluation that found it.
+        step: u64,
+        /// The two particles (indices).
+        particles: [usize; 2],
+        /// What was found, in words.
+        what: String,
+        /// The likely cause, in words.
+        cause: String,
+    },
     /// A particle crossed a closed (non-periodic) face of the box.
     #[error("particle {particle} left the box through closed dimension {dimension} at step {step} (the box is not periodic there: enlarge it, or add walls)")]
     LeftBox {

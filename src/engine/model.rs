@@ -11,7 +11,7 @@
 use super::neighbor::{Exclusions, NeighbourList};
 use super::simbox::SimBox;
 use super::timers::Timers;
-use crate::kernels::Tally;
+use crate::kernels::{Fault, Tally};
 use std::any::Any;
 
 /// Most energy terms a model may report (bond and pair for the BPM; normal,
@@ -79,6 +79,8 @@ pub struct ForceOutput<'a> {
     pub torque: Option<&'a mut [[f64; 3]]>,
     /// Per-part wall-clock timers.
     pub timers: &'a mut Timers,
+    /// The first interaction outside the model's range, set by the model.
+    pub fault: Option<Fault>,
 }
 
 /// A particle model: its state, its forces, its observables.
@@ -106,6 +108,14 @@ pub trait ParticleModel: std::fmt::Debug + Send + Any {
 
     /// Adds the model's forces for the state in `input` to `out`.
     fn compute(&mut self, input: &ForceInput<'_>, out: &mut ForceOutput<'_>) -> ModelTally;
+
+    /// The likely cause of `fault` at timestep `dt`, in words; `mass` is
+    /// the first particle's, `nearest_unbonded` the distance from either
+    /// particle to its nearest unexcluded neighbour over the contact
+    /// distance.
+    fn likely_cause(&self, fault: &Fault, dt: f64, mass: f64, nearest_unbonded: f64) -> String {
+        fault.likely_cause(dt, None, mass, nearest_unbonded)
+    }
 
     /// The model as [`Any`], to reach model-specific state (e.g. a stage
     /// that resets bond reference lengths).

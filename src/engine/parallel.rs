@@ -4,21 +4,22 @@
 //! output), then the buffers are summed in chunk order. For a fixed thread
 //! count the result is the same bit for bit on every run.
 
-use crate::kernels::Tally;
+use crate::kernels::ForcePass;
 
 /// Per-thread scratch buffers, kept between steps so no step allocates.
 #[derive(Debug, Default)]
 pub struct Scratch<T> {
     buffers: Vec<Vec<T>>,
-    tallies: Vec<Tally>,
+    passes: Vec<ForcePass>,
 }
 
 impl<T: Copy + Default + Send + Sync + std::ops::AddAssign> Scratch<T> {
     /// Runs `work(chunk, out)` for `chunks` chunks and adds every chunk's
-    /// contributions into `out`; returns the tallies merged in chunk order.
-    pub fn scatter<F>(&mut self, chunks: usize, out: &mut [T], work: F) -> Tally
+    /// contributions into `out`; returns the chunks' sums merged in chunk
+    /// order (the first fault in list order).
+    pub fn scatter<F>(&mut self, chunks: usize, out: &mut [T], work: F) -> ForcePass
     where
-        F: Fn(usize, &mut [T]) -> Tally + Sync,
+        F: Fn(usize, &mut [T]) -> ForcePass + Sync,
     {
         if chunks <= 1 {
             return work(0, out);
@@ -28,13 +29,13 @@ impl<T: Copy + Default + Send + Sync + std::ops::AddAssign> Scratch<T> {
             buf.clear();
             buf.resize(out.len(), T::default());
         }
-        self.tallies.clear();
-        self.tallies.resize(chunks, Tally::default());
-        let (first, rest) = self.tallies.split_at_mut(1);
+        self.passes.clear();
+        self.passes.resize(chunks, ForcePass::default());
+        let (first, rest) = self.passes.split_at_mut(1);
         let work = &work;
         rayon::scope(|s| {
-            for ((c, buf), tally) in self.buffers.iter_mut().enumerate().zip(rest.iter_mut()) {
-                s.spawn(move |_| *tally = work(c + 1, buf));
+            for ((c, buf), pass) in self.buffers.iter_mut().enumerate().zip(rest.iter_mut()) {
+                s.spawn(move |_| *pass = work(c + 1, buf));
             }
             first[0] = work(0, out);
         });
@@ -43,9 +44,9 @@ impl<T: Copy + Default + Send + Sync + std::ops::AddAssign> Scratch<T> {
                 *o += *b;
             }
         }
-        self.tallies
+        self.passes
             .iter()
-            .fold(Tally::default(), |acc, t| acc.merged(t))
+            .fold(ForcePass::default(), |acc, t| acc.merged(t))
     }
 }
 

@@ -13,7 +13,7 @@ use super::particles::Particles;
 use super::simbox::SimBox;
 use super::timers::{Stage, Timers};
 use super::EngineError;
-use crate::kernels::Tally;
+use crate::kernels::{Fault, Separation, Tally};
 
 /// Everything a stage adds on top of the interaction model.
 #[derive(Debug, Default)]
@@ -62,6 +62,8 @@ pub struct StepReport {
     /// `(wall, particle)`: the first particle found on or behind the plane
     /// of a flat wall.
     pub through_wall: Option<(usize, usize)>,
+    /// The first interaction outside the model's range.
+    pub fault: Option<Fault>,
 }
 
 /// Particles, box and model, with the state of a run.
@@ -203,12 +205,15 @@ impl System {
             f: &mut p.f,
             torque,
             timers: &mut self.timers,
+            fault: None,
         };
         let interactions = self.model.compute(&input, &mut output);
+        let fault = output.fault;
         let _t = self.timers.start(Stage::External);
         let mut report = StepReport {
             interactions,
             tallied: tally,
+            fault,
             ..StepReport::default()
         };
         for (w, wall) in drivers.walls.iter().enumerate() {
@@ -258,6 +263,7 @@ impl System {
         let elapsed = stage_step as f64 * dt;
         self.compute_forces(drivers, elapsed, drivers.tally_at(stage_step));
         self.step += 1;
+        self.check_faults(dt)?;
         self.check_walls()?;
         {
             let _t = self.timers.start(Stage::Integrate);
@@ -282,6 +288,50 @@ impl System {
             self.remap_into(new_box);
         }
         Ok(())
+    }
+
+    /// The verdict of the last force evaluation on its interactions: an
+    /// error naming the particles and the likely cause if one was outside
+    /// the model's range (the onset of a blow-up).
+    pub fn check_faults(&self, dt: f64) -> Result<(), EngineError> {
+        match &self.report.fault {
+            Some(fault) => {
+                let pair = [fault.i as usize, fault.j as usize];
+                let nearest = pair
+                    .iter()
+                    .map(|&p| self.nearest_unexcluded(p))
+                    .fold(f64::INFINITY, f64::min);
+                let contact = self.model.pair_cutoff().unwrap_or(f64::NAN);
+                Err(EngineError::Unstable {
+                    step: self.step,
+                    particles: pair,
+                    what: fault.what(&format!("particles {} and {}", fault.i, fault.j)),
+                    cause: self.model.likely_cause(
+                        fault,
+                        dt,
+                        self.particles.mass[pair[0]],
+                        nearest / contact,
+                    ),
+                })
+            }
+            None => Ok(()),
+        }
+    }
+
+    /// Distance from particle `p` to its nearest particle that the model
+    /// does not exclude from contact (its bond partners are excluded); a
+    /// scan of all particles, for error reports only.
+    fn nearest_unexcluded(&self, p: usize) -> f64 {
+        let sep = self.simbox.minimum_image();
+        let exclusions = self.model.exclusions();
+        let x = &self.particles.x;
+        (0..x.len())
+            .filter(|&q| q != p && !exclusions.is_some_and(|e| e.excludes(p, q)))
+            .map(|q| {
+                let d = sep.delta(&x[p], &x[q]);
+                (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt()
+            })
+            .fold(f64::INFINITY, f64::min)
     }
 
     /// The verdict of the last force evaluation's flat walls: an error if

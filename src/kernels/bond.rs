@@ -5,6 +5,7 @@
 //! atoms apart. The multibody term has no potential; the reported energy is
 //! the spring proxy `k (r - r0)^2 / 2`.
 
+use super::fault::{Fault, ForcePass, COLLAPSED_BELOW, OVERSTRETCHED_ABOVE};
 use super::isa::Isa;
 use super::tally::{apply_pair_force, Ownership, Tally};
 use super::{dot, sub, Separation};
@@ -146,7 +147,8 @@ pub struct BondInputs<'a> {
     pub tally: bool,
 }
 
-/// Adds the bond forces of `inputs.bonds` to `f` and returns energy and virial.
+/// Adds the bond forces of `inputs.bonds` to `f` and returns energy and
+/// virial, and the first bond outside the model's range ([`Fault`]).
 ///
 /// Runs on the widest instruction set this processor has ([`Isa::detect`]);
 /// every instruction set gives the same result bit for bit.
@@ -155,7 +157,7 @@ pub fn bond_forces<S: Separation>(
     inputs: &BondInputs,
     own: Ownership,
     f: &mut [[f64; 3]],
-) -> Tally {
+) -> ForcePass {
     bond_forces_on(Isa::detect(), sep, inputs, own, f)
 }
 
@@ -168,7 +170,7 @@ pub fn bond_forces_on<S: Separation>(
     inputs: &BondInputs,
     own: Ownership,
     f: &mut [[f64; 3]],
-) -> Tally {
+) -> ForcePass {
     #[cfg(target_arch = "x86_64")]
     if isa == Isa::Avx2 && Isa::Avx2.available() {
         // SAFETY: the processor has AVX2 and FMA (checked just above).
@@ -185,7 +187,7 @@ unsafe fn bond_forces_avx2<S: Separation>(
     inputs: &BondInputs,
     own: Ownership,
     f: &mut [[f64; 3]],
-) -> Tally {
+) -> ForcePass {
     bond_terms(sep, inputs, own, f)
 }
 
@@ -197,7 +199,7 @@ fn bond_terms<S: Separation>(
     inputs: &BondInputs,
     own: Ownership,
     f: &mut [[f64; 3]],
-) -> Tally {
+) -> ForcePass {
     let flags = (inputs.volumes.is_some(), inputs.v.is_some(), inputs.tally);
     if own.newton {
         match flags {
@@ -289,11 +291,12 @@ fn bond_blocks<
     inputs: &BondInputs,
     own: Ownership,
     f: &mut [[f64; 3]],
-) -> Tally {
+) -> ForcePass {
     let x = inputs.x;
     let (vol, vol0) = inputs.volumes.unwrap_or((&[], &[]));
     let v = inputs.v.unwrap_or(&[]);
     let mut tally = Tally::default();
+    let mut fault = None;
     let mut b = BondBlock::new();
     // One bond type (the usual case): its coefficients fill every lane once
     // here instead of being looked up bond by bond.
@@ -363,6 +366,7 @@ fn bond_blocks<
                 }
             }
         }
+        let mut out_of_range = false;
         for l in 0..LANES {
             let rsq = b.dx[l] * b.dx[l] + b.dy[l] * b.dy[l] + b.dz[l] * b.dz[l];
             let r = rsq.sqrt();
@@ -379,6 +383,17 @@ fn bond_blocks<
             if TALLY {
                 b.energy[l] = 0.5 * b.k[l] * dstretch * dstretch;
             }
+            // Written so that NaN fails it too.
+            let in_range = r > COLLAPSED_BELOW * b.r0[l]
+                && r < OVERSTRETCHED_ABOVE * b.r0[l]
+                && b.fpair[l].abs() < f64::INFINITY;
+            out_of_range |= !in_range;
+        }
+        if out_of_range && fault.is_none() {
+            fault = (0..lanes).find_map(|l| {
+                let r = (b.dx[l] * b.dx[l] + b.dy[l] * b.dy[l] + b.dz[l] * b.dz[l]).sqrt();
+                Fault::of_bond(start + l, b.i[l], b.j[l], r, b.r0[l], b.fpair[l])
+            });
         }
         // Scatter.
         for l in 0..lanes {
@@ -396,5 +411,5 @@ fn bond_blocks<
         }
         start += lanes;
     }
-    tally
+    ForcePass { tally, fault }
 }

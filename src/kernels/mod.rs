@@ -10,6 +10,7 @@
 //! `+n` (positive is repulsive) and on `j` along `-n`.
 
 mod bond;
+mod fault;
 mod geometry;
 mod isa;
 mod pair;
@@ -19,6 +20,10 @@ mod volume;
 pub use bond::{
     bond_force_magnitude, bond_forces, bond_forces_on, cube_root, dilation, BondCoeffs, BondEntry,
     BondInputs,
+};
+pub use fault::{
+    stable_timestep, verlet_limit, Fault, FaultKind, ForcePass, COLLAPSED_BELOW, DEEP_OVERLAP,
+    LIMIT_MARGIN, MULTIBODY_LIMIT, OVERSTRETCHED_ABOVE, STIFFEST_MODE,
 };
 pub use geometry::{Separation, Unwrapped};
 pub use isa::Isa;

@@ -4,6 +4,7 @@
 //! when positive. The conservative part derives from
 //! `U = k (d - r)^2 / 2 + a (d - r)^4 / 4`.
 
+use super::fault::{Fault, ForcePass};
 use super::tally::{apply_pair_force, Ownership, Tally};
 use super::{dot, sub, Separation, NEIGHMASK, SPECIAL_SHIFT};
 
@@ -59,14 +60,15 @@ pub struct PairInputs<'a> {
 ///
 /// `neighbours` yields `(i, js)`: atom `i` and its neighbours, each a LAMMPS
 /// neighbour index (the top two bits name a special class, stripped with
-/// [`NEIGHMASK`]). A pair with special weight 0 is skipped.
+/// [`NEIGHMASK`]). A pair with special weight 0 is skipped. Returns energy
+/// and virial, and the first pair with a non-finite force ([`Fault`]).
 pub fn pair_forces<'n, S, I>(
     sep: &S,
     inputs: &PairInputs,
     neighbours: I,
     own: Ownership,
     f: &mut [[f64; 3]],
-) -> Tally
+) -> ForcePass
 where
     S: Separation,
     I: Iterator<Item = (usize, &'n [i32])>,
@@ -86,7 +88,7 @@ fn pair_loop<'n, S, I, const DAMPED: bool, const TALLY: bool>(
     neighbours: I,
     own: Ownership,
     f: &mut [[f64; 3]],
-) -> Tally
+) -> ForcePass
 where
     S: Separation,
     I: Iterator<Item = (usize, &'n [i32])>,
@@ -94,6 +96,7 @@ where
     let x = inputs.x;
     let n = inputs.ntypes;
     let mut tally = Tally::default();
+    let mut fault = None;
     for (i, js) in neighbours {
         let ti = inputs.types.map_or(0, |t| (t[i] - 1) as usize);
         for &jraw in js {
@@ -118,6 +121,9 @@ where
                 0.0
             };
             let fpair = weight * pair_force_magnitude(r, n_dot_dv, c) * rinv;
+            if !fpair.is_finite() {
+                fault = fault.or(Fault::of_pair(i, j, r, c.d, fpair));
+            }
             let (on_i, on_j, frac) = own.split(i, j);
             apply_pair_force(f, i, j, on_i, on_j, &del, fpair);
             if TALLY {
@@ -125,5 +131,5 @@ where
             }
         }
     }
-    tally
+    ForcePass { tally, fault }
 }

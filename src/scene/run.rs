@@ -353,6 +353,7 @@ pub fn run_stage(
         }
         Ok(())
     };
+    sys.check_faults(spec.dt)?;
     sys.check_walls()?;
     record(sys, &mut out, out_files, 0)?;
     let bar = if opts.progress && spec.steps >= 1000 {

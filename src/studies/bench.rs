@@ -195,7 +195,7 @@ impl DebianSpeed {
                 ("bpm", -0.5, false),
             ),
         ];
-        pairs
+        let mut skips: Vec<Specialisation> = pairs
             .iter()
             .filter_map(|(what, with, without)| {
                 let w = self.timing(with.0, with.1, with.2)?;
@@ -206,7 +206,21 @@ impl DebianSpeed {
                     without_ns: wo.bond_ns,
                 })
             })
-            .collect()
+            .collect();
+        // The pair style costs neighbour lists and a pair pass, not bond
+        // time: the whole loop is compared.
+        if let (Some(w), Some(wo)) = (
+            self.timing("bpm", -0.5, false),
+            self.timing("nopair", -0.5, false),
+        ) {
+            skips.push(Specialisation {
+                skipped: "plugin: pair style (bpm/contact, none in reach, against none), loop"
+                    .into(),
+                with_ns: w.loop_ns,
+                without_ns: wo.loop_ns,
+            });
+        }
+        skips
     }
 }
 
@@ -302,6 +316,8 @@ fn specialisation_ratios(
     if let Some(p) = &mut undamped.pair {
         p.gamma = 0.0;
     }
+    let mut no_pairs = paper.clone();
+    no_pairs.pair = None;
     let cases = [
         (
             "multibody term (a_B = 0 against -0.5)",
@@ -320,8 +336,15 @@ fn specialisation_ratios(
         (
             "energy and virial sums (every step against never)",
             paper.clone(),
-            paper,
+            paper.clone(),
             1,
+            0,
+        ),
+        (
+            "pair search (contact pair style, none in reach, against none)",
+            paper,
+            no_pairs,
+            0,
             0,
         ),
     ];
@@ -890,7 +913,8 @@ impl LammpsBondTiming {
 #[derive(Clone, Copy, Debug)]
 pub struct LammpsVariant {
     /// `harmonic` (LAMMPS's own `bond_style harmonic` on the same bonds),
-    /// `bpm` (our plugin) or `nodamp` (our plugin with Gamma = 0).
+    /// `bpm` (our plugin), `nodamp` (our plugin with Gamma = 0) or `nopair`
+    /// (our plugin with `pair_style none`).
     pub style: &'static str,
     /// Multibody strength.
     pub a_b: f64,
@@ -912,15 +936,16 @@ impl LammpsVariant {
 }
 
 /// The variants run in Debian's LAMMPS; the first is the reference
-/// (`bond_style harmonic`). The last sums energies and virials on every
-/// step, against the others' once per 1,000 steps.
-pub const LAMMPS_VARIANTS: [LammpsVariant; 6] = [
+/// (`bond_style harmonic`). `bpm a_B=-0.5 thermo=1` sums energies and
+/// virials on every step, against the others' once per 1,000 steps.
+pub const LAMMPS_VARIANTS: [LammpsVariant; 7] = [
     LammpsVariant::new("harmonic", 0.0, 1000),
     LammpsVariant::new("bpm", 0.0, 1000),
     LammpsVariant::new("nodamp", 0.0, 1000),
     LammpsVariant::new("bpm", -0.5, 1000),
     LammpsVariant::new("nodamp", -0.5, 1000),
     LammpsVariant::new("bpm", -0.5, 1),
+    LammpsVariant::new("nopair", -0.5, 1000),
 ];
 
 /// What [`run_bench_lammps`] measured.
@@ -1037,6 +1062,7 @@ mod tests {
                 timing("bpm", -0.5, 1000, 150.0),
                 timing("nodamp", -0.5, 1000, 140.0),
                 timing("bpm", -0.5, 1, 165.0),
+                timing("nopair", -0.5, 1000, 120.0),
             ],
             native_a0_ns: 60.0,
             native_a0_bond_ns: 40.0,
@@ -1044,9 +1070,11 @@ mod tests {
         assert_eq!(debian.harmonic_over_native(), 2.5);
         assert_eq!(debian.plugin_over_harmonic(-0.5), 1.5);
         let skips = debian.specialisations();
-        assert_eq!(skips.len(), 4);
+        assert_eq!(skips.len(), 5);
         assert_eq!(skips[0].with_ns / skips[0].without_ns, 150.0 / 130.0);
         assert_eq!(skips[3].with_ns / skips[3].without_ns, 1.1);
+        // The pair style is judged on the loop (2x the bond time here).
+        assert_eq!((skips[4].with_ns, skips[4].without_ns), (300.0, 240.0));
         let mut cases = Vec::new();
         for (n, scale) in [
             (3_354, 1.0),

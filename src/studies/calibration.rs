@@ -199,6 +199,12 @@ impl StudyOptions {
                 format!("must be at least 5 (d), got {bad}"),
             ));
         }
+        if let Some(bad) = self.lammps_sizes.iter().find(|l| !self.sizes.contains(l)) {
+            return Err(InvalidOption::new(
+                "--lammps-sizes",
+                format!("must be among --sizes, got {bad}"),
+            ));
+        }
         validate_a_b_values("a_B values", self.a_b.iter().chain(&self.convergence_a_b))?;
         if self.seeds.is_empty() || self.a_b.is_empty() {
             return Err(InvalidOption::new(

@@ -11,10 +11,14 @@
 //! - [`bench`] (`bpm bench`, `bpm bench-lammps`): the native engine's
 //!   throughput per part of the step against size and threads, against
 //!   upstream LAMMPS and Debian's `bond_style harmonic`, the plugin's
-//!   times, and the speed goals with their verdicts.
+//!   times, and the speed goals with their verdicts;
+//! - [`stability`] (`bpm stability`): the largest stable timestep against
+//!   a_B and damping, by bisection, beside the stiffest-mode prediction and
+//!   the moduli near the incompressible limit.
 
 pub mod bench;
 pub mod calibration;
 pub mod hertz;
 pub mod hertz_sweep;
+pub mod stability;
 pub mod upstream;

@@ -51,6 +51,9 @@ pub enum UpstreamError {
     /// LAMMPS's screen output lacks a line or value.
     #[error("{0}")]
     Output(String),
+    /// An option is out of range.
+    #[error(transparent)]
+    Invalid(#[from] crate::options::InvalidOption),
 }
 
 type Result<T> = std::result::Result<T, UpstreamError>;
@@ -602,6 +605,40 @@ pub struct UpstreamOptions {
     pub seed: u64,
 }
 
+impl UpstreamOptions {
+    /// Checks every option; the message names it.
+    pub fn validate(&self) -> std::result::Result<(), crate::options::InvalidOption> {
+        use crate::options::InvalidOption;
+        let side = |v: f64| v.is_finite() && v > 3.0 && v <= crate::scene::builders::bulk::MAX_SIZE;
+        if !side(self.size) {
+            return Err(InvalidOption::new(
+                "--size",
+                format!("must be above 3 and at most 400 (d), got {}", self.size),
+            ));
+        }
+        if !(self.speed_size == 0.0 || side(self.speed_size)) {
+            return Err(InvalidOption::new(
+                "--speed-size",
+                format!(
+                    "must be 0 (no speed runs) or above 3 (d), got {}",
+                    self.speed_size
+                ),
+            ));
+        }
+        if !(self.grain_radius.is_finite() && self.grain_radius >= 2.0 && self.grain_radius <= 50.0)
+        {
+            return Err(InvalidOption::new(
+                "--grain-radius",
+                format!("must be in [2, 50] (d), got {}", self.grain_radius),
+            ));
+        }
+        if self.steps == 0 {
+            return Err(InvalidOption::new("--steps", "must be at least 1"));
+        }
+        Ok(())
+    }
+}
+
 /// What [`run_upstream_check`] measured and wrote.
 #[derive(Clone, Debug)]
 pub struct UpstreamReport {
@@ -641,6 +678,7 @@ pub fn run_upstream_check(
     command: &str,
     log: &mut dyn FnMut(&str),
 ) -> Result<UpstreamReport> {
+    opts.validate()?;
     let lammps = ModernLammps::locate()?;
     let work = output.join("lammps");
     std::fs::create_dir_all(&work).map_err(FileError::on("creating", &work))?;

@@ -18,7 +18,8 @@ use super::simbox::SimBox;
 use super::timers::Stage;
 use crate::kernels::{
     accumulate_reference_volumes, accumulate_volumes, bond_forces, pair_forces, BondCoeffs,
-    BondEntry, BondInputs, Ownership, PairCoeffs, PairInputs, Separation, Tally, Unwrapped,
+    BondEntry, BondInputs, Fault, ForcePass, Ownership, PairCoeffs, PairInputs, Separation,
+    Unwrapped,
 };
 
 /// Index of the bond term in [`ModelTally::terms`].
@@ -238,10 +239,10 @@ impl BpmModel {
                         own,
                         out,
                     );
-                    Tally::default()
+                    ForcePass::default()
                 });
         }
-        let bond_tally = {
+        let bond_pass = {
             let _t = timers.start(Stage::Bonds);
             let volumes = self
                 .terms
@@ -271,7 +272,7 @@ impl BpmModel {
                     .merged(&bond_forces(&sep, &boundary, own, out))
             })
         };
-        let pair_tally = match (self.terms.pairs, self.pair) {
+        let pair_pass = match (self.terms.pairs, self.pair) {
             (true, Some(p)) if !neighbours.is_empty() => {
                 let _t = timers.start(Stage::Pairs);
                 let coeffs = [p];
@@ -289,11 +290,12 @@ impl BpmModel {
                     pair_forces(&sep, &inputs, rows, own, as_rows(out))
                 })
             }
-            _ => Tally::default(),
+            _ => ForcePass::default(),
         };
+        out.fault = out.fault.or(bond_pass.fault).or(pair_pass.fault);
         let mut result = ModelTally::default();
-        result.terms[BOND_TERM] = bond_tally;
-        result.terms[PAIR_TERM] = pair_tally;
+        result.terms[BOND_TERM] = bond_pass.tally;
+        result.terms[PAIR_TERM] = pair_pass.tally;
         result
     }
 }
@@ -317,6 +319,10 @@ impl ParticleModel for BpmModel {
 
     fn compute(&mut self, input: &ForceInput<'_>, out: &mut ForceOutput<'_>) -> ModelTally {
         self.compute_forces(input, out)
+    }
+
+    fn likely_cause(&self, fault: &Fault, dt: f64, mass: f64, nearest_unbonded: f64) -> String {
+        fault.likely_cause(dt, Some(&self.bond), mass, nearest_unbonded)
     }
 
     fn as_any(&self) -> &dyn std::any::Any {

@@ -61,11 +61,15 @@ impl BulkParams {
     }
 }
 
+/// Largest box side: some 8e7 particles, about what 24 GiB holds while
+/// the fill is bonded.
+pub const MAX_SIZE: f64 = 400.0;
+
 fn validate_size(size: f64) -> Result<(), InvalidOption> {
-    if !(size.is_finite() && size > 3.0) {
+    if !(size.is_finite() && size > 3.0 && size <= MAX_SIZE) {
         return Err(InvalidOption::new(
             "--size",
-            format!("must be a number above 3 (d), got {size}"),
+            format!("must be a number above 3 and at most {MAX_SIZE} (d), got {size}"),
         ));
     }
     Ok(())
@@ -85,6 +89,12 @@ impl BulkParams {
     pub fn validate(&self) -> Result<(), InvalidOption> {
         validate_size(self.size)?;
         validate_a_b(self.force_field.bond.a)?;
+        if !(self.volume_fraction > 0.0 && self.volume_fraction < 0.75) {
+            return Err(InvalidOption::new(
+                "volume_fraction",
+                format!("must be in (0, 0.75), got {}", self.volume_fraction),
+            ));
+        }
         for (option, t) in [
             ("relax_time", self.relax_time),
             ("thermal_time", self.thermal_time),
@@ -218,6 +228,10 @@ pub fn build_bulk(
     threads: usize,
     progress: bool,
 ) -> Result<(Scene, BulkSummary), SceneError> {
+    params.validate().map_err(|e| SceneError::Invalid {
+        field: e.option.into(),
+        reason: e.requirement,
+    })?;
     let start = std::time::Instant::now();
     let l = params.size;
     let pair = params.force_field.pair.unwrap_or(PairCoeffs {
