@@ -158,25 +158,21 @@ fn pairs_fault_only_on_non_finite_values_not_on_deep_overlap() {
         special: [1.0; 4],
         tally: false,
     };
-    let mut f = vec![[0.0; 3]; 3];
-    let deep = [1i32];
-    let pass = pair_forces(
-        &Unwrapped,
-        &inputs,
-        [(0usize, &deep[..])].into_iter(),
-        Ownership::all(3),
-        &mut f,
-    );
-    assert_eq!(pass.fault, None, "deep overlap");
-    let bad = [2i32];
-    let pass = pair_forces(
-        &Unwrapped,
-        &inputs,
-        [(0usize, &bad[..])].into_iter(),
-        Ownership::all(3),
-        &mut f,
-    );
-    let fault = pass.fault.expect("NaN partner");
+    // The fault of particle 0's contact with `partner`.
+    let fault_with = |partner: i32| {
+        let mut f = vec![[0.0; 3]; 3];
+        let row = [partner];
+        pair_forces(
+            &Unwrapped,
+            &inputs,
+            [(0usize, &row[..])].into_iter(),
+            Ownership::all(3),
+            &mut f,
+        )
+        .fault
+    };
+    assert_eq!(fault_with(1), None, "deep overlap");
+    let fault = fault_with(2).expect("NaN partner");
     assert_eq!(
         (fault.kind, fault.i, fault.j, fault.bonded),
         (FaultKind::NonFinite, 0, 2, false)

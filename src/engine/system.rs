@@ -327,10 +327,7 @@ impl System {
         let x = &self.particles.x;
         (0..x.len())
             .filter(|&q| q != p && !exclusions.is_some_and(|e| e.excludes(p, q)))
-            .map(|q| {
-                let d = sep.delta(&x[p], &x[q]);
-                (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt()
-            })
+            .map(|q| sep.distance(&x[p], &x[q]))
             .fold(f64::INFINITY, f64::min)
     }
 

@@ -402,10 +402,7 @@ fn largest_bond_strain(sys: &crate::engine::System, pairs: &[[usize; 2]], r0: &[
     pairs
         .iter()
         .zip(r0)
-        .map(|([i, j], r0)| {
-            let d = sep.delta(&x[*i], &x[*j]);
-            ((d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt() / r0 - 1.0).abs()
-        })
+        .map(|([i, j], r0)| (sep.distance(&x[*i], &x[*j]) / r0 - 1.0).abs())
         .fold(0.0, f64::max)
 }
 
