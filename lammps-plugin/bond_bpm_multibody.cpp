@@ -21,7 +21,7 @@ using namespace LAMMPS_NS;
 static const char *REFERENCE_ID = "BPM_REFERENCE";
 
 BondBPMMultibody::BondBPMMultibody(LAMMPS *lmp) :
-    Bond(lmp), reference(nullptr), multibody(false), damped(false)
+    Bond(lmp), reference(nullptr), multibody(false), damped(false), zero_net(false)
 {
   writedata = 1;
 }
@@ -74,9 +74,18 @@ void BondBPMMultibody::init_style()
   ensure_reference();
 }
 
-void BondBPMMultibody::settings(int narg, char **)
+// bond_style bpm/multibody [zero_net yes|no]
+void BondBPMMultibody::settings(int narg, char **arg)
 {
-  if (narg != 0) error->all(FLERR, std::string("bond_style bpm/multibody takes no arguments"));
+  zero_net = false;
+  bool valid = narg == 0;
+  if (narg == 2 && std::string(arg[0]) == "zero_net") {
+    std::string value(arg[1]);
+    valid = value == "yes" || value == "no";
+    zero_net = value == "yes";
+  }
+  if (!valid)
+    error->all(FLERR, std::string("bond_style bpm/multibody takes no arguments or 'zero_net yes|no'"));
   ensure_reference();
 }
 
@@ -130,6 +139,28 @@ void BondBPMMultibody::compute(int eflag, int vflag)
   if (eflag_global) energy += tally.energy;
   if (vflag_global)
     for (int k = 0; k < 6; k++) virial[k] += tally.virial[k];
+  if (multibody && zero_net) apply_zero_net_correction(bonds, nbonds, r0, nall, nlocal, newton_bond);
+}
+
+// The zero-net variant's correction: per-atom multibody sums, completed on
+// owners and copied to ghosts, then the correction bond by bond.
+void BondBPMMultibody::apply_zero_net_correction(const bpm_bond_entry *bonds, int nbonds, const double *r0,
+                                         int nall, int nlocal, int newton_bond)
+{
+  reference->clear_multibody_sums(nall);
+  int status = bpm_multibody_sums(atom->x[0], nall, bonds, nbonds, r0, coeffs.data(),
+                                  (int64_t) coeffs.size(), reference->vol, reference->vol0, nlocal,
+                                  newton_bond, reference->multibody_sums);
+  if (status != BPM_OK)
+    error->one(FLERR, "bond_style bpm/multibody: multibody sum kernel failed with status " + std::to_string(status));
+  reference->communicate_multibody_sums(newton_bond);
+  bpm_tally tally{};
+  status = bpm_balance_multibody(atom->x[0], nall, bonds, nbonds, reference->multibody_sums, nlocal,
+                                 newton_bond, atom->f[0], vflag_global ? &tally : nullptr);
+  if (status != BPM_OK)
+    error->one(FLERR, "bond_style bpm/multibody: zero-net kernel failed with status " + std::to_string(status));
+  if (vflag_global)
+    for (int k = 0; k < 6; k++) virial[k] += tally.virial[k];
 }
 
 double BondBPMMultibody::equilibrium_distance(int)
@@ -151,14 +182,21 @@ double BondBPMMultibody::single(int type, double rsq, int i, int j, double &ffor
 void BondBPMMultibody::write_restart(FILE *fp)
 {
   fwrite(coeffs.data(), sizeof(bpm_bond_coeffs), coeffs.size(), fp);
+  int flag = zero_net ? 1 : 0;
+  fwrite(&flag, sizeof(int), 1, fp);
 }
 
 void BondBPMMultibody::read_restart(FILE *fp)
 {
   allocate();
-  if (comm->me == 0)
+  int flag = 0;
+  if (comm->me == 0) {
     utils::sfread(FLERR, coeffs.data(), sizeof(bpm_bond_coeffs), coeffs.size(), fp, nullptr, error);
+    utils::sfread(FLERR, &flag, sizeof(int), 1, fp, nullptr, error);
+  }
   MPI_Bcast(coeffs.data(), (int) (coeffs.size() * sizeof(bpm_bond_coeffs)), MPI_BYTE, 0, world);
+  MPI_Bcast(&flag, 1, MPI_INT, 0, world);
+  zero_net = flag != 0;
   for (int i = 1; i <= atom->nbondtypes; i++) setflag[i] = 1;
 }
 

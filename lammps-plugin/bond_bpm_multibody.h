@@ -29,7 +29,9 @@ class BondBPMMultibody : public Bond {
   std::vector<bpm_bond_coeffs> coeffs;    // index: type - 1
   class FixBPMReference *reference;
   bool multibody, damped;
+  bool zero_net;    // the zero-net-multibody variant (keyword zero_net)
   void allocate();
+  void apply_zero_net_correction(const bpm_bond_entry *, int, const double *, int, int, int);
   void ensure_reference();
 };
 

@@ -66,6 +66,21 @@ int bpm_bond_forces(const double *x, const double *v, int64_t nall, const bpm_bo
                     const double *vol, const double *vol0, int64_t n_owned, int32_t newton, double *f,
                     bpm_tally *tally, bpm_fault *fault);
 
+/* Zero-net-multibody variant, first pass: adds each bond's multibody force
+ * and a count of 1 to sums[4 i .. 4 i + 3] = (Mx, My, Mz, N) of its atoms
+ * (owned ones only with newton == 0). vol, vol0: complete volumes. */
+int bpm_multibody_sums(const double *x, int64_t nall, const bpm_bond_entry *bonds, int64_t nbonds,
+                       const double *r0, const bpm_bond_coeffs *coeffs, int64_t ncoeffs,
+                       const double *vol, const double *vol0, int64_t n_owned, int32_t newton,
+                       double *sums);
+
+/* Zero-net-multibody variant, second pass: adds -(M_i/N_i - M_j/N_j)/2 of
+ * each bond to atom i and the opposite to j, from sums complete on every
+ * atom (ghosts included); its virial (no energy) to tally if not NULL. */
+int bpm_balance_multibody(const double *x, int64_t nall, const bpm_bond_entry *bonds,
+                          int64_t nbonds, const double *sums, int64_t n_owned, int32_t newton,
+                          double *f, bpm_tally *tally);
+
 /* Adds contact forces over a LAMMPS half neighbour list (ilist, numneigh,
  * firstneigh; special bits in the top two bits of each neighbour index).
  * types == NULL: every atom is type 1. coeffs is ntypes x ntypes, row-major,

@@ -18,8 +18,8 @@ using namespace LAMMPS_NS;
 using namespace FixConst;
 
 FixBPMReference::FixBPMReference(LAMMPS *lmp, int narg, char **arg) :
-    Fix(lmp, narg, arg), vol(nullptr), vol0(nullptr), r0(nullptr), captured(0), nmax_vol(0), nmax_r0(0),
-    list_built_at(-1), list_size(-1), max_r0_all(0.0)
+    Fix(lmp, narg, arg), vol(nullptr), vol0(nullptr), multibody_sums(nullptr), r0(nullptr), captured(0), nmax_vol(0),
+    nmax_sums(0), nmax_r0(0), list_built_at(-1), list_size(-1), max_r0_all(0.0), comm_sums(false)
 {
   if (narg != 3) error->all(FLERR, std::string("Illegal fix BPM/REFERENCE command: it takes no arguments"));
   if (!atom->molecular) error->all(FLERR, std::string("Fix BPM/REFERENCE requires an atom style with bonds"));
@@ -27,8 +27,8 @@ FixBPMReference::FixBPMReference(LAMMPS *lmp, int narg, char **arg) :
   restart_global = 1;
   restart_peratom = 1;
   create_attribute = 1;
-  comm_forward = 2;
-  comm_reverse = 2;
+  comm_forward = 4;    // volumes: V, V0; multibody sums: Mx, My, Mz, N
+  comm_reverse = 4;
   grow_arrays(atom->nmax);
   atom->add_callback(Atom::GROW);
   atom->add_callback(Atom::RESTART);
@@ -41,6 +41,7 @@ FixBPMReference::~FixBPMReference()
   memory->destroy(r0);
   memory->destroy(vol);
   memory->destroy(vol0);
+  memory->destroy(multibody_sums);
 }
 
 int FixBPMReference::setmask()
@@ -185,7 +186,29 @@ void FixBPMReference::clear_volumes(int nall)
   for (int i = 0; i < nall; i++) vol[i] = vol0[i] = 0.0;
 }
 
+void FixBPMReference::clear_multibody_sums(int nall)
+{
+  if (nall > nmax_sums) {
+    nmax_sums = atom->nmax > nall ? atom->nmax : nall;
+    memory->destroy(multibody_sums);
+    memory->create(multibody_sums, 4 * nmax_sums, "bpm/reference:multibody_sums");
+  }
+  for (int i = 0; i < 4 * nall; i++) multibody_sums[i] = 0.0;
+}
+
+void FixBPMReference::communicate_multibody_sums(int newton_bond)
+{
+  comm_sums = true;
+  communicate(newton_bond);
+  comm_sums = false;
+}
+
 void FixBPMReference::communicate_volumes(int newton_bond)
+{
+  communicate(newton_bond);
+}
+
+void FixBPMReference::communicate(int newton_bond)
 {
 #if defined(BPM_MODERN_LAMMPS)    // 2022 and later: comm calls overloaded by class
   if (newton_bond) comm->reverse_comm(this);
@@ -199,6 +222,11 @@ void FixBPMReference::communicate_volumes(int newton_bond)
 int FixBPMReference::pack_forward_comm(int n, int *list, double *buf, int, int *)
 {
   int m = 0;
+  if (comm_sums) {
+    for (int k = 0; k < n; k++)
+      for (int c = 0; c < 4; c++) buf[m++] = multibody_sums[4 * list[k] + c];
+    return m;
+  }
   for (int k = 0; k < n; k++) {
     buf[m++] = vol[list[k]];
     buf[m++] = vol0[list[k]];
@@ -209,6 +237,11 @@ int FixBPMReference::pack_forward_comm(int n, int *list, double *buf, int, int *
 void FixBPMReference::unpack_forward_comm(int n, int first, double *buf)
 {
   int m = 0;
+  if (comm_sums) {
+    for (int i = first; i < first + n; i++)
+      for (int c = 0; c < 4; c++) multibody_sums[4 * i + c] = buf[m++];
+    return;
+  }
   for (int i = first; i < first + n; i++) {
     vol[i] = buf[m++];
     vol0[i] = buf[m++];
@@ -218,6 +251,11 @@ void FixBPMReference::unpack_forward_comm(int n, int first, double *buf)
 int FixBPMReference::pack_reverse_comm(int n, int first, double *buf)
 {
   int m = 0;
+  if (comm_sums) {
+    for (int i = first; i < first + n; i++)
+      for (int c = 0; c < 4; c++) buf[m++] = multibody_sums[4 * i + c];
+    return m;
+  }
   for (int i = first; i < first + n; i++) {
     buf[m++] = vol[i];
     buf[m++] = vol0[i];
@@ -228,6 +266,11 @@ int FixBPMReference::pack_reverse_comm(int n, int first, double *buf)
 void FixBPMReference::unpack_reverse_comm(int n, int *list, double *buf)
 {
   int m = 0;
+  if (comm_sums) {
+    for (int k = 0; k < n; k++)
+      for (int c = 0; c < 4; c++) multibody_sums[4 * list[k] + c] += buf[m++];
+    return;
+  }
   for (int k = 0; k < n; k++) {
     vol[list[k]] += buf[m++];
     vol0[list[k]] += buf[m++];
@@ -307,5 +350,6 @@ void FixBPMReference::restart(char *buf)
 
 double FixBPMReference::memory_usage()
 {
-  return (double) atom->nmax * stride * sizeof(double) + 2.0 * nmax_vol * sizeof(double);
+  return (double) atom->nmax * stride * sizeof(double) + 2.0 * nmax_vol * sizeof(double) +
+         4.0 * nmax_sums * sizeof(double);
 }

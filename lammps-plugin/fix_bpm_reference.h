@@ -1,7 +1,8 @@
 /* Internal fix of bond_style bpm/multibody: per-bond reference lengths r0,
  * stored per atom beside atom->bond_atom so they move with atoms between
  * ranks and go into restart files, and the volume proxies V, V0 with their
- * ghost communication. Created by the bond style with ID BPM_REFERENCE. */
+ * ghost communication, and the multibody sums of the zero-net variant.
+ * Created by the bond style with ID BPM_REFERENCE. */
 #ifndef LMP_FIX_BPM_REFERENCE_H
 #define LMP_FIX_BPM_REFERENCE_H
 
@@ -43,22 +44,30 @@ class FixBPMReference : public Fix {
   void clear_volumes(int nall);
   // Sums ghost parts into owners (newton_bond on), then copies owners to ghosts.
   void communicate_volumes(int newton_bond);
+  // Zeroed multibody sums (Mx, My, Mz, N per atom) of the zero-net variant.
+  void clear_multibody_sums(int nall);
+  // As communicate_volumes, for the multibody sums.
+  void communicate_multibody_sums(int newton_bond);
   // r0 of the bond between local atoms i and j (-1 if none).
   double r0_between(int i, int j);
   double max_r0() const { return max_r0_all; }
 
   double *vol, *vol0;
+  double *multibody_sums;    // [4 nall]: the zero-net variant's multibody sums
 
  private:
   double **r0;    // [nmax][bond_per_atom], aligned with atom->bond_atom
   int captured;
   int nmax_vol;
+  int nmax_sums;
   int nmax_r0;
   int stride;
   std::vector<double> list_r0;
   bigint list_built_at;
   int list_size;
   double max_r0_all;
+  bool comm_sums;    // which arrays the comm calls carry: the multibody sums, or V and V0
+  void communicate(int newton_bond);
   std::map<std::pair<tagint, tagint>, double> given;    // from "lengths FILE"
   void capture();
   void read_lengths(const char *path);

@@ -6,9 +6,9 @@
 //! The declarations are in `lammps-plugin/bpm_kernels.h`.
 
 use crate::kernels::{
-    accumulate_reference_volumes, accumulate_volumes, bond_forces, pair_forces, BondCoeffs,
-    BondEntry, BondInputs, Fault, FaultKind, ForcePass, Ownership, PairCoeffs, PairInputs, Tally,
-    Unwrapped, NEIGHMASK,
+    accumulate_multibody_sums, accumulate_reference_volumes, accumulate_volumes, balance_multibody,
+    bond_forces, pair_forces, BondCoeffs, BondEntry, BondInputs, Fault, FaultKind, ForcePass,
+    MultibodyInputs, MultibodySum, Ownership, PairCoeffs, PairInputs, Tally, Unwrapped, NEIGHMASK,
 };
 use std::panic::{catch_unwind, AssertUnwindSafe};
 use std::slice;
@@ -209,6 +209,120 @@ pub unsafe extern "C" fn bpm_bond_forces(
         };
         let f = slice::from_raw_parts_mut(f as *mut [f64; 3], nall);
         report(&bond_forces(&Unwrapped, &inputs, own, f), tally, fault)
+    })
+}
+
+/// Adds each bond's multibody force and a count of 1 to the sums
+/// `[Mx, My, Mz, N]` (4 doubles per atom) of its atoms, as owned; the first
+/// pass of the zero-net-multibody variant, see
+/// [`accumulate_multibody_sums`]. Needs complete volumes on every atom.
+///
+/// # Safety
+/// Array sizes as for [`bpm_bond_forces`]; `vol` and `vol0` hold `nall`
+/// doubles, `sums` `4 nall`.
+#[no_mangle]
+pub unsafe extern "C" fn bpm_multibody_sums(
+    x: *const f64,
+    nall: i64,
+    bonds: *const BondEntry,
+    nbonds: i64,
+    r0: *const f64,
+    coeffs: *const BondCoeffs,
+    ncoeffs: i64,
+    vol: *const f64,
+    vol0: *const f64,
+    n_owned: i64,
+    newton: i32,
+    sums: *mut f64,
+) -> i32 {
+    guard(|| {
+        let Some([nall, nbonds, ncoeffs, n_owned]) =
+            counts(&[nall, nbonds, ncoeffs, n_owned]).map(|c| [c[0], c[1], c[2], c[3]])
+        else {
+            return BPM_ERR_NULL;
+        };
+        if (nall > 0 && (x.is_null() || vol.is_null() || vol0.is_null() || sums.is_null()))
+            || (nbonds > 0 && (bonds.is_null() || r0.is_null() || coeffs.is_null()))
+        {
+            return BPM_ERR_NULL;
+        }
+        let bonds = list(bonds, nbonds);
+        let status = check_bonds(bonds, nall, ncoeffs);
+        if status != BPM_OK {
+            return status;
+        }
+        let inputs = MultibodyInputs {
+            x: rows(x, nall),
+            bonds,
+            r0: list(r0, nbonds),
+            coeffs: list(coeffs, ncoeffs),
+            volumes: (list(vol, nall), list(vol0, nall)),
+        };
+        let own = Ownership {
+            n_owned,
+            newton: newton != 0,
+        };
+        let sums = slice::from_raw_parts_mut(sums as *mut MultibodySum, nall);
+        accumulate_multibody_sums(&Unwrapped, &inputs, own, sums);
+        BPM_OK
+    })
+}
+
+/// Adds the zero-net-multibody correction of every bond to `f` from the
+/// complete sums of [`bpm_multibody_sums`] on all atoms (ghosts included),
+/// and writes its virial (no energy) to `tally` if not null; see
+/// [`balance_multibody`].
+///
+/// # Safety
+/// `x` and `f` hold `3 nall` doubles, `sums` `4 nall`, `bonds` `nbonds`
+/// rows; `tally` is null or valid.
+#[no_mangle]
+pub unsafe extern "C" fn bpm_balance_multibody(
+    x: *const f64,
+    nall: i64,
+    bonds: *const BondEntry,
+    nbonds: i64,
+    sums: *const f64,
+    n_owned: i64,
+    newton: i32,
+    f: *mut f64,
+    tally: *mut Tally,
+) -> i32 {
+    guard(|| {
+        let Some([nall, nbonds, n_owned]) =
+            counts(&[nall, nbonds, n_owned]).map(|c| [c[0], c[1], c[2]])
+        else {
+            return BPM_ERR_NULL;
+        };
+        if (nall > 0 && (x.is_null() || sums.is_null() || f.is_null()))
+            || (nbonds > 0 && bonds.is_null())
+        {
+            return BPM_ERR_NULL;
+        }
+        let bonds = list(bonds, nbonds);
+        let status = check_bonds(bonds, nall, i32::MAX as usize);
+        if status != BPM_OK {
+            return status;
+        }
+        let own = Ownership {
+            n_owned,
+            newton: newton != 0,
+        };
+        let sums = list(sums as *const MultibodySum, nall);
+        let f = slice::from_raw_parts_mut(f as *mut [f64; 3], nall);
+        let sum = balance_multibody(
+            &Unwrapped,
+            rows(x, nall),
+            bonds,
+            sums,
+            own,
+            f,
+            !tally.is_null(),
+        );
+        if let Some(t) = tally.as_mut() {
+            *t = sum;
+        }
+        BPM_OK
     })
 }
 

@@ -255,6 +255,8 @@ const SUBCOMMANDS: &[&[&str]] = &[
     &["export", "{scene}", "-o", "{out}"],
     &["bench-lammps"],
     &["stability", "-o", "{out}"],
+    &["accuracy", "-o", "{out}"],
+    &["large-strain", "-o", "{out}"],
 ];
 
 /// Value names of options that take paths or words, not numbers.
@@ -326,6 +328,25 @@ fn every_numeric_option_refuses_non_numbers_before_any_work() {
             .replace("{data}", data_path.to_str().unwrap())
             .replace("{out}", dir.join("out").to_str().unwrap())
     };
+    // Every subcommand `bpm --help` lists is in the sweep.
+    let top = Command::new(env!("CARGO_BIN_EXE_bpm"))
+        .arg("--help")
+        .output()
+        .unwrap();
+    let top = String::from_utf8(top.stdout).unwrap();
+    let listed = top
+        .lines()
+        .skip_while(|l| !l.starts_with("Commands:"))
+        .skip(1)
+        .take_while(|l| l.starts_with("  "))
+        .filter_map(|l| l.split_whitespace().next())
+        .filter(|name| *name != "help");
+    for name in listed {
+        assert!(
+            SUBCOMMANDS.iter().any(|sub| sub[0] == name),
+            "`bpm {name}` is missing from SUBCOMMANDS"
+        );
+    }
     let mut tried = 0;
     for sub in SUBCOMMANDS {
         let base: Vec<String> = sub.iter().map(fill).collect();

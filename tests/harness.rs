@@ -103,11 +103,19 @@ fn calibration_agrees_between_engines_and_with_the_paper() {
     let l = launcher("calibration");
     for a_b in [0.0, 1.0] {
         let loading = Loading::default();
-        let (n, _) =
-            measure_moduli(&solid, a_b, &loading, &CalibrationEngine::Native(1), "n").unwrap();
+        let (n, _) = measure_moduli(
+            &solid,
+            a_b,
+            false,
+            &loading,
+            &CalibrationEngine::Native(1),
+            "n",
+        )
+        .unwrap();
         let (m, _) = measure_moduli(
             &solid,
             a_b,
+            false,
             &loading,
             &CalibrationEngine::Lammps(l.clone(), 1),
             "l",

@@ -74,31 +74,63 @@ fn plugin_forces_and_pressure_equal_the_native_engine() {
     }
 }
 
-#[test]
-fn one_and_two_ranks_agree_with_newton_on_and_off() {
-    let s = scene(-0.5);
-    let native = native_single_point(&s);
-    for (ranks, newton) in [(1, false), (2, true), (2, false)] {
+/// `s` through LAMMPS on each `(ranks, newton)` equals the native engine
+/// at step 0; `tag` names the runs.
+fn assert_ranks_agree(s: &Scene, runs: &[(usize, bool)], tag: &str) {
+    let native = native_single_point(s);
+    for &(ranks, newton) in runs {
         let lmp = lammps_single_point(
             lmp(),
-            &s,
+            s,
             newton,
             ranks,
             &workdir(),
-            &format!("mpi-{ranks}-{newton}"),
+            &format!("{tag}-{ranks}-{newton}"),
         )
         .unwrap();
-        assert_step_zero_agrees(&lmp, &native, &format!("np {ranks}, newton {newton}"));
+        assert_step_zero_agrees(
+            &lmp,
+            &native,
+            &format!("{tag}, np {ranks}, newton {newton}"),
+        );
     }
 }
 
 #[test]
-fn a_restart_keeps_every_bond_reference_length() {
-    let s = scene(-0.5);
+fn one_and_two_ranks_agree_with_newton_on_and_off() {
+    assert_ranks_agree(&scene(-0.5), &[(1, false), (2, true), (2, false)], "mpi");
+}
+
+#[test]
+fn the_zero_net_variant_in_the_plugin_equals_the_native_engine_on_ranks_and_newton() {
+    let mut s = scene(-0.5);
+    let plain = native_single_point(&s);
+    s.force_field.zero_net_multibody = true;
+    let changed = max_relative_deviation(&native_single_point(&s).forces, &plain.forces);
+    assert!(
+        changed > 1e-3,
+        "the variant must change the forces: {changed:e}"
+    );
+    assert_ranks_agree(&s, &[(1, true), (2, true), (2, false)], "zero-net");
+}
+
+#[test]
+fn a_restart_keeps_every_bond_reference_length_and_the_zero_net_setting() {
+    for zero_net in [false, true] {
+        restart_resumes_the_run(zero_net);
+    }
+}
+
+/// A run written to a restart file halfway and resumed from it (the
+/// restart carries the style's settings; `restart_read.in` sets none)
+/// ends where the run without a restart ends.
+fn restart_resumes_the_run(zero_net: bool) {
+    let mut s = scene(-0.5);
+    s.force_field.zero_net_multibody = zero_net;
     let dir = workdir();
-    let restart = dir.join("state.restart");
-    let continuous = dir.join("continuous.dump");
-    let resumed = dir.join("resumed.dump");
+    let restart = dir.join(format!("state-{zero_net}.restart"));
+    let continuous = dir.join(format!("continuous-{zero_net}.dump"));
+    let resumed = dir.join(format!("resumed-{zero_net}.dump"));
     let var = |dump: &Path| {
         [
             ("restart", restart.display().to_string()),
@@ -146,7 +178,7 @@ fn a_restart_keeps_every_bond_reference_length() {
     let df = max_relative_deviation(&cols(&b, 3), &cols(&a, 3));
     assert!(
         dx <= tolerance("restart positions") && df <= tolerance("restart forces"),
-        "after restart: positions differ by {dx:e} d, forces by {df:e}"
+        "zero net {zero_net}: after restart, positions differ by {dx:e} d, forces by {df:e}"
     );
 }
 

@@ -125,3 +125,36 @@ fn inconsistent_arrays_and_stages_are_rejected() {
     );
     rejects(|d| d["box"]["tilt"] = json!([3.5, 0, 0]), "box.tilt[0]");
 }
+
+#[test]
+fn a_sphere_wall_that_would_shrink_through_its_cutoff_is_refused_and_a_fixed_one_is_not() {
+    let wall = |velocity: f64| json!({"centre": [3, 3, 3], "radius": 3.0, "velocity": velocity, "stiffness": 1, "cutoff": 1});
+    // 10 steps of dt 0.1 (the default): -1.5 d/tau shrinks 3 to 1.5, -2.5
+    // to 0.5, inside the cutoff.
+    let mut doc = valid();
+    doc["stages"][0]["sphere_wall"] = wall(-1.5);
+    check(doc).unwrap();
+    rejects(
+        |d| d["stages"][0]["sphere_wall"] = wall(-2.5),
+        "sphere_wall.velocity",
+    );
+    let mut doc = valid();
+    doc["stages"][0]["sphere_wall"] =
+        json!({"centre": [3, 3, 3], "radius": 0.5, "stiffness": 1, "cutoff": 1});
+    check(doc).unwrap();
+}
+
+#[test]
+fn a_sphere_wall_moves_at_its_speed_and_writes_no_speed_when_fixed() {
+    let moving: bpm::engine::SphereWall = serde_json::from_value(
+        json!({"centre": [0, 0, 0], "radius": 5.0, "velocity": -0.5, "stiffness": 1, "cutoff": 1}),
+    )
+    .unwrap();
+    assert_eq!(moving.radius_at(4.0), 3.0);
+    let fixed = bpm::engine::SphereWall {
+        velocity: 0.0,
+        ..moving
+    };
+    assert_eq!(fixed.radius_at(4.0), 5.0);
+    assert!(!serde_json::to_string(&fixed).unwrap().contains("velocity"));
+}

@@ -15,7 +15,7 @@ use bpm::studies::hertz::{
     run_hertz, EngineAgreement, GrainSource, HertzOptions, Moduli, SqueezeEngine,
 };
 use bpm::studies::hertz_sweep::{run_hertz_sweep, SweepOptions};
-use bpm::studies::{calibration, stability, upstream};
+use bpm::studies::{accuracy, calibration, large_strain, stability, upstream};
 use clap::{Parser, Subcommand, ValueEnum};
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
@@ -328,6 +328,93 @@ enum Command {
         #[arg(long, default_value_t = 1000)]
         steps: u64,
     },
+    /// Run time against error (docs/protocols.md "Run time against error"):
+    /// the calibration (K, G) and the Hertz squeeze force, each repeated with
+    /// one of timestep, loading rate, neighbour skin and resolution changed
+    /// from its default; writes DIR/accuracy.json and DIR/accuracy.svg.
+    Accuracy {
+        /// Output folder.
+        #[arg(short, long, default_value = "results/accuracy")]
+        output: PathBuf,
+        /// Multibody strength a_B of every run (k d).
+        #[arg(long = "a-b", default_value_t = 0.0, allow_hyphen_values = true)]
+        a_b: f64,
+        /// Seed of the solids and grains.
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+        /// Timesteps (tau); the default 0.1 is held in the other sweeps.
+        #[arg(long, value_delimiter = ',', default_value = "0.025,0.05,0.1,0.15,0.2")]
+        dts: Vec<f64>,
+        /// Neighbour skins (d); the default 0.3 is held in the other sweeps.
+        #[arg(long, value_delimiter = ',', default_value = "0.1,0.3,0.6,1")]
+        skins: Vec<f64>,
+        /// Box sides of the calibration (d); 10 is held in the other sweeps.
+        #[arg(long, value_delimiter = ',', default_value = "6,8,10,14,20")]
+        sizes: Vec<f64>,
+        /// Strain rates of the calibration (1/tau); 1e-5 is held in the other sweeps.
+        #[arg(long, value_delimiter = ',', default_value = "1e-4,3e-5,1e-5,3e-6")]
+        rates: Vec<f64>,
+        /// Grain radii of the squeeze (d); 6 is held in the other sweeps.
+        #[arg(long, value_delimiter = ',', default_value = "4,6,8")]
+        radii: Vec<f64>,
+        /// Wall speeds of the squeeze (d/tau); 5e-4 is held in the other sweeps.
+        #[arg(
+            long,
+            value_delimiter = ',',
+            default_value = "2e-3,1e-3,5e-4,2.5e-4,1.25e-4"
+        )]
+        wall_speeds: Vec<f64>,
+        /// Grain kind of the squeeze.
+        #[arg(long, value_enum, default_value = "smoother")]
+        kind: Kind,
+        /// Skip the squeeze sweeps.
+        #[arg(long)]
+        no_hertz: bool,
+        /// Skip the calibration sweeps.
+        #[arg(long)]
+        no_calibration: bool,
+    },
+    /// Large compression (docs/protocols.md "Large compression"): the bulk
+    /// solid and one grain compressed to 60% volumetric strain at each a_B,
+    /// pressure against strain, and checks that nothing is lost; writes
+    /// DIR/large_strain.json and DIR/large_strain.svg.
+    LargeStrain {
+        /// Output folder.
+        #[arg(short, long, default_value = "results/large-strain")]
+        output: PathBuf,
+        /// Multibody strengths a_B (k d).
+        #[arg(
+            long = "a-b",
+            value_delimiter = ',',
+            default_value = "3,0,-0.5,-0.9",
+            allow_hyphen_values = true
+        )]
+        a_b: Vec<f64>,
+        /// Use the zero-net-multibody variant (docs/model.md).
+        #[arg(long)]
+        zero_net: bool,
+        /// Seed of the solid and the grain.
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+        /// Volumetric strain to reach.
+        #[arg(long, default_value_t = 0.6)]
+        strain: f64,
+        /// Box side of the bulk solid (d); 0 skips it.
+        #[arg(long, default_value_t = 10.0)]
+        size: f64,
+        /// True strain rate of the bulk compression per dimension (1/tau).
+        #[arg(long, default_value_t = 1e-4)]
+        rate: f64,
+        /// Grain radius (d); 0 skips the grain.
+        #[arg(long, default_value_t = 6.0)]
+        radius: f64,
+        /// Inward speed of the grain's spherical wall (d/tau).
+        #[arg(long, default_value_t = 5e-4)]
+        wall_speed: f64,
+        /// Timestep (tau).
+        #[arg(long, default_value_t = 0.1)]
+        dt: f64,
+    },
     /// The stability map (docs/protocols.md "Stability map"): the largest
     /// stable timestep of the bulk solid against a_B and damping, by
     /// bisection, beside the stiffest-mode prediction, and K, G, nu near the
@@ -376,6 +463,10 @@ enum Command {
         /// Skip the moduli at each a_B.
         #[arg(long)]
         no_moduli: bool,
+        /// Map the zero-net-multibody variant of the bond force
+        /// (docs/model.md) instead of the paper's model.
+        #[arg(long)]
+        zero_net: bool,
     },
 }
 
@@ -981,6 +1072,79 @@ fn real_main() -> Result<()> {
             }
             println!("all {} judged comparisons pass", report.judged());
         }
+        Command::Accuracy {
+            output,
+            a_b,
+            seed,
+            dts,
+            skins,
+            sizes,
+            rates,
+            radii,
+            wall_speeds,
+            kind,
+            no_hertz,
+            no_calibration,
+        } => {
+            let opts = accuracy::AccuracyOptions {
+                a_b,
+                seed,
+                dts,
+                skins,
+                sizes,
+                rates,
+                radii,
+                wall_speeds,
+                kind: kind.into(),
+                hertz: !no_hertz,
+                calibration: !no_calibration,
+                ..Default::default()
+            };
+            opts.validate()?;
+            std::fs::create_dir_all(&output)
+                .with_context(|| format!("creating {}", output.display()))?;
+            let report = accuracy::run_accuracy(&opts, cli.threads, &command(), &mut print)?;
+            accuracy::write_report(&report, &output)?;
+            print!("{}", accuracy::table(&report));
+            println!("wrote {}/accuracy.json and accuracy.svg", output.display());
+        }
+        Command::LargeStrain {
+            output,
+            a_b,
+            zero_net,
+            seed,
+            strain,
+            size,
+            rate,
+            radius,
+            wall_speed,
+            dt,
+        } => {
+            let opts = large_strain::LargeStrainOptions {
+                a_b,
+                zero_net,
+                seed,
+                volumetric_strain: strain,
+                size,
+                rate,
+                radius,
+                wall_speed,
+                dt,
+                ..Default::default()
+            };
+            opts.validate()?;
+            std::fs::create_dir_all(&output)
+                .with_context(|| format!("creating {}", output.display()))?;
+            let report =
+                large_strain::run_large_strain(&opts, cli.threads, &command(), &mut print)?;
+            large_strain::write_report(&report, &output)?;
+            let complete = report.compressions.iter().filter(|c| c.complete).count();
+            println!(
+                "{complete} of {} compressions reached volumetric strain {strain} with nothing lost; wrote {}/large_strain.json and large_strain.svg",
+                report.compressions.len(),
+                output.display()
+            );
+        }
         Command::Stability {
             output,
             size,
@@ -994,6 +1158,7 @@ fn real_main() -> Result<()> {
             residual_strain,
             precision,
             no_moduli,
+            zero_net,
         } => {
             let opts = stability::StabilityOptions {
                 size,
@@ -1006,6 +1171,7 @@ fn real_main() -> Result<()> {
                 time,
                 precision,
                 moduli: !no_moduli,
+                zero_net,
                 ..Default::default()
             };
             opts.validate()?;

@@ -86,15 +86,18 @@ pub struct WallContact {
 }
 
 /// A harmonic spherical wall that confines particles inside a sphere whose
-/// radius oscillates with an exponentially decaying amplitude:
-/// `R(t) = R0 + A exp(-t / t_decay) sin(2 pi t / T)`.
+/// radius moves at a constant speed and oscillates with an exponentially
+/// decaying amplitude: `R(t) = R0 + v t + A exp(-t / t_decay) sin(2 pi t / T)`.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct SphereWall {
     /// Centre (d units).
     pub centre: [f64; 3],
-    /// Mean radius `R0` (d units).
+    /// Mean radius `R0` at the start of the stage (d units).
     pub radius: f64,
+    /// Radial speed `v` (d / tau); negative shrinks the sphere.
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub velocity: f64,
     /// Oscillation amplitude `A` (d units); 0 for a fixed sphere.
     #[serde(default)]
     pub amplitude: f64,
@@ -110,6 +113,10 @@ pub struct SphereWall {
     pub cutoff: f64,
 }
 
+fn is_zero(v: &f64) -> bool {
+    *v == 0.0
+}
+
 fn default_period() -> f64 {
     1.0
 }
@@ -118,7 +125,9 @@ impl SphereWall {
     /// Radius after `elapsed` time.
     pub fn radius_at(&self, elapsed: f64) -> f64 {
         let phase = 2.0 * std::f64::consts::PI * elapsed / self.period;
-        self.radius + self.amplitude * (-elapsed / self.decay_time).exp() * phase.sin()
+        self.radius
+            + self.velocity * elapsed
+            + self.amplitude * (-elapsed / self.decay_time).exp() * phase.sin()
     }
 
     /// Adds the inward wall force; returns (summed force magnitude, energy).

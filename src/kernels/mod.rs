@@ -16,6 +16,7 @@ mod isa;
 mod pair;
 mod tally;
 mod volume;
+mod zero_net;
 
 pub use bond::{
     bond_force_magnitude, bond_forces, bond_forces_on, cube_root, dilation, BondCoeffs, BondEntry,
@@ -30,6 +31,7 @@ pub use isa::Isa;
 pub use pair::{pair_energy, pair_force_magnitude, pair_forces, PairCoeffs, PairInputs};
 pub use tally::{Ownership, Tally};
 pub use volume::{accumulate_reference_volumes, accumulate_volumes, accumulate_volumes_on};
+pub use zero_net::{accumulate_multibody_sums, balance_multibody, MultibodyInputs, MultibodySum};
 
 /// Bits of a LAMMPS neighbour index that carry the special-bond class.
 pub const SPECIAL_SHIFT: u32 = 30;

@@ -64,6 +64,19 @@ impl Tally {
         self.virial[5] += s * del[1] * del[2];
     }
 
+    /// Adds the virial of a force `force` on `i` (and its opposite on `j`)
+    /// that need not be along `del`, as LAMMPS's `ev_tally_xyz` does: the
+    /// off-diagonal entries are `del_a force_b` with `a < b`.
+    #[inline(always)]
+    pub(crate) fn add_vector(&mut self, fraction: f64, del: &[f64; 3], force: &[f64; 3]) {
+        self.virial[0] += fraction * del[0] * force[0];
+        self.virial[1] += fraction * del[1] * force[1];
+        self.virial[2] += fraction * del[2] * force[2];
+        self.virial[3] += fraction * del[0] * force[1];
+        self.virial[4] += fraction * del[0] * force[2];
+        self.virial[5] += fraction * del[1] * force[2];
+    }
+
     /// Sum of two tallies.
     pub fn merged(mut self, other: &Tally) -> Tally {
         self.energy += other.energy;

@@ -47,6 +47,10 @@ impl ScriptVars {
             ("kB", g(ff.bond.k)),
             ("aB", g(ff.bond.a)),
             ("gB", g(ff.bond.gamma)),
+            (
+                "zeronet",
+                super::script::yes_no(ff.zero_net_multibody).to_string(),
+            ),
             ("kP", g(pair.k)),
             ("d", g(pair.d)),
             ("aP", g(pair.a)),

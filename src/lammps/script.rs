@@ -178,6 +178,15 @@ fn velocity_dump(v: &[[f64; 3]]) -> String {
     s
 }
 
+/// LAMMPS's spelling of a flag.
+pub(crate) fn yes_no(flag: bool) -> &'static str {
+    if flag {
+        "yes"
+    } else {
+        "no"
+    }
+}
+
 fn force_field_commands(ff: &ForceField) -> Vec<String> {
     let pair = ff.pair.unwrap_or(crate::kernels::PairCoeffs {
         k: 0.0,
@@ -186,6 +195,10 @@ fn force_field_commands(ff: &ForceField) -> Vec<String> {
         gamma: 0.0,
     });
     vec![
+        format!(
+            "bond_style      bpm/multibody zero_net {}",
+            yes_no(ff.zero_net_multibody)
+        ),
         format!(
             "bond_coeff      1 {} {} {}",
             g(ff.bond.k),

@@ -60,7 +60,13 @@ pub fn model_of(scene: &Scene) -> Box<dyn ParticleModel> {
                 .collect();
             let bonds = BondTopology::new(n, &triples);
             let ff = &scene.force_field;
-            Box::new(BpmModel::new(ff.bond, ff.pair, n, bonds))
+            Box::new(BpmModel::new(
+                ff.bond,
+                ff.pair,
+                ff.zero_net_multibody,
+                n,
+                bonds,
+            ))
         }
     }
 }

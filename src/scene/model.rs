@@ -147,6 +147,11 @@ pub struct ForceField {
     /// Neighbour-list skin (d units); default 0.3.
     #[serde(default = "default_skin")]
     pub skin: f64,
+    /// The zero-net-multibody variant of the bond force: each particle's
+    /// multibody forces on its neighbours are shifted to sum to zero
+    /// (docs/model.md). Default off, the paper's model.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub zero_net_multibody: bool,
 }
 
 fn default_skin() -> f64 {
@@ -169,6 +174,7 @@ impl ForceField {
                 gamma: 1.0,
             }),
             skin: default_skin(),
+            zero_net_multibody: false,
         }
     }
 }

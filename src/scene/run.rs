@@ -274,7 +274,7 @@ pub fn run_stage(
             .ok_or(EngineError::Unsupported {
                 what: "a force-field change of a model other than bpm",
             })?;
-        bpm.set_coefficients(ff.bond, ff.pair, n);
+        bpm.set_coefficients(ff.bond, ff.pair, ff.zero_net_multibody, n);
         sys.skin = ff.skin;
     }
     if spec.reset_reference {

@@ -145,6 +145,17 @@ fn check_stage(i: usize, stage: &StageSpec, simbox: &SimBox, n: usize) -> Result
         let q = format!("{p}.sphere_wall");
         finite_rows(&format!("{q}.centre"), &[s.centre])?;
         positive(&format!("{q}.radius"), s.radius)?;
+        finite(&format!("{q}.velocity"), s.velocity)?;
+        let end = s.radius + s.velocity * stage.steps as f64 * stage.dt;
+        if s.velocity < 0.0 && end <= s.cutoff {
+            return Err(invalid(
+                format!("{q}.velocity"),
+                format!(
+                    "shrinks the sphere to radius {end} by the end of the stage: it must stay above the cutoff {}",
+                    s.cutoff
+                ),
+            ));
+        }
         non_negative(&format!("{q}.amplitude"), s.amplitude)?;
         positive(&format!("{q}.period"), s.period)?;
         positive(&format!("{q}.decay_time"), s.decay_time)?;

@@ -113,11 +113,18 @@ pub struct Moduli {
     pub seconds: f64,
 }
 
-/// The compression and shear scenes of `solid` at `a_b`.
-pub fn calibration_scenes(solid: &Scene, a_b: f64, loading: &Loading) -> [Scene; 2] {
+/// The compression and shear scenes of `solid` at `a_b`, of the paper's
+/// model or its zero-net-multibody variant.
+pub fn calibration_scenes(
+    solid: &Scene,
+    a_b: f64,
+    zero_net: bool,
+    loading: &Loading,
+) -> [Scene; 2] {
     let mut base = solid.clone();
     base.force_field = ForceField {
         skin: solid.force_field.skin,
+        zero_net_multibody: zero_net,
         ..ForceField::paper(a_b)
     };
     base.particles.velocities = None;
@@ -138,16 +145,18 @@ pub fn calibration_scenes(solid: &Scene, a_b: f64, loading: &Loading) -> [Scene;
     [compress, shear]
 }
 
-/// Measures K and G of `solid` at `a_b` on `engine`; `tag` names the runs.
-/// Returns the moduli and the two runs.
+/// Measures K and G of `solid` at `a_b` (with the zero-net variant or
+/// without) on `engine`; `tag` names the runs. Returns the moduli and the
+/// two runs.
 pub fn measure_moduli(
     solid: &Scene,
     a_b: f64,
+    zero_net: bool,
     loading: &Loading,
     engine: &CalibrationEngine,
     tag: &str,
 ) -> Result<(Moduli, [EngineRun; 2]), HarnessError> {
-    let [compress, shear] = calibration_scenes(solid, a_b, loading);
+    let [compress, shear] = calibration_scenes(solid, a_b, zero_net, loading);
     let c = engine.run(&compress, &format!("{tag}-compress"))?;
     let s = engine.run(&shear, &format!("{tag}-shear"))?;
     let fail = |e: crate::analysis::moduli::ModulusError| HarnessError::Native {
@@ -302,7 +311,7 @@ pub fn run_study(
             for &a_b in a_bs {
                 for (engine, loading) in &engines {
                     let tag = format!("L{size}-s{seed}-aB{a_b}-rate{}", loading.rate);
-                    let (moduli, _) = measure_moduli(&solid, a_b, loading, engine, &tag)?;
+                    let (moduli, _) = measure_moduli(&solid, a_b, false, loading, engine, &tag)?;
                     let case = Case {
                         size,
                         seed,

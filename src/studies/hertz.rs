@@ -227,7 +227,7 @@ pub struct EngineAgreement {
 const LAMMPS_WALL_ERROR: &str = "Particle on or inside fix wall surface";
 
 /// The squeeze's wall gap and mean wall force per record.
-fn gap_and_force(stage: &StageOutput) -> (Vec<f64>, Vec<f64>) {
+pub(crate) fn gap_and_force(stage: &StageOutput) -> (Vec<f64>, Vec<f64>) {
     let col = |name: &str| stage.column(name).unwrap_or_default();
     let force = col("wall0_force")
         .iter()
@@ -245,7 +245,7 @@ fn gap_and_force(stage: &StageOutput) -> (Vec<f64>, Vec<f64>) {
 /// Squeezes natively. A squeeze that stops part of the way (a particle
 /// pushed onto a wall's plane) keeps its records up to there, with the
 /// reason.
-fn squeeze_native(
+pub(crate) fn squeeze_native(
     scene: &Scene,
     tag: &str,
     threads: usize,

@@ -16,9 +16,11 @@
 //!   a_B and damping, by bisection, beside the stiffest-mode prediction and
 //!   the moduli near the incompressible limit.
 
+pub mod accuracy;
 pub mod bench;
 pub mod calibration;
 pub mod hertz;
 pub mod hertz_sweep;
+pub mod large_strain;
 pub mod stability;
 pub mod upstream;

@@ -86,6 +86,8 @@ pub struct StabilityOptions {
     /// Also measure K, G and nu at every a_B (dt 0.1, the calibration
     /// protocol on the same solid).
     pub moduli: bool,
+    /// Map the zero-net-multibody variant instead of the paper's model.
+    pub zero_net: bool,
 }
 
 impl Default for StabilityOptions {
@@ -105,6 +107,7 @@ impl Default for StabilityOptions {
             residual_strain_limit: 0.1,
             precision: 0.02,
             moduli: true,
+            zero_net: false,
         }
     }
 }
@@ -254,13 +257,15 @@ pub struct Mode {
 pub struct ModuliRow {
     /// Multibody strength (k d).
     pub a_b: f64,
-    /// Bulk modulus (k / d), NaN when the run failed.
+    /// Bulk modulus (k / d): the fitted slope, NaN when a run failed.
     pub k: f64,
-    /// Shear modulus (k / d).
+    /// Shear modulus (k / d), as `k`.
     pub g: f64,
     /// Poisson ratio.
     pub nu: f64,
-    /// The engine error, when a run failed.
+    /// Why the slopes are not moduli: the engine error of a failed run, or
+    /// a solid that is not stable (a negative slope, or no stable timestep
+    /// in the map at this a_B).
     pub error: Option<String>,
 }
 
@@ -308,12 +313,13 @@ pub fn criterion(opts: &StabilityOptions) -> String {
     )
 }
 
-/// `solid` at rest with the paper's force field at `a_b`, with bond and
-/// contact damping `gamma`.
+/// `solid` at rest with the paper's force field at `a_b` (and the solid's
+/// choice of the zero-net variant), with bond and contact damping `gamma`.
 fn solid_at(solid: &Scene, a_b: f64, gamma: f64) -> Scene {
     let mut scene = solid.clone();
     let mut ff = ForceField {
         skin: solid.force_field.skin,
+        zero_net_multibody: solid.force_field.zero_net_multibody,
         ..ForceField::paper(a_b)
     };
     ff.bond.gamma = gamma;
@@ -563,11 +569,14 @@ pub fn run_stability(
         moduli: Vec::new(),
     };
     for (n, &seed) in opts.seeds.iter().enumerate() {
-        let (solid, summary) = build_bulk(&BulkParams::paper(opts.size, seed, 0.0), threads, false)
-            .map_err(|cause| HarnessError::Scene {
-                scene: format!("bulk L={} seed {seed}", opts.size),
-                cause,
-            })?;
+        let (mut solid, summary) =
+            build_bulk(&BulkParams::paper(opts.size, seed, 0.0), threads, false).map_err(
+                |cause| HarnessError::Scene {
+                    scene: format!("bulk L={} seed {seed}", opts.size),
+                    cause,
+                },
+            )?;
+        solid.force_field.zero_net_multibody = opts.zero_net;
         report.particles.push((seed, summary.particles));
         log(&format!(
             "solid L={} seed {seed}: {} particles",
@@ -606,9 +615,15 @@ pub fn run_stability(
                 report.limits.push(limit);
             }
             if n == 0 && opts.moduli {
+                let no_stable_timestep = report
+                    .limits
+                    .iter()
+                    .filter(|l| l.a_b == a_b && l.seed == seed)
+                    .all(|l| !l.dt_stable.is_finite());
                 let row = match measure_moduli(
                     &solid,
                     a_b,
+                    opts.zero_net,
                     &Loading::default(),
                     &CalibrationEngine::Native(threads),
                     &format!("moduli aB={a_b}"),
@@ -618,7 +633,21 @@ pub fn run_stability(
                         k: m.k,
                         g: m.g,
                         nu: m.nu,
-                        error: None,
+                        // A fit of a solid that rearranged under the load:
+                        // the slopes are not moduli.
+                        error: if m.k <= 0.0 || m.g <= 0.0 {
+                            Some(format!(
+                                "K = {:.4}, G = {:.4}: not a stable solid under this load, no moduli",
+                                m.k, m.g
+                            ))
+                        } else if no_stable_timestep {
+                            Some(format!(
+                                "K = {:.4}, G = {:.4} fitted, but no timestep of the map was stable at this a_B: no moduli",
+                                m.k, m.g
+                            ))
+                        } else {
+                            None
+                        },
                     },
                     Err(e) => ModuliRow {
                         a_b,
@@ -653,8 +682,13 @@ pub fn write_report(report: &StabilityReport, dir: &Path) -> Result<(), Stabilit
     std::fs::write(&json, text).map_err(FileError::on("writing", &json))?;
     let mut limits = Panel {
         title: format!(
-            "Largest stable timestep, bulk solid L = {}",
-            report.options.size
+            "Largest stable timestep, bulk solid L = {}{}",
+            report.options.size,
+            if report.options.zero_net {
+                ", zero-net variant"
+            } else {
+                ""
+            }
         ),
         x_label: "a_B (k d)".into(),
         y_label: "dt (tau)".into(),

@@ -312,11 +312,18 @@ pub fn run_check(opts: &CheckOptions) -> Result<CheckReport> {
     let mut calibration = Vec::new();
     for &a_b in &opts.calibration_a_b {
         let tag = format!("calibration-L{}-aB{a_b}", opts.calibration_size);
-        let (native, native_runs) =
-            measure_moduli(&bulk, a_b, &loading, &CalibrationEngine::Native(1), &tag)?;
+        let (native, native_runs) = measure_moduli(
+            &bulk,
+            a_b,
+            false,
+            &loading,
+            &CalibrationEngine::Native(1),
+            &tag,
+        )?;
         let (lammps, lammps_runs) = measure_moduli(
             &bulk,
             a_b,
+            false,
             &loading,
             &CalibrationEngine::Lammps(launcher.clone(), 1),
             &tag,

@@ -17,9 +17,9 @@ use super::parallel::{as_rows, as_vec3, chunk_range, Scratch, Vec3};
 use super::simbox::SimBox;
 use super::timers::Stage;
 use crate::kernels::{
-    accumulate_reference_volumes, accumulate_volumes, bond_forces, pair_forces, BondCoeffs,
-    BondEntry, BondInputs, Fault, ForcePass, Ownership, PairCoeffs, PairInputs, Separation,
-    Unwrapped,
+    accumulate_multibody_sums, accumulate_reference_volumes, accumulate_volumes, balance_multibody,
+    bond_forces, pair_forces, BondCoeffs, BondEntry, BondInputs, Fault, ForcePass, MultibodyInputs,
+    MultibodySum, Ownership, PairCoeffs, PairInputs, Separation, Tally, Unwrapped,
 };
 
 /// Index of the bond term in [`ModelTally::terms`].
@@ -52,13 +52,18 @@ pub struct BpmTerms {
     pub pairs: bool,
     /// Pair damping (`Gamma_P != 0`).
     pub pair_damping: bool,
+    /// The zero-net-multibody correction (the variant chosen and the
+    /// multibody term live).
+    pub zero_net: bool,
 }
 
 impl BpmTerms {
-    fn of(bond: &BondCoeffs, pair: Option<&PairCoeffs>, no_bonds: bool) -> Self {
+    fn of(bond: &BondCoeffs, pair: Option<&PairCoeffs>, zero_net: bool, no_bonds: bool) -> Self {
         let pairs = pair.is_some_and(|p| p.k != 0.0 || p.a != 0.0);
+        let multibody = bond.a != 0.0 && !no_bonds;
         Self {
-            multibody: bond.a != 0.0 && !no_bonds,
+            multibody,
+            zero_net: zero_net && multibody,
             bond_damping: bond.gamma != 0.0,
             pairs,
             pair_damping: pairs && pair.is_some_and(|p| p.gamma != 0.0),
@@ -75,6 +80,7 @@ pub struct BpmModel {
     terms: BpmTerms,
     volume: Vec<f64>,
     reference_volume: Vec<f64>,
+    multibody_sums: Vec<MultibodySum>,
     force_scratch: Scratch<Vec3>,
     volume_scratch: Scratch<f64>,
     partition: BondPartition,
@@ -124,29 +130,43 @@ impl BondPartition {
 }
 
 impl BpmModel {
-    /// A model of `bonds` on `n` particles; `V0` is computed here once.
-    pub fn new(bond: BondCoeffs, pair: Option<PairCoeffs>, n: usize, bonds: BondTopology) -> Self {
+    /// A model of `bonds` on `n` particles, with the zero-net-multibody
+    /// variant of the bond force or without; `V0` is computed here once.
+    pub fn new(
+        bond: BondCoeffs,
+        pair: Option<PairCoeffs>,
+        zero_net: bool,
+        n: usize,
+        bonds: BondTopology,
+    ) -> Self {
         let mut model = Self {
             bond,
             pair,
             bonds,
-            terms: BpmTerms::of(&bond, pair.as_ref(), false),
+            terms: BpmTerms::of(&bond, pair.as_ref(), zero_net, false),
             volume: Vec::new(),
             reference_volume: Vec::new(),
+            multibody_sums: Vec::new(),
             force_scratch: Scratch::default(),
             volume_scratch: Scratch::default(),
             partition: BondPartition::default(),
         };
-        model.set_coefficients(bond, pair, n);
+        model.set_coefficients(bond, pair, zero_net, n);
         model
     }
 
-    /// Replaces the coefficients (a stage's force-field change) and
-    /// re-derives the live terms and `V0`.
-    pub fn set_coefficients(&mut self, bond: BondCoeffs, pair: Option<PairCoeffs>, n: usize) {
+    /// Replaces the coefficients and the variant (a stage's force-field
+    /// change) and re-derives the live terms and `V0`.
+    pub fn set_coefficients(
+        &mut self,
+        bond: BondCoeffs,
+        pair: Option<PairCoeffs>,
+        zero_net: bool,
+        n: usize,
+    ) {
         self.bond = bond;
         self.pair = pair;
-        self.terms = BpmTerms::of(&bond, pair.as_ref(), self.bonds.is_empty());
+        self.terms = BpmTerms::of(&bond, pair.as_ref(), zero_net, self.bonds.is_empty());
         self.update_reference_volumes(n);
     }
 
@@ -182,6 +202,7 @@ impl BpmModel {
         if self.terms.multibody {
             self.volume = vec![0.0; n];
             self.reference_volume = vec![0.0; n];
+            self.multibody_sums = vec![[0.0; 4]; n];
             accumulate_reference_volumes(
                 &self.bonds.entries,
                 &self.bonds.r0,
@@ -272,6 +293,12 @@ impl BpmModel {
                     .merged(&bond_forces(&sep, &boundary, own, out))
             })
         };
+        let balance = if self.terms.zero_net {
+            let _t = timers.start(Stage::Bonds);
+            self.apply_zero_net_correction(&sep, x, tally, f)
+        } else {
+            Tally::default()
+        };
         let pair_pass = match (self.terms.pairs, self.pair) {
             (true, Some(p)) if !neighbours.is_empty() => {
                 let _t = timers.start(Stage::Pairs);
@@ -294,9 +321,35 @@ impl BpmModel {
         };
         out.fault = out.fault.or(bond_pass.fault).or(pair_pass.fault);
         let mut result = ModelTally::default();
-        result.terms[BOND_TERM] = bond_pass.tally;
+        result.terms[BOND_TERM] = bond_pass.tally.merged(&balance);
         result.terms[PAIR_TERM] = pair_pass.tally;
         result
+    }
+}
+
+impl BpmModel {
+    /// The zero-net-multibody correction, added to `f` after the bond pass:
+    /// per-particle multibody sums, then the correction bond by bond. One
+    /// thread: the variant is an option, not the hot path.
+    fn apply_zero_net_correction<S: Separation>(
+        &mut self,
+        sep: &S,
+        x: &[[f64; 3]],
+        tally: bool,
+        f: &mut [[f64; 3]],
+    ) -> Tally {
+        let own = Ownership::all(x.len());
+        let bonds = &self.bonds;
+        self.multibody_sums.fill([0.0; 4]);
+        let inputs = MultibodyInputs {
+            x,
+            bonds: &bonds.entries,
+            r0: &bonds.r0,
+            coeffs: std::slice::from_ref(&self.bond),
+            volumes: (&self.volume, &self.reference_volume),
+        };
+        accumulate_multibody_sums(sep, &inputs, own, &mut self.multibody_sums);
+        balance_multibody(sep, x, &bonds.entries, &self.multibody_sums, own, f, tally)
     }
 }
 

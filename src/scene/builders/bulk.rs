@@ -253,9 +253,8 @@ pub fn build_bulk(
         })
         .collect();
     let soft = ForceField {
-        bond: params.force_field.bond,
         pair: Some(PairCoeffs { a: 0.0, ..pair }),
-        skin: params.force_field.skin,
+        ..params.force_field.clone()
     };
     let mut relax = StageSpec::hold("relax", steps(params.relax_time, params.dt), params.dt);
     relax.viscous = params.relax_viscous;

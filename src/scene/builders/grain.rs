@@ -367,6 +367,7 @@ fn vibrate_in_cage(
     stage.sphere_wall = Some(SphereWall {
         centre,
         radius: params.radius + params.cage_offset,
+        velocity: 0.0,
         amplitude: params.cage_amplitude,
         period: params.cage_period,
         decay_time: params.cage_decay,
