@@ -38,8 +38,12 @@ fi
 out=target/modern
 mkdir -p "$out"
 # The kernels as a static library, without the `lammps` feature: no shim
-# built for Debian's LAMMPS inside it, no LAMMPS or MPI linked.
-cargo rustc --release --quiet --lib --no-default-features --crate-type staticlib --target-dir "$out/cargo"
+# built for Debian's LAMMPS inside it, no LAMMPS or MPI linked. Built in the
+# main target folder with the profile BPM_CARGO_PROFILE (default release;
+# the test suite passes its own), so the dependencies' builds are shared
+# with the other builds of that profile.
+profile="${BPM_CARGO_PROFILE:-release}"
+cargo rustc --profile "$profile" --quiet --lib --no-default-features --crate-type staticlib
 objs=()
 for f in bond_bpm_multibody fix_bpm_reference pair_bpm_contact bpm_plugin; do
   g++ -std=c++17 -O2 -fPIC -DBPM_MODERN_LAMMPS -Ilammps-plugin -I"$include" ${mpi_include:+-I"$mpi_include"} \
@@ -48,7 +52,7 @@ for f in bond_bpm_multibody fix_bpm_reference pair_bpm_contact bpm_plugin; do
 done
 # LAMMPS symbols resolve against the host lmp at `plugin load`.
 g++ -shared -o "$out/bpmplugin.so" "${objs[@]}" \
-  -Wl,--whole-archive "$out/cargo/release/libbpm.a" -Wl,--no-whole-archive -Wl,--allow-shlib-undefined
+  -Wl,--whole-archive "target/$profile/libbpm.a" -Wl,--no-whole-archive -Wl,--allow-shlib-undefined
 echo "built $out/bpmplugin.so: in LAMMPS, 'plugin load $(pwd)/$out/bpmplugin.so'"
 if [ -n "${site:-}" ]; then
   venv_abs=$(cd "$venv" && pwd)

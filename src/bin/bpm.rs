@@ -373,6 +373,10 @@ enum Command {
         /// Skip the calibration sweeps.
         #[arg(long)]
         no_calibration: bool,
+        /// Rewrite the plot from an earlier accuracy.json without running
+        /// anything (other options are ignored).
+        #[arg(long)]
+        from: Option<PathBuf>,
     },
     /// Large compression (docs/protocols.md "Large compression"): the bulk
     /// solid and one grain compressed to 60% volumetric strain at each a_B,
@@ -1085,7 +1089,14 @@ fn real_main() -> Result<()> {
             kind,
             no_hertz,
             no_calibration,
+            from,
         } => {
+            if let Some(path) = from {
+                let report = accuracy::replot(&path, &output)?;
+                print!("{}", accuracy::table(&report));
+                println!("wrote {}/accuracy.json and accuracy.svg", output.display());
+                return Ok(());
+            }
             let opts = accuracy::AccuracyOptions {
                 a_b,
                 seed,

@@ -24,7 +24,7 @@ use crate::scene::{ForceField, Scene};
 use crate::studies::calibration::{measure_moduli, CalibrationEngine, Loading};
 use crate::studies::hertz::{gap_and_force, squeeze_native, HertzError, Moduli};
 use crate::verify::engines::HarnessError;
-use serde::Serialize;
+use serde::{Deserialize, Deserializer, Serialize};
 use std::path::Path;
 
 /// Why the study could not finish.
@@ -42,14 +42,17 @@ pub enum AccuracyError {
     /// A plot could not be written.
     #[error(transparent)]
     Plot(#[from] PlotError),
-    /// The report could not be written.
+    /// The report could not be written or read.
     #[error(transparent)]
     File(#[from] FileError),
+    /// An earlier report could not be parsed.
+    #[error("{0}")]
+    Json(String),
 }
 
 /// What `bpm accuracy` runs. Every sweep holds the other parameters at
 /// their defaults (the first four fields' defaults, the docs' defaults).
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct AccuracyOptions {
     /// Multibody strength a_B of every run (k d).
     pub a_b: f64,
@@ -176,7 +179,7 @@ impl AccuracyOptions {
 }
 
 /// What a sweep changes.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Knob {
     /// The timestep (tau).
@@ -202,8 +205,9 @@ impl Knob {
     }
 }
 
-/// One run of a sweep.
-#[derive(Clone, Debug, Serialize)]
+/// One run of a sweep. JSON writes NaN (a failed run's figures) as null,
+/// and reads null back as NaN.
+#[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct Case {
     /// What the sweep changes.
     pub knob: Knob,
@@ -216,14 +220,17 @@ pub struct Case {
     /// Steps of the run(s).
     pub steps: u64,
     /// Wall-clock seconds of the run(s) (not the build).
+    #[serde(deserialize_with = "nan_if_null")]
     pub seconds: f64,
     /// Calibration: K, G and nu. Squeeze: none.
+    #[serde(deserialize_with = "moduli_nan_if_null")]
     pub moduli: Option<[f64; 3]>,
     /// Squeeze: the rms relative deviation of the force from Hertz over
     /// the window.
     pub hertz_deviation: Option<f64>,
     /// Relative error of K (calibration) or of the force (squeeze, rms
     /// over the window) against the sweep's reference.
+    #[serde(deserialize_with = "nan_if_null")]
     pub error: f64,
     /// Calibration: relative error of G.
     pub error_g: Option<f64>,
@@ -234,8 +241,17 @@ pub struct Case {
     pub failed: Option<String>,
 }
 
+fn nan_if_null<'de, D: Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
+    Ok(Option::<f64>::deserialize(d)?.unwrap_or(f64::NAN))
+}
+
+fn moduli_nan_if_null<'de, D: Deserializer<'de>>(d: D) -> Result<Option<[f64; 3]>, D::Error> {
+    let values = Option::<[Option<f64>; 3]>::deserialize(d)?;
+    Ok(values.map(|m| m.map(|v| v.unwrap_or(f64::NAN))))
+}
+
 /// The study's record (`accuracy.json`).
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct AccuracyReport {
     /// Program and version.
     pub program: String,
@@ -830,6 +846,16 @@ pub fn write_report(report: &AccuracyReport, dir: &Path) -> Result<(), AccuracyE
     Ok(())
 }
 
+/// Rewrites `DIR/accuracy.svg` (and the JSON) from an earlier
+/// `accuracy.json` without running anything.
+pub fn replot(json: &Path, dir: &Path) -> Result<AccuracyReport, AccuracyError> {
+    let text = std::fs::read_to_string(json).map_err(FileError::on("reading", json))?;
+    let report: AccuracyReport = serde_json::from_str(&text)
+        .map_err(|e| AccuracyError::Json(format!("reading {}: {e}", json.display())))?;
+    write_report(&report, dir)?;
+    Ok(report)
+}
+
 /// The report as a table, one line per run.
 pub fn table(report: &AccuracyReport) -> String {
     let mut out = String::new();
@@ -935,6 +961,30 @@ mod tests {
         assert_eq!(run_at(runs, 0.2), None);
         // The skin sweep's reference is the default, already run.
         assert_eq!(out[2].2.len(), 1);
+    }
+
+    #[test]
+    fn a_failed_run_reads_back_with_nan_figures() {
+        let failed = Case {
+            knob: Knob::Timestep,
+            value: 0.2,
+            default: false,
+            particles: 0,
+            steps: 0,
+            seconds: f64::NAN,
+            moduli: Some([f64::NAN; 3]),
+            hertz_deviation: None,
+            error: f64::NAN,
+            error_g: Some(f64::NAN),
+            reference: "dt = 0.025".into(),
+            failed: Some("blew up".into()),
+        };
+        let text = serde_json::to_string(&failed).unwrap();
+        let back: Case = serde_json::from_str(&text).unwrap();
+        assert!(back.seconds.is_nan() && back.error.is_nan());
+        assert!(back.moduli.unwrap().iter().all(|m| m.is_nan()));
+        assert_eq!(back.error_g, None, "null reads as no value");
+        assert_eq!(back.failed.as_deref(), Some("blew up"));
     }
 
     #[test]
