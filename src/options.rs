@@ -57,6 +57,63 @@ pub fn validate_a_b_values<'a>(
     Ok(())
 }
 
+/// Every value of `option` in `(0, max]` (`unit` names the unit in the
+/// message); a list must not be empty.
+pub fn require_positive_up_to(
+    option: &'static str,
+    values: &[f64],
+    max: f64,
+    unit: &str,
+) -> Result<(), InvalidOption> {
+    require_each(
+        option,
+        values,
+        &|v| v > 0.0 && v <= max,
+        &format!("in (0, {max}] {unit}"),
+    )
+}
+
+/// Every value of `option` in `[lo, hi]`, or 0 when `zero_skips` (0 then
+/// switches the part off); a list must not be empty.
+pub fn require_within(
+    option: &'static str,
+    values: &[f64],
+    (lo, hi): (f64, f64),
+    zero_skips: bool,
+    unit: &str,
+) -> Result<(), InvalidOption> {
+    let range = format!("in [{lo}, {hi}] {unit}");
+    let what = if zero_skips {
+        format!("0 (skip) or {range}")
+    } else {
+        range
+    };
+    require_each(
+        option,
+        values,
+        &|v| (zero_skips && v == 0.0) || (lo..=hi).contains(&v),
+        &what,
+    )
+}
+
+fn require_each(
+    option: &'static str,
+    values: &[f64],
+    ok: &dyn Fn(f64) -> bool,
+    what: &str,
+) -> Result<(), InvalidOption> {
+    if values.is_empty() {
+        return Err(InvalidOption::new(option, "needs at least one value"));
+    }
+    match values.iter().find(|v| !ok(**v)) {
+        Some(v) => Err(InvalidOption::new(
+            option,
+            format!("must be {what}, got {v}"),
+        )),
+        None => Ok(()),
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -16,7 +16,7 @@
 use crate::analysis::hertz::{effective_modulus, hertz_deviation, squeeze_curve};
 use crate::analysis::plot::{write_svg, Mark, Panel, PlotError, Series};
 use crate::file_error::FileError;
-use crate::options::InvalidOption;
+use crate::options::{require_positive_up_to, require_within, validate_a_b_values, InvalidOption};
 use crate::scene::builders::bulk::{build_bulk, BulkParams};
 use crate::scene::builders::grain::{build_grain, GrainKind, GrainParams};
 use crate::scene::protocols::{hertz_squeeze, SqueezeParams};
@@ -124,50 +124,19 @@ const WINDOW: (f64, f64) = (0.02, 0.25);
 impl AccuracyOptions {
     /// Checks every option; the message names the option.
     pub fn validate(&self) -> Result<(), InvalidOption> {
-        let positive = |v: f64| v.is_finite() && v > 0.0;
-        let list = |name: &'static str, values: &[f64], ok: &dyn Fn(f64) -> bool, what: &str| {
-            if values.is_empty() {
-                return Err(InvalidOption::new(name, "needs at least one value"));
-            }
-            match values.iter().find(|&&v| !ok(v)) {
-                Some(v) => Err(InvalidOption::new(name, format!("{what}, got {v}"))),
-                None => Ok(()),
-            }
-        };
-        if !(self.a_b.is_finite() && self.a_b > -1.0) {
-            return Err(InvalidOption::new(
-                "--a-b",
-                format!("must be finite and above -1 (k d), got {}", self.a_b),
-            ));
-        }
-        let timestep = |v: f64| positive(v) && v <= 0.3;
-        list("--dt", &[self.dt], &timestep, "must be in (0, 0.3] tau")?;
-        list("--dts", &self.dts, &timestep, "must be in (0, 0.3] tau")?;
-        let skin = |v: f64| v.is_finite() && v > 0.0 && v <= 3.0;
-        list("--skin", &[self.skin], &skin, "must be in (0, 3] d")?;
-        list("--skins", &self.skins, &skin, "must be in (0, 3] d")?;
-        let size = |v: f64| v.is_finite() && (4.0..=40.0).contains(&v);
-        list("--size", &[self.size], &size, "must be in [4, 40] d")?;
-        list("--sizes", &self.sizes, &size, "must be in [4, 40] d")?;
-        let rate = |v: f64| positive(v) && v <= 1e-2;
-        list("--rate", &[self.rate], &rate, "must be in (0, 0.01] / tau")?;
-        list("--rates", &self.rates, &rate, "must be in (0, 0.01] / tau")?;
-        let radius = |v: f64| v.is_finite() && (3.0..=20.0).contains(&v);
-        list("--radius", &[self.radius], &radius, "must be in [3, 20] d")?;
-        list("--radii", &self.radii, &radius, "must be in [3, 20] d")?;
-        let speed = |v: f64| positive(v) && v <= 0.05;
-        list(
-            "--wall-speed",
-            &[self.wall_speed],
-            &speed,
-            "must be in (0, 0.05] d/tau",
-        )?;
-        list(
-            "--wall-speeds",
-            &self.wall_speeds,
-            &speed,
-            "must be in (0, 0.05] d/tau",
-        )?;
+        validate_a_b_values("--a-b", [&self.a_b])?;
+        require_positive_up_to("--dt", &[self.dt], 0.3, "tau")?;
+        require_positive_up_to("--dts", &self.dts, 0.3, "tau")?;
+        require_positive_up_to("--skin", &[self.skin], 3.0, "d")?;
+        require_positive_up_to("--skins", &self.skins, 3.0, "d")?;
+        require_within("--size", &[self.size], (4.0, 40.0), false, "d")?;
+        require_within("--sizes", &self.sizes, (4.0, 40.0), false, "d")?;
+        require_positive_up_to("--rate", &[self.rate], 1e-2, "/ tau")?;
+        require_positive_up_to("--rates", &self.rates, 1e-2, "/ tau")?;
+        require_within("--radius", &[self.radius], (3.0, 20.0), false, "d")?;
+        require_within("--radii", &self.radii, (3.0, 20.0), false, "d")?;
+        require_positive_up_to("--wall-speed", &[self.wall_speed], 0.05, "d/tau")?;
+        require_positive_up_to("--wall-speeds", &self.wall_speeds, 0.05, "d/tau")?;
         if !(self.max_overlap >= 0.1 && self.max_overlap < 0.5) {
             return Err(InvalidOption::new(
                 "--max-overlap",

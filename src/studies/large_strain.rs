@@ -19,7 +19,7 @@ use crate::analysis::plot::{write_svg, Mark, Panel, PlotError, Series};
 use crate::engine::SphereWall;
 use crate::file_error::FileError;
 use crate::kernels::Separation;
-use crate::options::InvalidOption;
+use crate::options::{require_positive_up_to, require_within, InvalidOption};
 use crate::scene::builders::bulk::{build_bulk, BulkParams};
 use crate::scene::builders::grain::{build_grain, GrainKind, GrainParams};
 use crate::scene::{build_system, protocols, run_scene, ForceField, RunOptions, Scene, StageSpec};
@@ -101,52 +101,16 @@ impl Default for LargeStrainOptions {
 impl LargeStrainOptions {
     /// Checks every option; the message names the option.
     pub fn validate(&self) -> Result<(), InvalidOption> {
-        let positive = |v: f64| v.is_finite() && v > 0.0;
         if self.a_b.is_empty() || self.a_b.iter().any(|a| !a.is_finite()) {
             return Err(InvalidOption::new("--a-b", "needs finite values (k d)"));
         }
-        if !(self.volumetric_strain > 0.0 && self.volumetric_strain <= 0.8) {
-            return Err(InvalidOption::new(
-                "--strain",
-                format!("must be in (0, 0.8], got {}", self.volumetric_strain),
-            ));
-        }
-        if !(positive(self.dt) && self.dt <= 0.3) {
-            return Err(InvalidOption::new(
-                "--dt",
-                format!("must be in (0, 0.3] tau, got {}", self.dt),
-            ));
-        }
-        if !(self.size == 0.0 || (4.0..=40.0).contains(&self.size)) {
-            return Err(InvalidOption::new(
-                "--size",
-                format!("must be 0 (skip) or in [4, 40] d, got {}", self.size),
-            ));
-        }
-        if !(self.radius == 0.0 || (3.0..=20.0).contains(&self.radius)) {
-            return Err(InvalidOption::new(
-                "--radius",
-                format!("must be 0 (skip) or in [3, 20] d, got {}", self.radius),
-            ));
-        }
-        if !(positive(self.rate) && self.rate <= 1e-2) {
-            return Err(InvalidOption::new(
-                "--rate",
-                format!("must be in (0, 0.01] / tau, got {}", self.rate),
-            ));
-        }
-        if !(positive(self.wall_speed) && self.wall_speed <= 0.05) {
-            return Err(InvalidOption::new(
-                "--wall-speed",
-                format!("must be in (0, 0.05] d/tau, got {}", self.wall_speed),
-            ));
-        }
-        if !(positive(self.wall_stiffness) && self.wall_stiffness <= 100.0) {
-            return Err(InvalidOption::new(
-                "--wall-stiffness",
-                format!("must be in (0, 100] k, got {}", self.wall_stiffness),
-            ));
-        }
+        require_positive_up_to("--strain", &[self.volumetric_strain], 0.8, "")?;
+        require_positive_up_to("--dt", &[self.dt], 0.3, "tau")?;
+        require_within("--size", &[self.size], (4.0, 40.0), true, "d")?;
+        require_within("--radius", &[self.radius], (3.0, 20.0), true, "d")?;
+        require_positive_up_to("--rate", &[self.rate], 1e-2, "/ tau")?;
+        require_positive_up_to("--wall-speed", &[self.wall_speed], 0.05, "d/tau")?;
+        require_positive_up_to("--wall-stiffness", &[self.wall_stiffness], 100.0, "k")?;
         if !(2..=1000).contains(&self.chunks) {
             return Err(InvalidOption::new(
                 "--chunks",
