@@ -30,27 +30,37 @@ fn network() -> (Vec<[f64; 3]>, Vec<BondEntry>, Vec<f64>) {
     (x, bonds, r0)
 }
 
-/// The multibody sums of every atom, all owned.
-fn complete_sums(x: &[[f64; 3]], bonds: &[BondEntry], r0: &[f64], a: f64) -> Vec<MultibodySum> {
+/// Current and reference volumes of every atom.
+fn volumes(x: &[[f64; 3]], bonds: &[BondEntry], r0: &[f64]) -> (Vec<f64>, Vec<f64>) {
     let n = x.len();
     let all = Ownership::all(n);
     let (mut vol, mut vol0) = (vec![0.0; n], vec![0.0; n]);
     accumulate_volumes(&Unwrapped, x, bonds, all, &mut vol);
     accumulate_reference_volumes(bonds, r0, all, &mut vol0);
-    let coeffs = [BondCoeffs {
+    (vol, vol0)
+}
+
+/// The multibody term alone: no spring, no damping.
+fn multibody_only(a: f64) -> [BondCoeffs; 1] {
+    [BondCoeffs {
         k: 0.0,
         a,
         gamma: 0.0,
-    }];
+    }]
+}
+
+/// The multibody sums of every atom, all owned.
+fn complete_sums(x: &[[f64; 3]], bonds: &[BondEntry], r0: &[f64], a: f64) -> Vec<MultibodySum> {
+    let (vol, vol0) = volumes(x, bonds, r0);
     let mb = MultibodyInputs {
         x,
         bonds,
         r0,
-        coeffs: &coeffs,
+        coeffs: &multibody_only(a),
         volumes: (&vol, &vol0),
     };
-    let mut sums = vec![[0.0; 4]; n];
-    accumulate_multibody_sums(&Unwrapped, &mb, all, &mut sums);
+    let mut sums = vec![[0.0; 4]; x.len()];
+    accumulate_multibody_sums(&Unwrapped, &mb, Ownership::all(x.len()), &mut sums);
     sums
 }
 
@@ -66,14 +76,8 @@ fn multibody_and_correction(
 ) -> (Vec<[f64; 3]>, Vec<[f64; 3]>, Tally) {
     let n = x.len();
     let all = Ownership::all(n);
-    let (mut vol, mut vol0) = (vec![0.0; n], vec![0.0; n]);
-    accumulate_volumes(&Unwrapped, x, bonds, all, &mut vol);
-    accumulate_reference_volumes(bonds, r0, all, &mut vol0);
-    let coeffs = [BondCoeffs {
-        k: 0.0,
-        a,
-        gamma: 0.0,
-    }];
+    let (vol, vol0) = volumes(x, bonds, r0);
+    let coeffs = multibody_only(a);
     let inputs = BondInputs {
         x,
         v: None,

@@ -17,12 +17,11 @@ use crate::analysis::hertz::{effective_modulus, hertz_deviation, squeeze_curve};
 use crate::analysis::plot::{write_svg, Mark, Panel, PlotError, Series};
 use crate::file_error::FileError;
 use crate::options::{require_positive_up_to, require_within, validate_a_b_values, InvalidOption};
-use crate::scene::builders::bulk::{build_bulk, BulkParams};
-use crate::scene::builders::grain::{build_grain, GrainKind, GrainParams};
+use crate::scene::builders::grain::{GrainKind, GrainParams};
 use crate::scene::protocols::{hertz_squeeze, SqueezeParams};
 use crate::scene::{ForceField, Scene};
-use crate::studies::calibration::{measure_moduli, CalibrationEngine, Loading};
-use crate::studies::hertz::{gap_and_force, squeeze_native, HertzError, Moduli};
+use crate::studies::calibration::{measure_moduli, paper_solid, CalibrationEngine, Loading};
+use crate::studies::hertz::{built_grain, gap_and_force, squeeze_native, HertzError, Moduli};
 use crate::verify::engines::HarnessError;
 use serde::{Deserialize, Deserializer, Serialize};
 use std::path::Path;
@@ -405,11 +404,7 @@ fn calibration_sweeps(
         if let Some((_, s)) = solids.iter().find(|(l, _)| *l == size) {
             return Ok(s.clone());
         }
-        let (s, summary) = build_bulk(&BulkParams::paper(size, opts.seed, 0.0), threads, false)
-            .map_err(|cause| HarnessError::Scene {
-                scene: format!("bulk L={size} seed {}", opts.seed),
-                cause,
-            })?;
+        let (s, summary) = paper_solid(size, opts.seed, threads)?;
         log(&format!(
             "calibration: solid L={size} seed {}: {} particles",
             opts.seed, summary.particles
@@ -557,8 +552,7 @@ fn hertz_sweeps(
             return Ok(g.clone());
         }
         let p = GrainParams::new(opts.kind, radius, opts.seed, opts.a_b);
-        let (g, summary) =
-            build_grain(&p, threads, false).map_err(|e| HertzError::Grain(e.to_string()))?;
+        let (g, summary) = built_grain(&p, threads)?;
         log(&format!(
             "squeeze: {} grain R={radius} seed {}: {} particles",
             opts.kind.name(),

@@ -10,6 +10,7 @@ use crate::analysis::moduli::{
 use crate::analysis::plot::PlotError;
 use crate::file_error::FileError;
 use crate::options::{validate_a_b_values, validate_strain_and_rate, InvalidOption};
+use crate::scene::builders::bulk::{build_bulk, BulkParams, BulkSummary};
 use crate::scene::{protocols, ForceField, Scene};
 use crate::verify::engines::{run_native, EngineRun, HarnessError, LammpsLauncher};
 use serde::{Deserialize, Serialize};
@@ -111,6 +112,22 @@ pub struct Moduli {
     pub paper_g_over_k: f64,
     /// Wall seconds of the two runs.
     pub seconds: f64,
+}
+
+/// The bulk solid of the paper's protocol (the calibration's, and every
+/// study's that measures the solid), side `size`, seed `seed`; a failed
+/// build names the solid.
+pub fn paper_solid(
+    size: f64,
+    seed: u64,
+    threads: usize,
+) -> Result<(Scene, BulkSummary), HarnessError> {
+    build_bulk(&BulkParams::paper(size, seed, 0.0), threads, false).map_err(|cause| {
+        HarnessError::Scene {
+            scene: format!("bulk L={size} seed {seed}"),
+            cause,
+        }
+    })
 }
 
 /// The compression and shear scenes of `solid` at `a_b`, of the paper's
@@ -283,15 +300,7 @@ pub fn run_study(
     for &size in &opts.sizes {
         for (n, &seed) in opts.seeds.iter().enumerate() {
             let start = std::time::Instant::now();
-            let (solid, summary) = crate::scene::builders::bulk::build_bulk(
-                &crate::scene::builders::bulk::BulkParams::paper(size, seed, 0.0),
-                threads,
-                false,
-            )
-            .map_err(|cause| HarnessError::Scene {
-                scene: format!("bulk L={size} seed {seed}"),
-                cause,
-            })?;
+            let (solid, summary) = paper_solid(size, seed, threads)?;
             let build_seconds = start.elapsed().as_secs_f64();
             // Every a_B at the largest size, and for the LAMMPS comparison.
             let a_bs = if size == largest || (n == 0 && opts.lammps_sizes.contains(&size)) {

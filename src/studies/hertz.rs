@@ -333,6 +333,14 @@ pub struct Grain {
     pub summary: Option<GrainSummary>,
 }
 
+/// A grain built from `params`; a failed build is a [`HertzError::Grain`].
+pub fn built_grain(
+    params: &GrainParams,
+    threads: usize,
+) -> Result<(Scene, GrainSummary), HertzError> {
+    build_grain(params, threads, false).map_err(|e| HertzError::Grain(e.to_string()))
+}
+
 fn grains(opts: &HertzOptions) -> Result<Vec<Grain>, HertzError> {
     match &opts.source {
         GrainSource::Build {
@@ -345,8 +353,7 @@ fn grains(opts: &HertzOptions) -> Result<Vec<Grain>, HertzError> {
             .map(|&seed| {
                 let mut p = GrainParams::new(*kind, *radius, seed, opts.a_b);
                 p.time_scale = *time_scale;
-                let (scene, summary) = build_grain(&p, opts.threads, false)
-                    .map_err(|e| HertzError::Grain(e.to_string()))?;
+                let (scene, summary) = built_grain(&p, opts.threads)?;
                 Ok(Grain {
                     seed,
                     scene,

@@ -20,10 +20,10 @@ use crate::engine::SphereWall;
 use crate::file_error::FileError;
 use crate::kernels::Separation;
 use crate::options::{require_positive_up_to, require_within, InvalidOption};
-use crate::scene::builders::bulk::{build_bulk, BulkParams};
-use crate::scene::builders::grain::{build_grain, GrainKind, GrainParams};
+use crate::scene::builders::grain::{GrainKind, GrainParams};
 use crate::scene::{build_system, protocols, run_scene, ForceField, RunOptions, Scene, StageSpec};
-use crate::studies::hertz::HertzError;
+use crate::studies::calibration::paper_solid;
+use crate::studies::hertz::{built_grain, HertzError};
 use crate::verify::engines::HarnessError;
 use serde::Serialize;
 use std::path::Path;
@@ -211,15 +211,7 @@ pub fn run_large_strain(
         ..ForceField::paper(a_b)
     };
     if opts.size > 0.0 {
-        let (solid, summary) = build_bulk(
-            &BulkParams::paper(opts.size, opts.seed, 0.0),
-            threads,
-            false,
-        )
-        .map_err(|cause| HarnessError::Scene {
-            scene: format!("bulk L={} seed {}", opts.size, opts.seed),
-            cause,
-        })?;
+        let (solid, summary) = paper_solid(opts.size, opts.seed, threads)?;
         log(&format!(
             "bulk solid L={} seed {}: {} particles",
             opts.size, opts.seed, summary.particles
@@ -234,8 +226,7 @@ pub fn run_large_strain(
     }
     if opts.radius > 0.0 {
         let p = GrainParams::new(opts.kind, opts.radius, opts.seed, 0.0);
-        let (grain, summary) =
-            build_grain(&p, threads, false).map_err(|e| HertzError::Grain(e.to_string()))?;
+        let (grain, summary) = built_grain(&p, threads)?;
         log(&format!(
             "{} grain R={} seed {}: {} particles",
             opts.kind.name(),

@@ -30,10 +30,9 @@ use crate::file_error::FileError;
 use crate::kernels::verlet_limit;
 use crate::kernels::Separation;
 use crate::options::InvalidOption;
-use crate::scene::builders::bulk::{build_bulk, BulkParams};
 use crate::scene::{build_system, protocols, ForceField, Scene, VelocityInit};
 use crate::scene::{run_native_report, RunOptions};
-use crate::studies::calibration::{measure_moduli, CalibrationEngine, Loading};
+use crate::studies::calibration::{measure_moduli, paper_solid, CalibrationEngine, Loading};
 use crate::verify::engines::HarnessError;
 use rand::{Rng, SeedableRng};
 use serde::Serialize;
@@ -569,13 +568,7 @@ pub fn run_stability(
         moduli: Vec::new(),
     };
     for (n, &seed) in opts.seeds.iter().enumerate() {
-        let (mut solid, summary) =
-            build_bulk(&BulkParams::paper(opts.size, seed, 0.0), threads, false).map_err(
-                |cause| HarnessError::Scene {
-                    scene: format!("bulk L={} seed {seed}", opts.size),
-                    cause,
-                },
-            )?;
+        let (mut solid, summary) = paper_solid(opts.size, seed, threads)?;
         solid.force_field.zero_net_multibody = opts.zero_net;
         report.particles.push((seed, summary.particles));
         log(&format!(
