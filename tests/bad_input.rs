@@ -257,6 +257,16 @@ const SUBCOMMANDS: &[&[&str]] = &[
     &["stability", "-o", "{out}"],
     &["accuracy", "-o", "{out}"],
     &["large-strain", "-o", "{out}"],
+    &["compact", "-o", "{out}"],
+    &[
+        "analyse-packing",
+        "--data",
+        "{data}",
+        "--dump",
+        "{data}",
+        "-o",
+        "{out}",
+    ],
 ];
 
 /// Value names of options that take paths or words, not numbers.
@@ -275,6 +285,7 @@ const NOT_NUMBERS: &[&str] = &[
     "NEWTON",
     "BOUNDARY",
     "MODEL",
+    "PACKING",
 ];
 
 /// `bpm` with `args`; its exit code and error output, or `None` when it

@@ -49,6 +49,24 @@ fn bulk_solid_trajectory_agrees_between_engines_on_one_and_two_ranks() {
     assert_eq!(assert_agree(&scene, "solid-np2", 2, false), 8);
 }
 
+/// The Berendsen barostat (LAMMPS `fix press/berendsen iso`) moves the box
+/// the same way in both engines: a contact solid driven towards a pressure
+/// well above its own, so the box shrinks by a measurable amount.
+#[test]
+fn barostat_trajectory_agrees_between_engines_on_one_and_two_ranks() {
+    let mut scene = as_trajectory(contact_solid(6.0, 3, -0.5).unwrap(), 300);
+    scene.stages[0].barostat = Some(bpm::engine::Barostat {
+        target_pressure: 0.05,
+        gain: 0.1,
+    });
+    let run = run_native(&scene, "barostat-native", 1).unwrap();
+    let lx = run.stages[0].column("lx").unwrap();
+    let shrink = 1.0 - lx.last().unwrap() / lx[0];
+    assert!(shrink > 1e-4, "the box barely moved: {shrink:e}");
+    assert_eq!(assert_agree(&scene, "barostat-np1", 1, true), 8);
+    assert_eq!(assert_agree(&scene, "barostat-np2", 2, false), 8);
+}
+
 #[test]
 fn grain_pair_trajectory_agrees_between_engines() {
     let scene = as_trajectory(grain_pair(2.5, 4, 1.0).unwrap(), 300);
@@ -174,14 +192,20 @@ fn scenes_lammps_rejects_or_cannot_express_are_clear_harness_errors() {
     }
     // A stage the LAMMPS templates do not express (see lammps/script.rs).
     let mut walls = as_trajectory(contact_solid(6.0, 3, 0.0).unwrap(), 10);
-    walls.stages[0].barostat = Some(bpm::engine::Barostat {
-        target_pressure: 0.0,
-        gain: 1e-3,
+    walls.stages[0].sphere_wall = Some(bpm::engine::SphereWall {
+        centre: [0.0; 3],
+        radius: 10.0,
+        velocity: 0.0,
+        amplitude: 0.0,
+        period: 1.0,
+        decay_time: 1.0,
+        stiffness: 1.0,
+        cutoff: 1.0,
     });
-    match l.run(&walls, "barostat", 1, true) {
+    match l.run(&walls, "sphere-wall", 1, true) {
         Err(HarnessError::Lammps { message, .. }) => {
             assert!(
-                message.contains("barostat") && message.contains("not support"),
+                message.contains("spherical wall") && message.contains("not support"),
                 "{message}"
             )
         }

@@ -127,6 +127,20 @@ fn inconsistent_arrays_and_stages_are_rejected() {
 }
 
 #[test]
+fn a_stage_with_both_a_barostat_and_a_deformation_is_refused() {
+    let mut doc = valid();
+    doc["stages"][0]["barostat"] = json!({"target_pressure": 0.0, "gain": 0.1});
+    check(doc).unwrap();
+    rejects(
+        |d| {
+            d["stages"][0]["barostat"] = json!({"target_pressure": 0.0, "gain": 0.1});
+            d["stages"][0]["deformation"] = json!({"isotropic": {"true_strain_rate": -1e-4}});
+        },
+        "stages[0].barostat",
+    );
+}
+
+#[test]
 fn a_sphere_wall_that_would_shrink_through_its_cutoff_is_refused_and_a_fixed_one_is_not() {
     let wall = |velocity: f64| json!({"centre": [3, 3, 3], "radius": 3.0, "velocity": velocity, "stiffness": 1, "cutoff": 1});
     // 10 steps of dt 0.1 (the default): -1.5 d/tau shrinks 3 to 1.5, -2.5

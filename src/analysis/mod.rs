@@ -2,7 +2,9 @@
 
 pub mod fit;
 pub mod hertz;
+pub mod jamming;
 pub mod moduli;
+pub mod packing;
 pub mod plot;
 
 pub use fit::{least_squares_line, Line};

@@ -15,7 +15,7 @@ use bpm::studies::hertz::{
     run_hertz, EngineAgreement, GrainSource, HertzOptions, Moduli, SqueezeEngine,
 };
 use bpm::studies::hertz_sweep::{run_hertz_sweep, SweepOptions};
-use bpm::studies::{accuracy, calibration, large_strain, stability, upstream};
+use bpm::studies::{accuracy, calibration, compaction, large_strain, stability, upstream};
 use clap::{Parser, Subcommand, ValueEnum};
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
@@ -377,6 +377,119 @@ enum Command {
         /// anything (other options are ignored).
         #[arg(long)]
         from: Option<PathBuf>,
+    },
+    /// Compaction of a grain packing (docs/protocols.md "Compaction"): a
+    /// packing built per seed (or read with --packing) is jammed with the
+    /// Berendsen barostat and compressed isotropically at strain rates
+    /// raised stepwise, in the native engine or LAMMPS; every recorded
+    /// state is analysed (phi_MC, Z, grain strain and asphericity) and the
+    /// power laws near jamming are fitted; writes DIR/compaction.json,
+    /// DIR/compaction.svg, DIR/jamming.svg, DIR/compaction.txt and
+    /// DIR/seed-N/ (scene, packing data file). Defaults are a reduced scale that runs in
+    /// minutes; the paper's protocol is --jam-gain 0.1 --jam-time 2e5
+    /// --rate-start 1e-9 --rate-end 1e-6 --rate-levels 10 --stage-time 2e5.
+    Compact {
+        /// Output folder.
+        #[arg(short, long, default_value = "results/compaction")]
+        output: PathBuf,
+        /// Grains per built packing (paper: 1,024).
+        #[arg(long, default_value_t = 32)]
+        grains: usize,
+        /// Grain radius R (d) (paper: 10).
+        #[arg(long, default_value_t = 3.0)]
+        radius: f64,
+        /// Grain kind.
+        #[arg(long, value_enum, default_value = "smoother")]
+        kind: Kind,
+        /// Different grains built per packing (each reused, rotated).
+        #[arg(long, default_value_t = 4)]
+        distinct_grains: usize,
+        /// Volume fraction of the template's spheres (grains' outer spheres).
+        #[arg(long, default_value_t = 0.57)]
+        template_fraction: f64,
+        /// Scale of the grain builds' times (1 = the full protocol).
+        #[arg(long, default_value_t = 1.0)]
+        time_scale: f64,
+        /// Compress this packing instead (LAMMPS data file, atom_style
+        /// bond, molecule id = grain; the box is taken as periodic and
+        /// must be orthogonal; image flags honoured).
+        #[arg(long)]
+        packing: Option<PathBuf>,
+        /// Multibody strength a_B (k d); the force field is the paper's.
+        #[arg(long = "a-b", allow_hyphen_values = true, default_value_t = 0.0)]
+        a_b: f64,
+        /// Use the zero-net-multibody variant (docs/model.md).
+        #[arg(long)]
+        zero_net: bool,
+        /// Seeds: one packing and run per seed (comma separated).
+        #[arg(long, value_delimiter = ',', default_value = "1")]
+        seeds: Vec<u64>,
+        /// The engine.
+        #[arg(long, value_enum, default_value = "native")]
+        engine: Engine,
+        /// MPI ranks of the LAMMPS engine.
+        #[arg(long, default_value_t = 1)]
+        ranks: usize,
+        /// Timestep (tau).
+        #[arg(long, default_value_t = 0.1)]
+        dt: f64,
+        /// Barostat target pressure while jamming (k/d).
+        #[arg(long, default_value_t = 1e-6)]
+        jam_pressure: f64,
+        /// Barostat gain per step (d/k).
+        #[arg(long, default_value_t = 1.0)]
+        jam_gain: f64,
+        /// Duration of the jamming stage (tau).
+        #[arg(long, default_value_t = 2e4)]
+        jam_time: f64,
+        /// First true strain rate per dimension (1/tau).
+        #[arg(long, default_value_t = 1e-7)]
+        rate_start: f64,
+        /// Last true strain rate (1/tau).
+        #[arg(long, default_value_t = 1e-5)]
+        rate_end: f64,
+        /// Rates from first to last, geometrically spaced.
+        #[arg(long, default_value_t = 5)]
+        rate_levels: usize,
+        /// Duration of each compression stage (tau).
+        #[arg(long, default_value_t = 1e4)]
+        stage_time: f64,
+        /// Volumetric strain of the box after jamming at which to stop.
+        #[arg(long, default_value_t = 0.6)]
+        volumetric_strain: f64,
+        /// Thermo rows per stage.
+        #[arg(long, default_value_t = 100)]
+        rows_per_stage: u64,
+        /// Recorded (analysed) states per stage.
+        #[arg(long, default_value_t = 4)]
+        states_per_stage: u64,
+        /// Monte Carlo points per state for phi_MC.
+        #[arg(long, default_value_t = 1_000_000)]
+        mc_points: u64,
+        /// Refit the runs of an earlier OUTPUT/compaction.json and rewrite
+        /// its plots and table, without running anything (other options
+        /// are ignored).
+        #[arg(long)]
+        refit: bool,
+    },
+    /// Measures the states of a packing in a LAMMPS dump (e.g. from
+    /// lammps_inputs/compaction.in): phi_MC, coordination, grain strain and
+    /// asphericity of every frame, against the data file's state; writes
+    /// JSON.
+    AnalysePacking {
+        /// The packing's data file (atom_style bond, molecule id = grain):
+        /// bonds, grains, and the reference (stress-free) state.
+        #[arg(long)]
+        data: PathBuf,
+        /// The dump (columns id mol x y z, optional ix iy iz).
+        #[arg(long)]
+        dump: PathBuf,
+        /// Monte Carlo points per frame for phi_MC.
+        #[arg(long, default_value_t = 1_000_000)]
+        mc_points: u64,
+        /// Output JSON.
+        #[arg(short, long)]
+        output: PathBuf,
     },
     /// Large compression (docs/protocols.md "Large compression"): the bulk
     /// solid and one grain compressed to 60% volumetric strain at each a_B,
@@ -1118,6 +1231,130 @@ fn real_main() -> Result<()> {
             accuracy::write_report(&report, &output)?;
             print!("{}", accuracy::table(&report));
             println!("wrote {}/accuracy.json and accuracy.svg", output.display());
+        }
+        Command::Compact {
+            output,
+            grains,
+            radius,
+            kind,
+            distinct_grains,
+            template_fraction,
+            time_scale,
+            packing,
+            a_b,
+            zero_net,
+            seeds,
+            engine,
+            ranks,
+            dt,
+            jam_pressure,
+            jam_gain,
+            jam_time,
+            rate_start,
+            rate_end,
+            rate_levels,
+            stage_time,
+            volumetric_strain,
+            rows_per_stage,
+            states_per_stage,
+            mc_points,
+            refit,
+        } => {
+            if refit {
+                let report = compaction::refit(&output)?;
+                print!("{}", compaction::table(&report));
+                println!(
+                    "refitted {} run(s); rewrote {}/compaction.json, compaction.svg, jamming.svg and compaction.txt",
+                    report.runs.len(),
+                    output.display()
+                );
+                return Ok(());
+            }
+            let opts = compaction::CompactOptions {
+                source: match packing {
+                    Some(path) => compaction::PackingSource::File { path },
+                    None => compaction::PackingSource::Build {
+                        grains,
+                        kind: kind.into(),
+                        radius,
+                        distinct_grains,
+                        template_fraction,
+                        time_scale,
+                    },
+                },
+                a_b,
+                zero_net,
+                seeds,
+                protocol: bpm::scene::protocols::CompactionProtocol {
+                    dt,
+                    jam_pressure,
+                    jam_gain,
+                    jam_time,
+                    rate_start,
+                    rate_end,
+                    rate_levels,
+                    stage_time,
+                    volumetric_strain,
+                    rows_per_stage,
+                    states_per_stage,
+                },
+                engine: match engine {
+                    Engine::Native => compaction::CompactionEngine::Native,
+                    Engine::Lammps => compaction::CompactionEngine::Lammps { ranks },
+                },
+                analysis: bpm::analysis::packing::AnalysisOptions {
+                    mc_points,
+                    ..Default::default()
+                },
+            };
+            opts.validate()?;
+            let exe = std::env::current_exe().context("locating the bpm executable")?;
+            let report = compaction::run_compaction(
+                &opts,
+                cli.threads,
+                Some(&exe),
+                &output,
+                &command(),
+                std::io::stderr().is_terminal(),
+                &mut print,
+            )?;
+            print!("{}", compaction::table(&report));
+            println!(
+                "{} run(s); wrote {}/compaction.json, compaction.svg, jamming.svg and compaction.txt",
+                report.runs.len(),
+                output.display()
+            );
+        }
+        Command::AnalysePacking {
+            data,
+            dump,
+            mc_points,
+            output,
+        } => {
+            if mc_points < 1000 {
+                anyhow::bail!("--mc-points must be at least 1000, got {mc_points}");
+            }
+            let analysis = bpm::analysis::packing::AnalysisOptions {
+                mc_points,
+                ..Default::default()
+            };
+            let report = compaction::analyse_dump(&data, &dump, &analysis, &command())?;
+            let text = serde_json::to_string_pretty(&report).expect("report serialises");
+            std::fs::write(&output, text)
+                .with_context(|| format!("writing {}", output.display()))?;
+            for f in &report.frames {
+                println!(
+                    "step {:>10}: phi_MC = {:.4} +- {:.4}, Z_force = {:.2}, Z_geometry = {:.2}, eps_V = {:.4}, alpha - alpha0 = {:.2e}",
+                    f.step,
+                    f.packing.phi_mc,
+                    f.packing.phi_mc_error,
+                    f.packing.z_force,
+                    f.packing.z_geometry,
+                    f.packing.eps_v_mean,
+                    f.packing.asphericity_excess_mean
+                );
+            }
+            println!("wrote {}", output.display());
         }
         Command::LargeStrain {
             output,

@@ -83,27 +83,39 @@ impl Deformation {
     }
 }
 
-/// Isotropic Berendsen barostat: each step the periodic lengths scale by
-/// `(1 - gain (P_target - P))^(1/3)`. `gain` is LAMMPS's
-/// `dt / (Pdamp * modulus)` of `fix press/berendsen`.
+/// Isotropic Berendsen barostat, LAMMPS's `fix press/berendsen iso`: at
+/// the end of each step every periodic length (and tilt) scales about the
+/// box centre by `(1 - gain (P_target - P))^(1/3)`, where `P` is LAMMPS's
+/// scalar pressure ([`crate::engine::System::scalar_pressure`]). `gain` is
+/// LAMMPS's `dt / (Pdamp * modulus)` per step; the harness writes
+/// `Pdamp = dt` and `modulus = 1 / gain`, and [`Barostat::step`] evaluates
+/// the same expression in the same order, so both engines scale the box
+/// by the same number.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Barostat {
-    /// Target pressure (k / d).
+    /// Target pressure (k/d).
     pub target_pressure: f64,
     /// Gain per step (d / k).
     pub gain: f64,
 }
 
 impl Barostat {
+    /// LAMMPS's `modulus` for `Pdamp = dt`: the gain's inverse.
+    pub fn modulus(&self) -> f64 {
+        1.0 / self.gain
+    }
+
     /// The box after one barostat step at current pressure `pressure`, or
     /// `None` when the gain is so large that the box would invert.
     pub fn step(&self, current: &SimBox, pressure: f64) -> Option<SimBox> {
-        let arg = 1.0 - self.gain * (self.target_pressure - pressure);
+        // LAMMPS: pow(1 - dt/Pdamp * (P_target - P) / modulus, 1/3) with
+        // dt/Pdamp exactly 1; pow, not cbrt, for the same last bit.
+        let arg = 1.0 - (self.target_pressure - pressure) / self.modulus();
         if arg.is_nan() || arg <= 0.0 {
             return None;
         }
-        let mu = arg.cbrt();
+        let mu = arg.powf(1.0 / 3.0);
         let mut b = current.clone();
         let mut lengths = current.lengths;
         for (d, l) in lengths.iter_mut().enumerate() {

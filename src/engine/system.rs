@@ -157,6 +157,29 @@ impl System {
         (p[0] + p[1] + p[2]) / 3.0
     }
 
+    /// LAMMPS's scalar pressure (`compute pressure` with `compute temp`):
+    /// the kinetic part is `dof T` with `3N - 3` degrees of freedom, which
+    /// equals `sum m v^2` except that a single particle has none; then
+    /// `(dof T + W_xx + W_yy + W_zz) / 3 / V`, in LAMMPS's order of
+    /// operations. The barostat drives this number.
+    pub fn scalar_pressure(&self) -> f64 {
+        let p = &self.particles;
+        let dof = (3 * p.len()) as f64 - 3.0;
+        let sum_mv2: f64 =
+            p.v.iter()
+                .zip(&p.mass)
+                .map(|(v, &m)| (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]) * m)
+                .sum();
+        let temperature = if dof > 0.0 {
+            sum_mv2 * (1.0 / dof)
+        } else {
+            0.0
+        };
+        let w = self.interaction_tally().virial;
+        let [lx, ly, lz] = self.simbox.lengths;
+        (dof * temperature + w[0] + w[1] + w[2]) / 3.0 * (1.0 / (lx * ly * lz))
+    }
+
     /// Wraps positions and rebuilds the pair list if atoms may have moved
     /// into range. Does nothing for a model without pair contacts.
     fn update_neighbours(&mut self, force: bool) {
@@ -277,7 +300,7 @@ impl System {
             self.remap_into(new_box);
         }
         if let Some(barostat) = &drivers.barostat {
-            let pressure = self.pressure();
+            let pressure = self.scalar_pressure();
             let new_box =
                 barostat
                     .step(&self.simbox, pressure)

@@ -132,13 +132,21 @@ fn check_supported(index: usize, stage: &StageSpec, scene: &Scene) -> Result<(),
     };
     // LAMMPS's fix wall/region stops at particles beyond the surface and
     // reports a force vector, not the summed magnitude the native engine
-    // records; fix press/berendsen's scalar pressure counts 3N - 3 kinetic
-    // degrees of freedom where the native barostat uses the tensor's trace.
+    // records.
     if stage.sphere_wall.is_some() {
         return Err(unsupported("a spherical wall"));
     }
     if stage.barostat.is_some() {
-        return Err(unsupported("a barostat"));
+        if !scene.simbox.periodic.iter().all(|&p| p) {
+            return Err(unsupported(
+                "a barostat in a box that is not periodic in every dimension (fix press/berendsen iso scales all three)",
+            ));
+        }
+        if needs_triclinic(scene) {
+            return Err(unsupported(
+                "a barostat in a triclinic box (fix press/berendsen needs an orthogonal one)",
+            ));
+        }
     }
     if type_masses(scene).is_none() {
         return Err(unsupported(
@@ -394,6 +402,16 @@ pub fn write_driver(
         lines.extend(external.variables.into_iter().map(DriverLine::Command));
         let columns = stage_columns(energy_terms(scene.model), stage);
         let template = match &stage.deformation {
+            None if stage.barostat.is_some() => {
+                let b = stage.barostat.as_ref().expect("checked by the guard");
+                for (name, value) in [
+                    ("target_pressure", g(b.target_pressure)),
+                    ("modulus", g(b.modulus())),
+                ] {
+                    cmd(&mut lines, format!("variable        {name} string {value}"));
+                }
+                "stage_barostat.in"
+            }
             None => "stage_hold.in",
             Some(Deformation::Isotropic { true_strain_rate }) => {
                 cmd(
@@ -438,6 +456,9 @@ pub fn write_driver(
         cmd(&mut lines, "include         ${inputs}/stage_end.in".into());
         if stage.deformation.is_some() {
             cmd(&mut lines, "unfix           bpm_deform".into());
+        }
+        if stage.barostat.is_some() {
+            cmd(&mut lines, "unfix           bpm_barostat".into());
         }
         lines.extend(external.end.into_iter().map(DriverLine::Command));
         stages.push(StagePlan {

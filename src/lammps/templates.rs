@@ -22,12 +22,14 @@ macro_rules! templates {
 
 templates![
     "bench_bonds.in",
+    "compaction.in",
     "hertz_squeeze.in",
     "plugin_load_example.in",
     "restart_read.in",
     "restart_write.in",
     "setup.in",
     "single_point.in",
+    "stage_barostat.in",
     "stage_begin.in",
     "stage_compress.in",
     "stage_end.in",

@@ -197,6 +197,14 @@ fn check_stage(i: usize, stage: &StageSpec, simbox: &SimBox, n: usize) -> Result
                 "needs at least one periodic dimension",
             ));
         }
+        if stage.deformation.is_some() {
+            // LAMMPS refuses fix press/berendsen and fix deform on the same
+            // lengths, and one would undo the other.
+            return Err(invalid(
+                format!("{p}.barostat"),
+                "a stage has either a barostat or a box deformation, not both",
+            ));
+        }
     }
     Ok(())
 }

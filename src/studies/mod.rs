@@ -19,6 +19,7 @@
 pub mod accuracy;
 pub mod bench;
 pub mod calibration;
+pub mod compaction;
 pub mod hertz;
 pub mod hertz_sweep;
 pub mod large_strain;

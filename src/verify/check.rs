@@ -2,9 +2,9 @@
 //! observable, a JSON report and plots.
 
 use super::compare::CompareError;
-use super::compare::{compare_runs, deviation_series};
+use super::compare::{compaction_deviation, compare_runs, deviation_series};
 use super::engines::{run_native, HarnessError, LammpsLauncher};
-use super::scenes::{as_trajectory, contact_solid, grain_pair, grain_squeeze};
+use super::scenes::{as_trajectory, contact_solid, grain_pair, grain_squeeze, small_compaction};
 use super::single_point::{
     lammps_single_point, max_relative_deviation, native_single_point, SinglePointError,
 };
@@ -300,6 +300,26 @@ pub fn run_check(opts: &CheckOptions) -> Result<CheckReport> {
             series,
             Mark::LinePoints,
         ));
+    }
+
+    // A small packing jammed by the barostat and compressed: contacts form
+    // and rearrange, so the engines are compared on pressure and box
+    // (verify::compare::compaction_deviation), not pointwise.
+    let compaction = small_compaction(opts.seed)?;
+    let compaction_name = "compaction 16 rough grains R=2 a_B=0";
+    let native = run_native(&compaction, "compaction", 1)?;
+    let lammps = launcher.run(&compaction, "compaction-np1-newtontrue", 1, true)?;
+    lammps_version = lammps_version.or(lammps.lammps_version);
+    for d in compaction_deviation(&native.stages, &lammps.stages)? {
+        let v = verdict(
+            compaction_name,
+            "np1 newton on",
+            &d.observable,
+            d.max_deviation,
+            (native.seconds, lammps.seconds),
+        );
+        print_verdict(&v);
+        verdicts.push(v);
     }
 
     let bulk = build_bulk(

@@ -185,3 +185,63 @@ pub fn deviation_series(
     let scale = if scale > 0.0 { scale } else { 1.0 };
     raw.into_iter().map(|(s, d)| (s, d / scale)).collect()
 }
+
+/// How far a compaction run in one engine is from the same run in the
+/// other: the largest pressure deviation of any stage relative to that
+/// stage's largest |P| (stages span decades of pressure, so one scale for
+/// the whole run would hide the early ones), and the largest relative
+/// deviation of the box length `lx`.
+pub fn compaction_deviation(
+    reference: &[StageOutput],
+    run: &[StageOutput],
+) -> Result<[Deviation; 2], CompareError> {
+    let shape = |m: String| CompareError::Shape(m);
+    if reference.len() != run.len() {
+        return Err(shape(format!(
+            "{} stages against {}",
+            reference.len(),
+            run.len()
+        )));
+    }
+    let mut pressure = Deviation {
+        observable: "compaction pressure".into(),
+        max_deviation: 0.0,
+        at_step: 0,
+    };
+    let mut length = Deviation {
+        observable: "compaction box".into(),
+        max_deviation: 0.0,
+        at_step: 0,
+    };
+    for (a, b) in reference.iter().zip(run) {
+        let column = |s: &StageOutput, name: &str| {
+            s.column(name)
+                .ok_or_else(|| shape(format!("stage {} records no `{name}`", s.name)))
+        };
+        let (pa, pb) = (column(a, "pressure")?, column(b, "pressure")?);
+        let (la, lb) = (column(a, "lx")?, column(b, "lx")?);
+        let steps = column(a, "step")?;
+        if pa.len() != pb.len() {
+            return Err(shape(format!(
+                "stage {}: {} rows against {}",
+                a.name,
+                pa.len(),
+                pb.len()
+            )));
+        }
+        let scale = pa.iter().fold(0.0f64, |m, p| m.max(p.abs()));
+        for k in 0..pa.len() {
+            let dp = (pa[k] - pb[k]).abs() / scale.max(f64::MIN_POSITIVE);
+            if dp.is_nan() || dp > pressure.max_deviation {
+                pressure.max_deviation = dp;
+                pressure.at_step = steps[k] as u64;
+            }
+            let dl = (la[k] - lb[k]).abs() / la[k].abs();
+            if dl.is_nan() || dl > length.max_deviation {
+                length.max_deviation = dl;
+                length.at_step = steps[k] as u64;
+            }
+        }
+    }
+    Ok([pressure, length])
+}

@@ -9,11 +9,12 @@ pub mod scenes;
 pub mod single_point;
 pub mod tolerances;
 
-pub use compare::{compare_runs, Deviation};
+pub use compare::{compaction_deviation, compare_runs, Deviation};
 pub use engines::{run_native, EngineRun, HarnessError, LammpsLauncher};
 pub use launch::{LammpsChild, LaunchError, Work};
 pub use scenes::{
     as_trajectory, contact_solid, contact_solid_reference, grain_pair, grain_squeeze,
+    small_compaction,
 };
 pub use single_point::{
     lammps_single_point, max_relative_deviation, native_single_point, run_lmp_bpm, SinglePoint,

@@ -62,6 +62,16 @@ pub const TOLERANCES: &[Tolerance] = &[
         why: "both engines set L0 exp(rate t) and T0 + rate t L0 in closed form each step: measured <= 1.5e-16",
     },
     Tolerance {
+        observable: "compaction pressure",
+        tolerance: 2e-2,
+        why: "a packing of 16 grains jammed by the barostat and compressed (verify::scenes::small_compaction, about 33,000 steps): grains rearrange, and rearrangements amplify round-off as a chaotic system does, so unlike the damped solid the deviation grows: measured 5e-6 of the stage's largest |P| through jamming, 1e-4 once jammed, 1.3e-3 by the end; one decade above, so a force, damping or barostat error of a few percent fails",
+    },
+    Tolerance {
+        observable: "compaction box",
+        tolerance: 1e-10,
+        why: "the barostat's box follows the pressure only through its gain times P_T-scale pressures, and the compression's box is closed form: measured 8.5e-13 over the same run",
+    },
+    Tolerance {
         observable: "trajectory time",
         tolerance: 1e-14,
         why: "both engines record the stage start plus k dt (the native engine summed t += dt until this was found to reach 5.3e-13 after 29,000 steps): measured 0",

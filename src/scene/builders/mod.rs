@@ -2,6 +2,7 @@
 
 pub mod bulk;
 pub mod grain;
+pub mod packing;
 pub mod replicate;
 
 use crate::engine::System;

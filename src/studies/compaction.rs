@@ -1,0 +1,1167 @@
+//! Compaction of grain packings (`bpm compact`, docs/protocols.md
+//! "Compaction"): a packing is built (or read from a LAMMPS data file),
+//! jammed with the Berendsen barostat and compressed isotropically at
+//! stepwise-raised strain rates, in the native engine or in LAMMPS with
+//! this project's styles, from one scene. Every recorded state is
+//! analysed (volume fraction, coordination, grain strain and shape), and
+//! the report, per-run folders and plots are written as the runs finish,
+//! so a failure loses nothing already done.
+
+use crate::analysis::hertz::effective_modulus;
+use crate::analysis::jamming::{
+    coordination_law, power_law_at, power_law_with_jamming_point, PowerLaw,
+};
+use crate::analysis::packing::{analyse, reference_of, AnalysisOptions, PackingState, Snapshot};
+use crate::analysis::plot::{write_svg, Mark, Panel, PlotError, Series};
+use crate::engine::SimBox;
+use crate::file_error::FileError;
+use crate::options::InvalidOption;
+use crate::scene::builders::grain::GrainKind;
+use crate::scene::builders::packing::{
+    break_contacts, build_packing, PackingParams, PackingSummary,
+};
+use crate::scene::datafile::{read_data_file, write_data_file};
+use crate::scene::protocols::CompactionProtocol;
+use crate::scene::run::Checkpoint;
+use crate::scene::validate::simbox_of;
+use crate::scene::{
+    build_system, run_scene, write_scene, ForceField, RunOptions, Scene, StageOutput,
+};
+use crate::studies::hertz::Moduli;
+use crate::verify::LammpsLauncher;
+use serde::{Deserialize, Serialize};
+use std::path::{Path, PathBuf};
+
+/// Where the packings come from.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum PackingSource {
+    /// Built here, one packing per seed.
+    Build {
+        /// Grains per packing.
+        grains: usize,
+        /// Rough or smoother grains.
+        kind: GrainKind,
+        /// Grain radius R (d).
+        radius: f64,
+        /// Different grains built per packing (reused with rotations).
+        distinct_grains: usize,
+        /// Volume fraction of the template's spheres.
+        template_fraction: f64,
+        /// Scale of the grain builds' times (1 = full protocol).
+        time_scale: f64,
+    },
+    /// A LAMMPS data file of bonded grains (molecule id = grain), periodic
+    /// in every dimension; image flags are honoured.
+    File {
+        /// The data file.
+        path: PathBuf,
+    },
+}
+
+/// Which engine compresses.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum CompactionEngine {
+    /// The native engine.
+    Native,
+    /// LAMMPS with this project's styles, as a child process.
+    Lammps {
+        /// MPI ranks.
+        ranks: usize,
+    },
+}
+
+/// What `bpm compact` runs.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct CompactOptions {
+    /// The packings.
+    pub source: PackingSource,
+    /// Multibody strength a_B (k d); the force field is otherwise the paper's.
+    pub a_b: f64,
+    /// The zero-net-multibody variant.
+    pub zero_net: bool,
+    /// One packing and run per seed.
+    pub seeds: Vec<u64>,
+    /// The protocol.
+    pub protocol: CompactionProtocol,
+    /// The engine.
+    pub engine: CompactionEngine,
+    /// How states are measured.
+    pub analysis: AnalysisOptions,
+}
+
+/// Why the study could not run (a run that stops is a result: it is
+/// recorded with its message and the states it reached).
+#[derive(Debug, thiserror::Error)]
+pub enum CompactionError {
+    /// An option is out of range.
+    #[error(transparent)]
+    Invalid(#[from] InvalidOption),
+    /// A packing could not be built or read.
+    #[error("packing: {0}")]
+    Packing(String),
+    /// A state could not be analysed.
+    #[error("analysing {what}: {message}")]
+    Analysis {
+        /// Which state.
+        what: String,
+        /// Why.
+        message: String,
+    },
+    /// A plot could not be written.
+    #[error(transparent)]
+    Plot(#[from] PlotError),
+    /// A file could not be written.
+    #[error(transparent)]
+    File(#[from] FileError),
+}
+
+impl CompactOptions {
+    /// Checks the options; the error names the one at fault.
+    pub fn validate(&self) -> Result<(), InvalidOption> {
+        let p = &self.protocol;
+        let positive = |name: &'static str, v: f64| {
+            if v.is_finite() && v > 0.0 {
+                Ok(())
+            } else {
+                Err(InvalidOption::new(
+                    name,
+                    format!("must be positive, got {v}"),
+                ))
+            }
+        };
+        positive("--dt", p.dt)?;
+        positive("--jam-gain", p.jam_gain)?;
+        positive("--jam-time", p.jam_time)?;
+        positive("--rate-start", p.rate_start)?;
+        positive("--rate-end", p.rate_end)?;
+        positive("--stage-time", p.stage_time)?;
+        if !(p.jam_pressure.is_finite() && p.jam_pressure >= 0.0) {
+            return Err(InvalidOption::new(
+                "--jam-pressure",
+                format!("must be finite and >= 0, got {}", p.jam_pressure),
+            ));
+        }
+        if p.rate_end < p.rate_start {
+            return Err(InvalidOption::new(
+                "--rate-end",
+                format!("must be at least --rate-start ({})", p.rate_start),
+            ));
+        }
+        if p.rate_levels == 0 {
+            return Err(InvalidOption::new("--rate-levels", "must be at least 1"));
+        }
+        if !(p.volumetric_strain > 0.0 && p.volumetric_strain < 0.95) {
+            return Err(InvalidOption::new(
+                "--volumetric-strain",
+                format!("must be in (0, 0.95), got {}", p.volumetric_strain),
+            ));
+        }
+        let stages = p.rates().len();
+        if stages > 1000 {
+            return Err(InvalidOption::new(
+                "--stage-time",
+                format!("{stages} compression stages are needed to reach the strain: raise --stage-time or --rate-end"),
+            ));
+        }
+        if p.states_per_stage == 0 {
+            return Err(InvalidOption::new(
+                "--states-per-stage",
+                "must be at least 1",
+            ));
+        }
+        if !(self.a_b.is_finite() && self.a_b > -1.0) {
+            return Err(InvalidOption::new(
+                "--a-b",
+                format!("must be finite and above -1 (k d), got {}", self.a_b),
+            ));
+        }
+        if p.states_per_stage > 1000 {
+            return Err(InvalidOption::new(
+                "--states-per-stage",
+                format!(
+                    "at most 1000 (every state is kept in memory), got {}",
+                    p.states_per_stage
+                ),
+            ));
+        }
+        if self.seeds.is_empty() {
+            return Err(InvalidOption::new("--seeds", "needs at least one value"));
+        }
+        if self.analysis.mc_points < 1000 {
+            return Err(InvalidOption::new("--mc-points", "must be at least 1000"));
+        }
+        if let CompactionEngine::Lammps { ranks } = self.engine {
+            crate::options::validate_threads(ranks)
+                .map_err(|_| InvalidOption::new("--ranks", "must be at least 1"))?;
+        }
+        match &self.source {
+            PackingSource::Build {
+                grains,
+                radius,
+                distinct_grains,
+                template_fraction,
+                time_scale,
+                ..
+            } => {
+                if *grains < 2 {
+                    return Err(InvalidOption::new("--grains", "must be at least 2"));
+                }
+                if !(radius.is_finite() && *radius >= 1.5) {
+                    return Err(InvalidOption::new(
+                        "--radius",
+                        format!("must be at least 1.5 (d), got {radius}"),
+                    ));
+                }
+                if *distinct_grains == 0 {
+                    return Err(InvalidOption::new(
+                        "--distinct-grains",
+                        "must be at least 1",
+                    ));
+                }
+                let max = crate::scene::builders::packing::MAX_TEMPLATE_FRACTION;
+                if !(*template_fraction > 0.0 && *template_fraction <= max) {
+                    return Err(InvalidOption::new(
+                        "--template-fraction",
+                        format!("must be in (0, {max}], got {template_fraction}"),
+                    ));
+                }
+                positive("--time-scale", *time_scale)?;
+            }
+            PackingSource::File { path } => {
+                if self.seeds.len() > 1 {
+                    return Err(InvalidOption::new(
+                        "--seeds",
+                        "one seed with --packing: the file is the packing, so more seeds would repeat the same run",
+                    ));
+                }
+                if !path.is_file() {
+                    return Err(InvalidOption::new(
+                        "--packing",
+                        format!("{} is not a readable file", path.display()),
+                    ));
+                }
+            }
+        }
+        Ok(())
+    }
+
+    fn force_field(&self) -> ForceField {
+        let mut ff = ForceField::paper(self.a_b);
+        ff.zero_net_multibody = self.zero_net;
+        ff
+    }
+}
+
+/// One recorded state of a run.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct StateRow {
+    /// Stage name.
+    pub stage: String,
+    /// Compression rate of the stage (1/tau; 0 while jamming).
+    pub rate: f64,
+    /// Global step.
+    pub step: u64,
+    /// Time (tau).
+    pub time: f64,
+    /// Pressure, virial and kinetic (k/d).
+    pub pressure: f64,
+    /// Pressure over E_eff.
+    pub p_over_e_eff: f64,
+    /// Kinetic energy per particle (k d^2).
+    pub ke_per_particle: f64,
+    /// The packing measurements.
+    #[serde(flatten)]
+    pub packing: PackingState,
+}
+
+/// The thermo series of a run, every recorded row.
+#[derive(Clone, Debug, Default, Serialize, Deserialize)]
+pub struct RunSeries {
+    /// Time (tau).
+    pub time: Vec<f64>,
+    /// Box volume (d^3).
+    pub box_volume: Vec<f64>,
+    /// Pressure (k/d).
+    pub pressure: Vec<f64>,
+    /// Kinetic energy per particle.
+    pub ke_per_particle: Vec<f64>,
+}
+
+/// A coordination power law and its `Z_c`.
+#[derive(Clone, Copy, Debug, Serialize, Deserialize)]
+pub struct CoordinationFit {
+    /// `Z - Z_c = B (phi - phi_c)^gamma`.
+    pub law: PowerLaw,
+    /// The fitted `Z_c`.
+    pub z_c: f64,
+}
+
+/// The power laws of one run near jamming (analysis::jamming): `phi_c`
+/// from the pressure, then the others at that `phi_c`, each over
+/// `phi - phi_c <= FIT_WINDOW` on the compression stages' states.
+#[derive(Clone, Debug, Default, Serialize, Deserialize)]
+pub struct RunFits {
+    /// `P / E_eff` against `phi_MC`, `phi_c` fitted.
+    pub pressure: Option<PowerLaw>,
+    /// `Z_force - Z_c`.
+    pub z_force: Option<CoordinationFit>,
+    /// `Z_geometry - Z_c`.
+    pub z_geometry: Option<CoordinationFit>,
+    /// Mean grain volumetric strain.
+    pub eps_v: Option<PowerLaw>,
+    /// Mean `alpha - alpha0`.
+    pub asphericity: Option<PowerLaw>,
+}
+
+/// Largest `phi - phi_c` of the power-law fits: the paper finds them to
+/// hold up to about 0.1.
+pub const FIT_WINDOW: f64 = 0.1;
+
+/// The fits of a run's compression states.
+pub fn fit_run(states: &[StateRow]) -> RunFits {
+    let compressed: Vec<&StateRow> = states
+        .iter()
+        .filter(|s| s.stage.starts_with("compress"))
+        .collect();
+    let phi: Vec<f64> = compressed.iter().map(|s| s.packing.phi_mc).collect();
+    let of = |f: &dyn Fn(&StateRow) -> f64| compressed.iter().map(|s| f(s)).collect::<Vec<f64>>();
+    let Some(pressure) =
+        power_law_with_jamming_point(&phi, &of(&|s| s.p_over_e_eff), FIT_WINDOW, 0.05, 5)
+    else {
+        return RunFits::default();
+    };
+    let phi_c = pressure.phi_c;
+    let z = |f: &dyn Fn(&StateRow) -> f64| {
+        coordination_law(&phi, &of(f), phi_c, FIT_WINDOW, 5)
+            .map(|(law, z_c)| CoordinationFit { law, z_c })
+    };
+    RunFits {
+        pressure: Some(pressure),
+        z_force: z(&|s| s.packing.z_force),
+        z_geometry: z(&|s| s.packing.z_geometry),
+        eps_v: power_law_at(&phi, &of(&|s| s.packing.eps_v_mean), phi_c, FIT_WINDOW),
+        asphericity: power_law_at(
+            &phi,
+            &of(&|s| s.packing.asphericity_excess_mean),
+            phi_c,
+            FIT_WINDOW,
+        ),
+    }
+}
+
+/// One packing compressed in one engine.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct CompactionRun {
+    /// Seed of the packing (and of its run).
+    pub seed: u64,
+    /// Grains.
+    pub grains: usize,
+    /// Particles.
+    pub particles: usize,
+    /// How the packing was built (absent for a file).
+    pub packing: Option<PackingSummary>,
+    /// Linear expansion that broke the packing's contacts (1 = none).
+    pub expansion: f64,
+    /// Wall-clock seconds of the run (engine only).
+    pub run_seconds: f64,
+    /// Wall-clock seconds of the analysis of its states.
+    pub analysis_seconds: f64,
+    /// Why the run stopped early or a state could not be measured, if so;
+    /// the native engine keeps the states up to there, a failed LAMMPS run
+    /// returns none.
+    pub stopped: Option<String>,
+    /// Thermo series.
+    pub series: RunSeries,
+    /// Recorded states: the stress-free packing first, then every checkpoint.
+    pub states: Vec<StateRow>,
+    /// Power laws near jamming.
+    #[serde(default)]
+    pub fits: RunFits,
+    /// The run's folder (scene, data file).
+    pub folder: String,
+}
+
+/// What `bpm compact` writes to `compaction.json`.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct CompactionReport {
+    /// bpm version.
+    pub version: String,
+    /// The command line.
+    pub command: String,
+    /// The options.
+    pub options: CompactOptions,
+    /// E_eff (k/d) that normalises the pressure, and its constants.
+    pub e_eff: f64,
+    /// K and nu behind E_eff.
+    pub moduli: Moduli,
+    /// The compression stages' rates (1/tau), in order.
+    pub rates: Vec<f64>,
+    /// One run per seed.
+    pub runs: Vec<CompactionRun>,
+}
+
+/// Unwraps the grains of a packing read from a file through its bonds, so
+/// each grain is whole whatever image flags the file had.
+fn whole_grains(scene: &mut Scene) -> Result<(), CompactionError> {
+    let grain = scene
+        .particles
+        .grain
+        .clone()
+        .ok_or_else(|| CompactionError::Packing("the data file has no molecule ids".into()))?;
+    let simbox = simbox_of(scene);
+    let grains = crate::analysis::packing::Grains::from_bonds(
+        &simbox,
+        &scene.particles.positions,
+        &grain,
+        &scene.bonds.pairs,
+    )
+    .map_err(|e| CompactionError::Packing(e.to_string()))?;
+    for (members, positions) in grains.members.iter().zip(&grains.positions) {
+        for (&i, x) in members.iter().zip(positions) {
+            scene.particles.positions[i] = *x;
+        }
+    }
+    Ok(())
+}
+
+/// The packing of `seed`: built, or read and made contact-free.
+fn packing(
+    opts: &CompactOptions,
+    seed: u64,
+    threads: usize,
+) -> Result<(Scene, Option<PackingSummary>, f64), CompactionError> {
+    match &opts.source {
+        PackingSource::Build {
+            grains,
+            kind,
+            radius,
+            distinct_grains,
+            template_fraction,
+            time_scale,
+        } => {
+            let mut p = PackingParams::new(*grains, *kind, *radius, opts.a_b, seed);
+            p.distinct_grains = *distinct_grains;
+            p.template_fraction = *template_fraction;
+            p.grain.time_scale = *time_scale;
+            let (mut scene, summary) = build_packing(&p, threads, false)
+                .map_err(|e| CompactionError::Packing(e.to_string()))?;
+            scene.force_field = opts.force_field();
+            let expansion = summary.expansion;
+            Ok((scene, Some(summary), expansion))
+        }
+        PackingSource::File { path } => {
+            let mut scene = read_data_file(path, [true; 3], opts.force_field(), seed)
+                .map_err(|e| CompactionError::Packing(e.to_string()))?;
+            if scene.simbox.tilt.iter().any(|&t| t != 0.0) {
+                return Err(CompactionError::Packing(format!(
+                    "{}: the box is tilted; compaction needs an orthogonal periodic box",
+                    path.display()
+                )));
+            }
+            whole_grains(&mut scene)?;
+            let expansion =
+                break_contacts(&mut scene).map_err(|e| CompactionError::Packing(e.to_string()))?;
+            Ok((scene, None, expansion))
+        }
+    }
+}
+
+fn simbox_of_checkpoint(c: &Checkpoint, periodic: [bool; 3]) -> SimBox {
+    SimBox {
+        lo: c.simbox[0],
+        lengths: c.simbox[1],
+        tilt: c.simbox[2],
+        periodic,
+    }
+}
+
+/// Fails, naming the grain, when the packing's start cannot be measured
+/// (a grain with fewer than four particles, flat or collinear ones).
+fn check_measurable(scene: &Scene, analysis: &AnalysisOptions) -> Result<(), CompactionError> {
+    let grain = scene.particles.grain.clone().unwrap_or_default();
+    let simbox = simbox_of(scene);
+    let start = Snapshot {
+        simbox: &simbox,
+        positions: &scene.particles.positions,
+        grain: &grain,
+        bonds: &scene.bonds.pairs,
+    };
+    reference_of(&start, analysis)
+        .map(|_| ())
+        .map_err(|e| CompactionError::Analysis {
+            what: "the packing before the run".into(),
+            message: e.to_string(),
+        })
+}
+
+/// The compaction scene of a packing: its stages are the protocol's.
+pub fn compaction_scene(packing: &Scene, protocol: &CompactionProtocol) -> Scene {
+    let mut scene = packing.clone();
+    scene.stages = protocol.stages();
+    scene
+}
+
+fn column(stage: &StageOutput, name: &str) -> Vec<f64> {
+    stage.column(name).unwrap_or_default()
+}
+
+/// Runs the compaction scene in the chosen engine; returns the stages
+/// (those done, the last possibly partial), the stop message if any, and
+/// the run's seconds.
+fn run_engine(
+    scene: &Scene,
+    opts: &CompactOptions,
+    folder: &Path,
+    threads: usize,
+    bpm: Option<&Path>,
+    progress: bool,
+) -> (Vec<StageOutput>, Option<String>, f64) {
+    let start = std::time::Instant::now();
+    match &opts.engine {
+        CompactionEngine::Native => {
+            let mut sys = build_system(scene, threads);
+            let run = RunOptions {
+                progress,
+                ..RunOptions::quiet(threads)
+            };
+            let (stages, error) = run_scene(&mut sys, scene, &run);
+            (
+                stages,
+                error.map(|e| e.to_string()),
+                start.elapsed().as_secs_f64(),
+            )
+        }
+        CompactionEngine::Lammps { ranks } => {
+            let Some(bpm) = bpm else {
+                return (
+                    Vec::new(),
+                    Some("no bpm executable to run LAMMPS with".into()),
+                    0.0,
+                );
+            };
+            let launcher = LammpsLauncher {
+                bpm: bpm.to_path_buf(),
+                dir: folder.to_path_buf(),
+            };
+            match launcher.run(scene, "lammps", *ranks, true) {
+                Ok(run) => (run.stages, None, run.seconds),
+                Err(e) => (
+                    Vec::new(),
+                    Some(e.to_string()),
+                    start.elapsed().as_secs_f64(),
+                ),
+            }
+        }
+    }
+}
+
+/// Measures the stress-free packing and every checkpoint of `stages`; a
+/// state that cannot be measured ends the list, and its error is returned
+/// beside the states before it.
+fn states_of(
+    scene: &Scene,
+    stages: &[StageOutput],
+    opts: &CompactOptions,
+    e_eff: f64,
+    rates: &[f64],
+) -> Result<(Vec<StateRow>, RunSeries, Option<String>), CompactionError> {
+    let grain = scene.particles.grain.clone().unwrap_or_default();
+    let n = scene.particles.positions.len() as f64;
+    let simbox = simbox_of(scene);
+    let start = Snapshot {
+        simbox: &simbox,
+        positions: &scene.particles.positions,
+        grain: &grain,
+        bonds: &scene.bonds.pairs,
+    };
+    let fail = |what: String| {
+        move |e: crate::analysis::packing::PackingError| CompactionError::Analysis {
+            what,
+            message: e.to_string(),
+        }
+    };
+    let reference = reference_of(&start, &opts.analysis).map_err(fail("the packing".into()))?;
+    let mut rows = vec![StateRow {
+        stage: "start".into(),
+        rate: 0.0,
+        step: 0,
+        time: 0.0,
+        pressure: 0.0,
+        p_over_e_eff: 0.0,
+        ke_per_particle: 0.0,
+        packing: analyse(&start, &reference, &opts.analysis).map_err(fail("the packing".into()))?,
+    }];
+    let mut series = RunSeries::default();
+    let mut failed = None;
+    for (k, stage) in stages.iter().enumerate() {
+        let steps = column(stage, "step");
+        let time = column(stage, "time");
+        let pressure = column(stage, "pressure");
+        let ke = column(stage, "e_kinetic");
+        let [lx, ly, lz] = ["lx", "ly", "lz"].map(|c| column(stage, c));
+        for r in 0..steps.len() {
+            // A stage's first row repeats the previous stage's last step,
+            // with forces recomputed after that step's box change (one
+            // step's affine strain, unrelaxed): keep the earlier row.
+            if k > 0 && r == 0 {
+                continue;
+            }
+            series.time.push(time[r]);
+            series.box_volume.push(lx[r] * ly[r] * lz[r]);
+            series.pressure.push(pressure[r]);
+            series.ke_per_particle.push(ke[r] / n);
+        }
+        let rate = if k == 0 {
+            0.0
+        } else {
+            rates.get(k - 1).copied().unwrap_or(0.0)
+        };
+        for c in &stage.checkpoints {
+            let Some(r) = steps.iter().position(|&s| s as u64 == c.step) else {
+                continue;
+            };
+            // Stage 0's first checkpoint is the start, measured above.
+            if r == 0 {
+                continue;
+            }
+            if failed.is_some() {
+                break;
+            }
+            let cbox = simbox_of_checkpoint(c, scene.simbox.periodic);
+            let snap = Snapshot {
+                simbox: &cbox,
+                positions: &c.positions,
+                grain: &grain,
+                bonds: &scene.bonds.pairs,
+            };
+            let packing = match analyse(&snap, &reference, &opts.analysis) {
+                Ok(p) => p,
+                Err(e) => {
+                    failed = Some(format!(
+                        "analysing stage {} step {}: {e} (states from there on are not measured)",
+                        stage.name, c.step
+                    ));
+                    break;
+                }
+            };
+            rows.push(StateRow {
+                stage: stage.name.clone(),
+                rate,
+                step: c.step,
+                time: time[r],
+                pressure: pressure[r],
+                p_over_e_eff: pressure[r] / e_eff,
+                ke_per_particle: ke[r] / n,
+                packing,
+            });
+        }
+    }
+    Ok((rows, series, failed))
+}
+
+/// Runs the study: for each seed a packing, its compaction in the chosen
+/// engine and the analysis of its states; writes `compaction.json`, the
+/// plots and each run's scene and data file into `dir` as it goes.
+/// `bpm` is this program's executable (needed for the LAMMPS engine).
+pub fn run_compaction(
+    opts: &CompactOptions,
+    threads: usize,
+    bpm: Option<&Path>,
+    dir: &Path,
+    command: &str,
+    progress: bool,
+    print: &mut dyn FnMut(&str),
+) -> Result<CompactionReport, CompactionError> {
+    opts.validate()?;
+    std::fs::create_dir_all(dir).map_err(FileError::on("creating", dir))?;
+    let moduli = Moduli::paper_fits(opts.a_b);
+    let e_eff = effective_modulus(moduli.k, moduli.nu);
+    let mut report = CompactionReport {
+        version: crate::VERSION.into(),
+        command: command.into(),
+        options: opts.clone(),
+        e_eff,
+        moduli,
+        rates: opts.protocol.rates(),
+        runs: Vec::new(),
+    };
+    for &seed in &opts.seeds {
+        let folder = dir.join(format!("seed-{seed}"));
+        std::fs::create_dir_all(&folder).map_err(FileError::on("creating", &folder))?;
+        let (packing, summary, expansion) = packing(opts, seed, threads)?;
+        // Every grain must have a hull before hours of running, not after.
+        check_measurable(&packing, &opts.analysis)?;
+        if expansion > 1.0 {
+            print(&format!(
+                "seed {seed}: the box was expanded by {expansion:.4} (linear) to give the grains room"
+            ));
+        }
+        let data = folder.join("packing.data");
+        std::fs::write(&data, write_data_file(&packing))
+            .map_err(FileError::on("writing", &data))?;
+        let scene = compaction_scene(&packing, &opts.protocol);
+        let scene_path = folder.join("scene.json");
+        write_scene(&scene_path, &scene).map_err(|e| CompactionError::Packing(e.to_string()))?;
+        print(&format!(
+            "seed {seed}: {} grains, {} particles, box {:.2} d; running {} steps ({} stages)",
+            packing
+                .particles
+                .grain
+                .as_ref()
+                .map_or(0, |g| g.iter().max().map_or(0, |m| *m as usize + 1)),
+            packing.particles.positions.len(),
+            packing.simbox.lengths[0],
+            scene.stages.iter().map(|s| s.steps).sum::<u64>(),
+            scene.stages.len()
+        ));
+        let (stages, stopped, run_seconds) =
+            run_engine(&scene, opts, &folder, threads, bpm, progress);
+        if let Some(m) = &stopped {
+            print(&format!("seed {seed}: the run stopped: {m}"));
+        }
+        let t = std::time::Instant::now();
+        let (states, series, unmeasured) =
+            states_of(&packing, &stages, opts, e_eff, &report.rates)?;
+        let stopped = match (stopped, unmeasured) {
+            (Some(a), Some(b)) => Some(format!("{a}; {b}")),
+            (a, b) => a.or(b),
+        };
+        report.runs.push(CompactionRun {
+            seed,
+            grains: states[0].packing.eps_v.len(),
+            particles: packing.particles.positions.len(),
+            packing: summary,
+            expansion,
+            run_seconds,
+            analysis_seconds: t.elapsed().as_secs_f64(),
+            stopped,
+            series,
+            fits: fit_run(&states),
+            states,
+            folder: folder.display().to_string(),
+        });
+        write_report(&report, dir)?;
+        let last = report.runs.last().and_then(|r| r.states.last());
+        if let Some(s) = last {
+            print(&format!(
+                "seed {seed}: {run_seconds:.0} s; last state phi_MC = {:.4}, P/E_eff = {:.3e}, Z_force = {:.2}, eps_V = {:.3}",
+                s.packing.phi_mc, s.p_over_e_eff, s.packing.z_force, s.packing.eps_v_mean
+            ));
+        }
+    }
+    Ok(report)
+}
+
+/// Writes `compaction.json`, `compaction.svg`, `jamming.svg` and
+/// `compaction.txt` into `dir`.
+pub fn write_report(report: &CompactionReport, dir: &Path) -> Result<(), CompactionError> {
+    let json = dir.join("compaction.json");
+    let text = serde_json::to_string_pretty(report).expect("report serialises");
+    std::fs::write(&json, text).map_err(FileError::on("writing", &json))?;
+    let per_run = |f: &dyn Fn(&StateRow) -> Option<(f64, f64)>, mark| -> Vec<Series> {
+        report
+            .runs
+            .iter()
+            .map(|r| {
+                Series::new(
+                    format!("seed {}", r.seed),
+                    r.states.iter().filter_map(f).collect(),
+                    mark,
+                )
+            })
+            .collect()
+    };
+    let compressed = |s: &StateRow| s.stage != "start";
+    let mut z = per_run(
+        &|s| compressed(s).then_some((s.packing.phi_mc, s.packing.z_force)),
+        Mark::LinePoints,
+    );
+    for (series, run) in z.iter_mut().zip(&report.runs) {
+        series.label = format!("Z_force, seed {}", run.seed);
+    }
+    let mut zg = per_run(
+        &|s| compressed(s).then_some((s.packing.phi_mc, s.packing.z_geometry)),
+        Mark::Rings,
+    );
+    for (series, run) in zg.iter_mut().zip(&report.runs) {
+        series.label = format!("Z_geometry, seed {}", run.seed);
+    }
+    z.extend(zg);
+    let panels = vec![
+        Panel {
+            title: "pressure against volume fraction".into(),
+            x_label: "phi_MC".into(),
+            y_label: "P / E_eff".into(),
+            log_y: true,
+            series: per_run(
+                &|s| compressed(s).then_some((s.packing.phi_mc, s.p_over_e_eff)),
+                Mark::LinePoints,
+            ),
+            ..Panel::default()
+        },
+        Panel {
+            title: "coordination (rattlers removed)".into(),
+            x_label: "phi_MC".into(),
+            y_label: "Z".into(),
+            series: z,
+            ..Panel::default()
+        },
+        Panel {
+            title: "grain volumetric strain".into(),
+            x_label: "phi_MC".into(),
+            y_label: "mean eps_V".into(),
+            series: per_run(
+                &|s| compressed(s).then_some((s.packing.phi_mc, s.packing.eps_v_mean)),
+                Mark::LinePoints,
+            ),
+            ..Panel::default()
+        },
+        Panel {
+            title: "grain asphericity".into(),
+            x_label: "phi_MC".into(),
+            y_label: "mean alpha - alpha0".into(),
+            log_y: true,
+            series: per_run(
+                &|s| compressed(s).then_some((s.packing.phi_mc, s.packing.asphericity_excess_mean)),
+                Mark::LinePoints,
+            ),
+            ..Panel::default()
+        },
+        Panel {
+            title: "pressure and kinetic energy against time".into(),
+            x_label: "time (tau)".into(),
+            y_label: "P (k/d), KE per particle (k d^2)".into(),
+            log_x: true,
+            log_y: true,
+            series: report
+                .runs
+                .iter()
+                .flat_map(|r| {
+                    let pts = |y: &[f64]| {
+                        r.series
+                            .time
+                            .iter()
+                            .zip(y)
+                            .map(|(&t, &y)| (t, y))
+                            .collect::<Vec<_>>()
+                    };
+                    [
+                        Series::new(
+                            format!("P, seed {}", r.seed),
+                            pts(&r.series.pressure),
+                            Mark::Line,
+                        ),
+                        Series::new(
+                            format!("KE/particle, seed {}", r.seed),
+                            pts(&r.series.ke_per_particle),
+                            Mark::Line,
+                        ),
+                    ]
+                })
+                .collect(),
+        },
+    ];
+    write_svg(&dir.join("compaction.svg"), &panels)?;
+    write_svg(&dir.join("jamming.svg"), &jamming_panels(report))?;
+    std::fs::write(dir.join("compaction.txt"), table(report))
+        .map_err(FileError::on("writing", &dir.join("compaction.txt")))?;
+    Ok(())
+}
+
+/// Log-log panels against `phi - phi_c` (each run at its own fitted
+/// `phi_c`), with the fitted power laws as lines.
+fn jamming_panels(report: &CompactionReport) -> Vec<Panel> {
+    type Pick = fn(&StateRow, &RunFits) -> Option<f64>;
+    type Law = fn(&RunFits) -> Option<PowerLaw>;
+    let panel = |title: &str, y_label: &str, pick: Pick, law: Law| {
+        let mut series = Vec::new();
+        for r in &report.runs {
+            let Some(p) = &r.fits.pressure else { continue };
+            let pts: Vec<(f64, f64)> = r
+                .states
+                .iter()
+                .filter(|s| s.stage.starts_with("compress"))
+                .filter_map(|s| Some((s.packing.phi_mc - p.phi_c, pick(s, &r.fits)?)))
+                .filter(|(x, y)| *x > 0.0 && *y > 0.0)
+                .collect();
+            series.push(Series::new(format!("seed {}", r.seed), pts, Mark::Points));
+            if let Some(f) = law(&r.fits) {
+                let line: Vec<(f64, f64)> = (0..=40)
+                    .map(|k| {
+                        let x = 1e-4 * (f.window / 1e-4).powf(k as f64 / 40.0);
+                        (x, f.prefactor * x.powf(f.exponent))
+                    })
+                    .collect();
+                series.push(Series::new(
+                    format!(
+                        "fit, seed {}: exponent {:.2} +- {:.2}",
+                        r.seed, f.exponent, f.exponent_error
+                    ),
+                    line,
+                    Mark::Line,
+                ));
+            }
+        }
+        Panel {
+            title: title.into(),
+            x_label: "phi_MC - phi_c".into(),
+            y_label: y_label.into(),
+            log_x: true,
+            log_y: true,
+            series,
+        }
+    };
+    vec![
+        panel(
+            "pressure near jamming (paper: exponent 3/2)",
+            "P / E_eff",
+            |s, _| Some(s.p_over_e_eff),
+            |f| f.pressure,
+        ),
+        panel(
+            "force coordination (paper: exponent 1/2)",
+            "Z_force - Z_c",
+            |s, f| f.z_force.map(|z| s.packing.z_force - z.z_c),
+            |f| f.z_force.map(|z| z.law),
+        ),
+        panel(
+            "geometric coordination",
+            "Z_geometry - Z_c",
+            |s, f| f.z_geometry.map(|z| s.packing.z_geometry - z.z_c),
+            |f| f.z_geometry.map(|z| z.law),
+        ),
+        panel(
+            "grain volumetric strain (paper: exponent 3/2)",
+            "mean eps_V",
+            |s, _| Some(s.packing.eps_v_mean),
+            |f| f.eps_v,
+        ),
+        panel(
+            "grain asphericity (paper: exponent 5/2 at nu = 1/4)",
+            "mean alpha - alpha0",
+            |s, _| Some(s.packing.asphericity_excess_mean),
+            |f| f.asphericity,
+        ),
+    ]
+}
+
+/// The fits of every run and their mean and spread over runs, beside the
+/// paper's values, as text.
+pub fn table(report: &CompactionReport) -> String {
+    use std::fmt::Write as _;
+    let mut t = String::new();
+    let _ = writeln!(
+        t,
+        "# bpm compact: power laws near jamming (fit window phi - phi_c <= {FIT_WINDOW})\n# {}\n",
+        report.command
+    );
+    let _ = writeln!(
+        t,
+        "{:>6} {:>8} {:>9} {:>13} {:>8} {:>13} {:>8} {:>13} {:>13} {:>13} {:>8}",
+        "seed",
+        "grains",
+        "phi_c",
+        "P exponent",
+        "Z_c",
+        "Z exponent",
+        "Zg_c",
+        "Zg exponent",
+        "eps_V exp.",
+        "alpha exp.",
+        "run s"
+    );
+    let fmt = |f: Option<PowerLaw>| {
+        f.map_or("-".to_string(), |f| {
+            format!("{:.2}+-{:.2}", f.exponent, f.exponent_error)
+        })
+    };
+    let mut columns: [Vec<f64>; 7] = Default::default();
+    for r in &report.runs {
+        let f = &r.fits;
+        let _ = writeln!(
+            t,
+            "{:>6} {:>8} {:>9} {:>13} {:>8} {:>13} {:>8} {:>13} {:>13} {:>13} {:>8.0}",
+            r.seed,
+            r.grains,
+            f.pressure.map_or("-".into(), |p| format!("{:.4}", p.phi_c)),
+            fmt(f.pressure),
+            f.z_force.map_or("-".into(), |z| format!("{:.2}", z.z_c)),
+            fmt(f.z_force.map(|z| z.law)),
+            f.z_geometry.map_or("-".into(), |z| format!("{:.2}", z.z_c)),
+            fmt(f.z_geometry.map(|z| z.law)),
+            fmt(f.eps_v),
+            fmt(f.asphericity),
+            r.run_seconds
+        );
+        let values = [
+            f.pressure.map(|p| p.phi_c),
+            f.pressure.map(|p| p.exponent),
+            f.z_force.map(|z| z.z_c),
+            f.z_force.map(|z| z.law.exponent),
+            f.z_geometry.map(|z| z.z_c),
+            f.eps_v.map(|p| p.exponent),
+            f.asphericity.map(|p| p.exponent),
+        ];
+        for (c, v) in columns.iter_mut().zip(values) {
+            c.extend(v);
+        }
+    }
+    let stats = |v: &[f64]| {
+        if v.is_empty() {
+            return "-".to_string();
+        }
+        let n = v.len() as f64;
+        let m = v.iter().sum::<f64>() / n;
+        if v.len() < 2 {
+            return format!("{m:.4}");
+        }
+        let sd = (v.iter().map(|x| (x - m).powi(2)).sum::<f64>() / (n - 1.0)).sqrt();
+        format!("{m:.4} +- {sd:.4} (sd over {} runs)", v.len())
+    };
+    let _ = writeln!(t, "\nquantity               ours                                 paper (R = 10 d, 1,024 grains)");
+    for (name, k, paper) in [
+        ("phi_c", 0, "0.5979 smoother, 0.5836 rough"),
+        ("P exponent", 1, "3/2"),
+        ("Z_c (force)", 2, "about 5.2 smoother, 5.05 rough"),
+        ("Z exponent", 3, "1/2"),
+        ("Z_c (geometry)", 4, "-"),
+        ("eps_V exponent", 5, "3/2"),
+        (
+            "alpha exponent",
+            6,
+            "5/2 at nu = 1/4 (2.3 to 2.7 across nu)",
+        ),
+    ] {
+        let _ = writeln!(t, "{name:<22} {:<36} {paper}", stats(&columns[k]));
+    }
+    t
+}
+
+/// Reads an earlier `compaction.json`, refits its runs and rewrites the
+/// report, plots and table: the analysis can change without rerunning.
+pub fn refit(dir: &Path) -> Result<CompactionReport, CompactionError> {
+    let json = dir.join("compaction.json");
+    let text = std::fs::read_to_string(&json).map_err(FileError::on("reading", &json))?;
+    let mut report: CompactionReport = serde_json::from_str(&text).map_err(|e| {
+        CompactionError::Packing(format!("{}: not a compaction report: {e}", json.display()))
+    })?;
+    for r in &mut report.runs {
+        r.fits = fit_run(&r.states);
+    }
+    write_report(&report, dir)?;
+    Ok(report)
+}
+
+/// One dump frame of a packing, measured.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct FrameState {
+    /// Step of the frame.
+    pub step: u64,
+    /// The measurements.
+    #[serde(flatten)]
+    pub packing: PackingState,
+}
+
+/// What `bpm analyse-packing` writes.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct DumpAnalysis {
+    /// bpm version.
+    pub version: String,
+    /// The command line.
+    pub command: String,
+    /// The data file: bonds, grains, and the reference state.
+    pub data: String,
+    /// The dump.
+    pub dump: String,
+    /// How states were measured.
+    pub analysis: AnalysisOptions,
+    /// One entry per frame.
+    pub frames: Vec<FrameState>,
+}
+
+/// Measures every frame of a LAMMPS text dump (columns `id mol x y z`,
+/// optional image flags; atom ids as in the data file) of the packing in
+/// the data file `data` (atom_style bond, molecule id = grain), against
+/// the data file's own state as the reference (hull volumes and shapes at
+/// the stress-free start).
+pub fn analyse_dump(
+    data: &Path,
+    dump: &Path,
+    analysis: &AnalysisOptions,
+    command: &str,
+) -> Result<DumpAnalysis, CompactionError> {
+    let scene = read_data_file(data, [true; 3], ForceField::paper(0.0), 1)
+        .map_err(|e| CompactionError::Packing(e.to_string()))?;
+    let frames = crate::scene::trajectory::read_dump(dump)
+        .map_err(|e| CompactionError::Packing(e.to_string()))?;
+    let grain = scene
+        .particles
+        .grain
+        .clone()
+        .ok_or_else(|| CompactionError::Packing("the data file has no molecule ids".into()))?;
+    let simbox = simbox_of(&scene);
+    let start = Snapshot {
+        simbox: &simbox,
+        positions: &scene.particles.positions,
+        grain: &grain,
+        bonds: &scene.bonds.pairs,
+    };
+    let fail = |what: String| {
+        move |e: crate::analysis::packing::PackingError| CompactionError::Analysis {
+            what,
+            message: e.to_string(),
+        }
+    };
+    let reference = reference_of(&start, analysis).map_err(fail(data.display().to_string()))?;
+    let mut out = Vec::with_capacity(frames.len());
+    for f in &frames {
+        if f.x.len() != grain.len() {
+            return Err(CompactionError::Packing(format!(
+                "{} step {}: {} atoms, the data file has {}",
+                dump.display(),
+                f.step,
+                f.x.len(),
+                grain.len()
+            )));
+        }
+        if !f.simbox.periodic.iter().all(|&p| p) {
+            return Err(CompactionError::Packing(format!(
+                "{} step {}: the box is not periodic in every dimension (BOX BOUNDS pp pp pp needed)",
+                dump.display(),
+                f.step
+            )));
+        }
+        if f.grain != grain {
+            return Err(CompactionError::Packing(format!(
+                "{} step {}: the molecule ids differ from the data file's",
+                dump.display(),
+                f.step
+            )));
+        }
+        let fbox = f.simbox.clone();
+        let snap = Snapshot {
+            simbox: &fbox,
+            positions: &f.x,
+            grain: &grain,
+            bonds: &scene.bonds.pairs,
+        };
+        out.push(FrameState {
+            step: f.step,
+            packing: analyse(&snap, &reference, analysis).map_err(fail(format!(
+                "{} step {}",
+                dump.display(),
+                f.step
+            )))?,
+        });
+    }
+    Ok(DumpAnalysis {
+        version: crate::VERSION.into(),
+        command: command.into(),
+        data: data.display().to_string(),
+        dump: dump.display().to_string(),
+        analysis: analysis.clone(),
+        frames: out,
+    })
+}

@@ -1,0 +1,158 @@
+//! Compaction of a small packing in both engines from one scene: the
+//! barostat jams it and the stepwise compression squeezes it, with the
+//! same pressure and box series in the native engine and in LAMMPS.
+
+mod common;
+
+use bpm::verify::tolerances::tolerance;
+use bpm::verify::{compaction_deviation, run_native, small_compaction, LammpsLauncher};
+use std::path::PathBuf;
+
+#[test]
+fn a_small_packing_jams_and_compresses_alike_in_both_engines() {
+    let scene = small_compaction(3).unwrap();
+    assert!(scene.stages[0].barostat.is_some() && scene.stages[0].reset_reference);
+    let native = run_native(&scene, "compaction-native", 1).unwrap();
+    let launcher = LammpsLauncher {
+        bpm: PathBuf::from(env!("CARGO_BIN_EXE_bpm")),
+        dir: common::scratch_dir("compaction"),
+    };
+    let lammps = launcher.run(&scene, "compaction", 1, true).unwrap();
+    for d in compaction_deviation(&native.stages, &lammps.stages).unwrap() {
+        let tol = tolerance(&d.observable);
+        assert!(tol > 0.0, "no tolerance for {}", d.observable);
+        assert!(
+            d.max_deviation <= tol,
+            "{} deviates by {:e} at step {} (tolerance {tol:e})",
+            d.observable,
+            d.max_deviation,
+            d.at_step
+        );
+    }
+    // It jammed (the barostat held the pressure near its target, far
+    // below the compressed state's) and was compressed: the box shrank by
+    // the protocol's strain after the barostat had shrunk it further.
+    let pressure = |k: usize| native.stages[k].column("pressure").unwrap();
+    let jam = pressure(0);
+    let last = pressure(native.stages.len() - 1);
+    assert!(jam.last().unwrap().abs() < 1e-5, "{jam:?}");
+    assert!(*last.last().unwrap() > 1e-3, "{last:?}");
+    let lx = |k: usize| native.stages[k].column("lx").unwrap();
+    let (l0, l1) = (lx(0)[0], *lx(0).last().unwrap());
+    // Unjammed, the barostat shrinks the volume by gain * P_T = 1e-6 per
+    // step: at most 2% (0.66% in length) over its 20,000 steps.
+    assert!(
+        l1 < 0.995 * l0 && l1 > 0.993 * l0,
+        "the barostat did not shrink the box as it should: {l0} -> {l1}"
+    );
+    // Each compression stage scales the box as exp(-rate t) in closed form
+    // (rates 3e-5, 1e-4, 1e-4), to its last recorded row.
+    for (k, rate) in [(1, 3e-5), (2, 1e-4), (3, 1e-4)] {
+        let stage = &native.stages[k];
+        let (t, l) = (stage.column("time").unwrap(), lx(k));
+        let last = t.len() - 1;
+        let expected = l[0] * (-rate * (t[last] - t[0])).exp();
+        assert!(
+            (l[last] / expected - 1.0).abs() < 1e-12,
+            "stage {k}: {} against {expected}",
+            l[last]
+        );
+    }
+    let _ = std::fs::remove_dir_all(&launcher.dir);
+}
+
+/// The readable LAMMPS script (lammps_inputs/compaction.in) runs the same
+/// protocol as the scene: from the same packing data file, its box and
+/// pressure at the end of the jam and of each full compression stage are
+/// the native engine's; `analyse-packing` measures its dump.
+#[test]
+fn the_lammps_compaction_script_follows_the_protocol_and_its_dump_is_measured() {
+    use bpm::analysis::packing::AnalysisOptions;
+    use bpm::scene::datafile::write_data_file;
+    use bpm::studies::compaction::analyse_dump;
+    let scene = small_compaction(3).unwrap();
+    let native = run_native(&scene, "compaction-script-native", 1).unwrap();
+
+    let dir = common::scratch_dir("compaction-script");
+    let data = dir.join("packing.data");
+    std::fs::write(&data, write_data_file(&scene)).unwrap();
+    let script = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("lammps_inputs/compaction.in");
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_lmp-bpm"))
+        .current_dir(&dir)
+        .args(["-in", script.to_str().unwrap(), "-log", "none"])
+        .args(["-var", "data", data.to_str().unwrap()])
+        .args(["-var", "gain", "1.0", "-var", "jamtime", "2000"])
+        .args([
+            "-var", "rate0", "3e-5", "-var", "rate1", "1e-4", "-var", "levels", "2",
+        ])
+        .args(["-var", "stagetime", "500", "-var", "vstrain", "0.25"])
+        .args(["-var", "dumpevery", "10000"])
+        .output()
+        .unwrap();
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(out.status.success(), "{text}");
+    // "<what>: step S volume V pressure P" lines, one per stage end.
+    let ends: Vec<(u64, f64, f64)> = text
+        .lines()
+        .filter(|l| l.starts_with("jammed:") || l.starts_with("compression stage"))
+        .filter_map(|l| {
+            let w: Vec<&str> = l.split_whitespace().collect();
+            let at = |k: &str| w.iter().position(|x| *x == k).map(|i| w[i + 1]);
+            Some((
+                at("step")?.parse().ok()?,
+                at("volume")?.parse().ok()?,
+                at("pressure")?.parse().ok()?,
+            ))
+        })
+        .collect();
+    assert_eq!(ends.len(), 4, "{text}");
+    let mut compared = 0;
+    for stage in &native.stages {
+        let steps = stage.column("step").unwrap();
+        let (x, y, z) = (
+            stage.column("lx").unwrap(),
+            stage.column("ly").unwrap(),
+            stage.column("lz").unwrap(),
+        );
+        let p = stage.column("pressure").unwrap();
+        let scale = p.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        let last = steps.len() - 1;
+        if let Some(&(_, volume, pressure)) = ends.iter().find(|e| e.0 as f64 == steps[last]) {
+            let native_volume = x[last] * y[last] * z[last];
+            assert!(
+                (volume / native_volume - 1.0).abs() <= tolerance("compaction box"),
+                "{}: script {volume} native {native_volume}",
+                stage.name
+            );
+            assert!(
+                (pressure - p[last]).abs() / scale <= tolerance("compaction pressure"),
+                "{}: script {pressure} native {}",
+                stage.name,
+                p[last]
+            );
+            compared += 1;
+        }
+    }
+    // The jam and the two full stages end on a recorded step; the last,
+    // shortened stage ends between records.
+    assert_eq!(compared, 3);
+
+    let report = analyse_dump(
+        &data,
+        &dir.join("states.dump"),
+        &AnalysisOptions {
+            mc_points: 50_000,
+            ..AnalysisOptions::default()
+        },
+        "test",
+    )
+    .unwrap();
+    let first = &report.frames[0].packing;
+    let end = &report.frames.last().unwrap().packing;
+    assert_eq!(report.frames[0].step, 0);
+    assert!(first.eps_v_mean.abs() < 1e-12 && first.asphericity_excess_mean.abs() < 1e-12);
+    assert_eq!(first.force_contacts, 0);
+    assert!(end.eps_v_mean > 1e-3 && end.z_force > 4.0, "{end:?}");
+    assert!(end.phi_mc > first.phi_mc + 0.05);
+    let _ = std::fs::remove_dir_all(&dir);
+}
