@@ -98,6 +98,29 @@ fn a_missing_file_and_bad_options_fail_cleanly() {
 }
 
 #[test]
+fn compare_compaction_refuses_folders_without_a_report_and_mismatched_labels() {
+    let dir = tmp("compare");
+    std::fs::create_dir_all(&dir).unwrap();
+    let compare = |extra: &[&str]| {
+        let st = bpm()
+            .args(["compare-compaction", dir.to_str().unwrap()])
+            .args(extra)
+            .arg("-o")
+            .arg(dir.join("out"))
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&st.stderr).to_string();
+        assert_eq!(st.status.code(), Some(1), "{err}");
+        assert!(!err.contains("panicked"), "{err}");
+        err
+    };
+    assert!(compare(&[]).contains("compaction.json"));
+    std::fs::write(dir.join("compaction.json"), "{\"runs\": 3}").unwrap();
+    assert!(compare(&[]).contains("not a compaction report"));
+    assert!(compare(&["--labels", "a,b"]).contains("--labels"));
+}
+
+#[test]
 fn each_error_is_printed_once() {
     // A missing file and a malformed scene: the cause appears once, not
     // once in the message and again from the error chain.

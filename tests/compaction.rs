@@ -156,3 +156,223 @@ fn the_lammps_compaction_script_follows_the_protocol_and_its_dump_is_measured() 
     assert!(end.phi_mc > first.phi_mc + 0.05);
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// The packing-moduli measurement (restart from a saved state, relax,
+/// compress or shear, fit) on a solid whose moduli the calibration
+/// measures independently: a bulk solid saved at 0.1% linear compression.
+/// Its relaxed pressure is then K times the volumetric strain, which holds
+/// only if the restart keeps the stress-free reference lengths; K and G
+/// match the calibration's, and LAMMPS's match the native engine's.
+#[test]
+fn packing_moduli_of_a_compressed_solid_match_its_calibration_in_both_engines() {
+    use bpm::scene::builders::bulk::{build_bulk, BulkParams};
+    use bpm::scene::protocols::PackingModuliProtocol;
+    use bpm::scene::run::Checkpoint;
+    use bpm::studies::calibration::{measure_moduli, CalibrationEngine, Loading};
+    use bpm::studies::compaction::moduli::measure_state;
+    use bpm::studies::compaction::CompactionEngine;
+
+    let solid = build_bulk(&BulkParams::shortened(6.0, 4, 0.0), 1, false)
+        .unwrap()
+        .0;
+    let (calibrated, [compressed, _]) = measure_moduli(
+        &solid,
+        0.0,
+        false,
+        &Loading::default(),
+        &CalibrationEngine::Native(1),
+        "calibration",
+    )
+    .unwrap();
+    let scale = 0.999;
+    let lo = solid.simbox.lo;
+    let state = Checkpoint {
+        step: 7,
+        simbox: [
+            lo,
+            solid.simbox.lengths.map(|l| l * scale),
+            solid.simbox.tilt,
+        ],
+        positions: solid
+            .particles
+            .positions
+            .iter()
+            .map(|x| std::array::from_fn(|d| lo[d] + (x[d] - lo[d]) * scale))
+            .collect(),
+        images: Vec::new(),
+    };
+    let protocol = PackingModuliProtocol {
+        relax_time: 200.0,
+        compression_rate: 1e-5,
+        shear_rate: 2e-5,
+        ..PackingModuliProtocol::paper()
+    };
+    let dir = common::scratch_dir("packing-moduli");
+    let bpm = PathBuf::from(env!("CARGO_BIN_EXE_bpm"));
+    let native = measure_state(
+        &solid,
+        &state,
+        &protocol,
+        &CompactionEngine::Native,
+        &dir,
+        1,
+        None,
+    )
+    .unwrap();
+    let lammps = measure_state(
+        &solid,
+        &state,
+        &protocol,
+        &CompactionEngine::Lammps { ranks: 1 },
+        &dir,
+        1,
+        Some(&bpm),
+    )
+    .unwrap();
+    let strain = 1.0 - scale.powi(3);
+    // The built solid's own pressure (contacts between unbonded
+    // neighbours) adds to the strain's.
+    let p0 = compressed.stages[0].column("pressure").unwrap()[0];
+    let expected_pressure = p0 + calibrated.k * strain;
+    assert!(
+        (native.relaxed_pressure / expected_pressure - 1.0).abs() < 0.02,
+        "relaxed pressure {} against K eps_V = {expected_pressure}",
+        native.relaxed_pressure
+    );
+    assert!(native.is_reliable(), "{native:?}");
+    // A solid at rest does not creep: the control changes nothing.
+    assert!(
+        native.bulk_creep_fraction().abs() < 1e-3 && native.shear_creep_fraction().abs() < 1e-3,
+        "{native:?}"
+    );
+    assert!(
+        (native.bulk / calibrated.k - 1.0).abs() < 0.02
+            && (native.shear / calibrated.g - 1.0).abs() < 0.02,
+        "K {} G {} against the calibration's {} {}",
+        native.bulk,
+        native.shear,
+        calibrated.k,
+        calibrated.g
+    );
+    assert!(
+        (native.poisson - calibrated.nu).abs() < 0.01,
+        "nu {} against {}",
+        native.poisson,
+        calibrated.nu
+    );
+    for (ours, theirs, what) in [
+        (native.bulk, lammps.bulk, "K"),
+        (native.shear, lammps.shear, "G"),
+    ] {
+        let d = (ours / theirs - 1.0).abs();
+        assert!(d <= tolerance(what), "{what}: engines differ by {d:e}");
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// `bpm compact` end to end on a tiny packing: states measured, moduli at
+/// the picked states, report, plots and slice picture written; `--refit`
+/// reproduces the fits; a study compared with itself agrees from its
+/// first state.
+#[test]
+fn a_tiny_compaction_study_measures_moduli_and_writes_its_report() {
+    use bpm::analysis::packing::AnalysisOptions;
+    use bpm::scene::builders::grain::GrainKind;
+    use bpm::scene::protocols::{CompactionProtocol, PackingModuliProtocol};
+    use bpm::studies::compaction::{
+        compare, refit, run_compaction, CompactOptions, CompactionEngine, ModuliOptions,
+        PackingSource,
+    };
+    let dir = common::scratch_dir("tiny-compaction");
+    let opts = CompactOptions {
+        source: PackingSource::Build {
+            grains: 12,
+            kind: GrainKind::Rough,
+            radius: 2.0,
+            distinct_grains: 4,
+            template_fraction: 0.57,
+            time_scale: 0.2,
+        },
+        a_b: 0.0,
+        zero_net: false,
+        seeds: vec![1],
+        protocol: CompactionProtocol {
+            jam_gain: 1.0,
+            jam_time: 2e3,
+            rate_start: 1e-5,
+            rate_end: 1e-4,
+            rate_levels: 2,
+            stage_time: 1e3,
+            volumetric_strain: 0.4,
+            ..CompactionProtocol::paper()
+        },
+        engine: CompactionEngine::Native,
+        analysis: AnalysisOptions {
+            mc_points: 20_000,
+            ..Default::default()
+        },
+        moduli: ModuliOptions {
+            states: 2,
+            protocol: PackingModuliProtocol {
+                relax_time: 200.0,
+                compression_rate: 1e-6,
+                shear_rate: 2e-6,
+                ..PackingModuliProtocol::paper()
+            },
+        },
+    };
+    let report = run_compaction(&opts, 1, None, &dir, "test", false, &mut |_| {}).unwrap();
+    let run = &report.runs[0];
+    assert!(run.stopped.is_none(), "{:?}", run.stopped);
+    assert_eq!(run.moduli.len() + run.moduli_failures.len(), 2);
+    // The most compressed state is a solid packing: both moduli positive,
+    // a Poisson ratio inside the isotropic bounds.
+    let last = run.moduli.last().unwrap();
+    let state = run.states.last().unwrap();
+    assert_eq!((last.step, &last.stage), (state.step, &state.stage));
+    assert!(
+        last.moduli.bulk > 0.0 && last.moduli.shear > 0.0,
+        "{last:?}"
+    );
+    assert!(last.moduli.poisson > -1.0 && last.moduli.poisson < 0.5);
+    for file in [
+        "compaction.json",
+        "compaction.svg",
+        "jamming.svg",
+        "distributions.svg",
+        "moduli.svg",
+        "seed-1/slices.svg",
+    ] {
+        assert!(dir.join(file).is_file(), "{file} not written");
+    }
+    let text = std::fs::read_to_string(dir.join("compaction.txt")).unwrap();
+    assert!(text.contains("K_P exponent") && text.contains("dalpha skew"));
+    let again = refit(&dir).unwrap();
+    assert_eq!(
+        serde_json::to_value(&again.runs[0].fits).unwrap(),
+        serde_json::to_value(&run.fits).unwrap()
+    );
+    let a = compare::read_study(&dir, "a").unwrap();
+    let b = compare::read_study(&dir, "b").unwrap();
+    let first_compressed = run
+        .states
+        .iter()
+        .filter(|s| s.stage.starts_with("compress") && s.p_over_e_eff > 0.0)
+        .map(|s| s.packing.phi_mc)
+        .fold(f64::INFINITY, f64::min);
+    assert_eq!(
+        compare::joins_at(&a.report, &b.report),
+        Some(first_compressed)
+    );
+    let last_phi = state.packing.phi_mc;
+    let mid = 0.5 * (first_compressed + last_phi);
+    assert_eq!(
+        compare::pressure_ratio(&a.report, &b.report, mid),
+        Some(1.0)
+    );
+    assert_eq!(
+        compare::pressure_ratio(&a.report, &b.report, last_phi + 0.01),
+        None
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}

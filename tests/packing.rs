@@ -337,6 +337,10 @@ fn jamming_point_and_exponents_are_recovered_from_synthetic_power_laws() {
         "{fit:?}"
     );
     assert!(fit.exponent_error < 0.01);
+    // The crossover (dphi / 0.1)^2 exceeds 1.25 from dphi = 0.112; the
+    // states are 23% apart, so the first one above lies below 0.138.
+    let departure = bpm::analysis::jamming::departure(&phi, &p, &fit, 1.25).unwrap();
+    assert!(departure > 0.11 && departure < 0.138, "{departure}");
     let (zfit, z_c) = coordination_law(&phi, &z, fit.phi_c, 0.1, 5).unwrap();
     assert!((z_c - 5.2).abs() < 0.02, "{z_c}");
     assert!((zfit.exponent - 0.5).abs() < 0.02, "{zfit:?}");

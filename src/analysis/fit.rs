@@ -1,4 +1,5 @@
-//! Least-squares straight lines, for moduli from stress-strain series.
+//! Least-squares straight lines: moduli from stress-strain series, power
+//! laws in log-log.
 
 /// A fitted line `y = slope x + intercept`.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -34,6 +35,43 @@ pub fn least_squares_line(x: &[f64], y: &[f64]) -> Option<Line> {
     })
 }
 
+/// A least-squares line with its uncertainty.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LineFit {
+    /// The line.
+    pub line: Line,
+    /// Standard error of the slope (residual variance over `n - 2`).
+    pub slope_error: f64,
+    /// Root-mean-square residual about the line.
+    pub rms_residual: f64,
+    /// Points fitted.
+    pub points: usize,
+}
+
+/// [`least_squares_line`] with the slope's standard error; `None` for
+/// fewer than three points (no residual degrees of freedom) or a single
+/// distinct `x`.
+pub fn fit_line(x: &[f64], y: &[f64]) -> Option<LineFit> {
+    let n = x.len().min(y.len());
+    if n < 3 {
+        return None;
+    }
+    let line = least_squares_line(x, y)?;
+    let mx = x[..n].iter().sum::<f64>() / n as f64;
+    let sxx: f64 = x[..n].iter().map(|a| (a - mx) * (a - mx)).sum();
+    let ss: f64 = x[..n]
+        .iter()
+        .zip(&y[..n])
+        .map(|(a, b)| (b - line.intercept - line.slope * a).powi(2))
+        .sum();
+    Some(LineFit {
+        line,
+        slope_error: (ss / (n as f64 - 2.0) / sxx).sqrt(),
+        rms_residual: (ss / n as f64).sqrt(),
+        points: n,
+    })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -45,5 +83,16 @@ mod tests {
         let l = least_squares_line(&x, &y).unwrap();
         assert!((l.slope - 2.5).abs() < 1e-12 && (l.intercept + 1.0).abs() < 1e-12);
         assert!(least_squares_line(&[1.0, 1.0], &[0.0, 2.0]).is_none());
+    }
+
+    #[test]
+    fn slope_error_matches_the_textbook_formula() {
+        // slope 0.2, intercept 0.2, residuals -0.2, 0.6, -0.6, 0.2:
+        // ss = 0.8, sxx = 5, so the error is sqrt(0.8 / 2 / 5).
+        let f = fit_line(&[0.0, 1.0, 2.0, 3.0], &[0.0, 1.0, 0.0, 1.0]).unwrap();
+        assert!((f.line.slope - 0.2).abs() < 1e-12);
+        assert!((f.slope_error - 0.08f64.sqrt()).abs() < 1e-12);
+        assert!((f.rms_residual - 0.2f64.sqrt()).abs() < 1e-12);
+        assert!(fit_line(&[0.0, 1.0], &[0.0, 1.0]).is_none());
     }
 }

@@ -8,6 +8,7 @@
 //! window, and the candidate with the smallest residual wins. The exponent
 //! comes with the standard error of the fitted slope.
 
+use super::fit::fit_line;
 use serde::{Deserialize, Serialize};
 
 /// A fitted power law `y = prefactor (phi - phi_c)^exponent`.
@@ -38,32 +39,14 @@ pub fn fit_power_law(x: &[f64], y: &[f64], window: f64) -> Option<PowerLaw> {
         .filter(|(&x, &y)| x > 0.0 && x <= window && y > 0.0 && y.is_finite())
         .map(|(&x, &y)| (x.ln(), y.ln()))
         .unzip();
-    let n = lx.len();
-    if n < 3 {
-        return None;
-    }
-    let nf = n as f64;
-    let mx = lx.iter().sum::<f64>() / nf;
-    let my = ly.iter().sum::<f64>() / nf;
-    let sxx: f64 = lx.iter().map(|a| (a - mx).powi(2)).sum();
-    if sxx <= 0.0 {
-        return None;
-    }
-    let sxy: f64 = lx.iter().zip(&ly).map(|(a, b)| (a - mx) * (b - my)).sum();
-    let slope = sxy / sxx;
-    let intercept = my - slope * mx;
-    let ss: f64 = lx
-        .iter()
-        .zip(&ly)
-        .map(|(a, b)| (b - intercept - slope * a).powi(2))
-        .sum();
+    let fit = fit_line(&lx, &ly)?;
     Some(PowerLaw {
         phi_c: 0.0,
-        exponent: slope,
-        exponent_error: (ss / (nf - 2.0) / sxx).sqrt(),
-        prefactor: intercept.exp(),
-        rms_residual: (ss / nf).sqrt(),
-        points: n,
+        exponent: fit.line.slope,
+        exponent_error: fit.slope_error,
+        prefactor: fit.line.intercept.exp(),
+        rms_residual: fit.rms_residual,
+        points: fit.points,
         window,
     })
 }
@@ -102,6 +85,23 @@ pub fn power_law_with_jamming_point(
         .filter_map(|phi_c| power_law_at(phi, y, phi_c, window))
         .filter(|f| f.points >= min_points)
         .min_by(|a, b| a.rms_residual.total_cmp(&b.rms_residual))
+}
+
+/// Where `y` leaves the power law `law` for good: the smallest
+/// `phi - phi_c` from which every state lies above `factor` times the law
+/// (the source study finds the pressure rising faster than its 3/2 law
+/// beyond about 0.1). `None` when the last state is still within.
+pub fn departure(phi: &[f64], y: &[f64], law: &PowerLaw, factor: f64) -> Option<f64> {
+    let mut points: Vec<(f64, f64)> = phi
+        .iter()
+        .zip(y)
+        .map(|(p, y)| (p - law.phi_c, *y))
+        .filter(|(x, y)| *x > 0.0 && y.is_finite())
+        .collect();
+    points.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let above = |&(x, y): &(f64, f64)| y > factor * law.prefactor * x.powf(law.exponent);
+    let first_of_run = points.iter().rposition(|p| !above(p)).map_or(0, |k| k + 1);
+    points.get(first_of_run).map(|p| p.0)
 }
 
 /// `Z - Z_c = B (phi - phi_c)^gamma` at a known `phi_c`. A free `Z_c`

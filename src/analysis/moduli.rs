@@ -42,9 +42,9 @@ fn slope(stage: &StageOutput, x: &[f64], y: &[f64]) -> Result<f64, ModulusError>
         })
 }
 
-/// Bulk modulus `K`: slope of the pressure against the volumetric strain
-/// `(V0 - V) / V0` of an isotropic compression stage.
-pub fn bulk_modulus(stage: &StageOutput) -> Result<f64, ModulusError> {
+/// Volumetric strain `(V0 - V) / V0` (from the first row) and pressure of
+/// an isotropic compression stage.
+pub fn compression_series(stage: &StageOutput) -> Result<(Vec<f64>, Vec<f64>), ModulusError> {
     let (lx, ly, lz) = (
         column(stage, "lx")?,
         column(stage, "ly")?,
@@ -57,12 +57,12 @@ pub fn bulk_modulus(stage: &StageOutput) -> Result<f64, ModulusError> {
         rows: 0,
     })?;
     let strain: Vec<f64> = volume.iter().map(|v| (v0 - v) / v0).collect();
-    slope(stage, &strain, &p)
+    Ok((strain, p))
 }
 
-/// Shear modulus `G`: slope of `-P_xy` against the shear strain `xy / ly`
-/// of a simple-shear stage (LAMMPS's pressure tensor is minus the stress).
-pub fn shear_modulus(stage: &StageOutput) -> Result<f64, ModulusError> {
+/// Shear strain `xy / ly` and shear stress `-P_xy` of a simple-shear stage
+/// (LAMMPS's pressure tensor is minus the stress).
+pub fn shear_series(stage: &StageOutput) -> Result<(Vec<f64>, Vec<f64>), ModulusError> {
     let (xy, ly, pxy) = (
         column(stage, "xy")?,
         column(stage, "ly")?,
@@ -70,12 +70,33 @@ pub fn shear_modulus(stage: &StageOutput) -> Result<f64, ModulusError> {
     );
     let strain: Vec<f64> = xy.iter().zip(&ly).map(|(t, l)| t / l).collect();
     let stress: Vec<f64> = pxy.iter().map(|p| -p).collect();
+    Ok((strain, stress))
+}
+
+/// Bulk modulus `K`: slope of the pressure against the volumetric strain
+/// `(V0 - V) / V0` of an isotropic compression stage.
+pub fn bulk_modulus(stage: &StageOutput) -> Result<f64, ModulusError> {
+    let (strain, p) = compression_series(stage)?;
+    slope(stage, &strain, &p)
+}
+
+/// Shear modulus `G`: slope of `-P_xy` against the shear strain `xy / ly`
+/// of a simple-shear stage.
+pub fn shear_modulus(stage: &StageOutput) -> Result<f64, ModulusError> {
+    let (strain, stress) = shear_series(stage)?;
     slope(stage, &strain, &stress)
 }
 
 /// Poisson's ratio of an isotropic solid with moduli `k` and `g`.
 pub fn poisson_ratio(k: f64, g: f64) -> f64 {
     (3.0 * k - 2.0 * g) / (2.0 * (3.0 * k + g))
+}
+
+/// Standard error of [`poisson_ratio`] from those of `k` and `g`
+/// (independent): `9 sqrt(G^2 sK^2 + K^2 sG^2) / (2 (3K + G)^2)`.
+pub fn poisson_ratio_error(k: f64, g: f64, k_error: f64, g_error: f64) -> f64 {
+    9.0 * (g * g * k_error * k_error + k * k * g_error * g_error).sqrt()
+        / (2.0 * (3.0 * k + g).powi(2))
 }
 
 /// The paper's fits, `reference_data/paper_fits.json` compiled in: the one
@@ -164,6 +185,16 @@ mod tests {
             neighbour_builds: 0,
             stopped_at: None,
         }
+    }
+
+    #[test]
+    fn poisson_ratio_error_matches_finite_differences() {
+        let (k, g, sk, sg) = (1.3, 0.4, 0.02, 0.03);
+        let h = 1e-6;
+        let dk = (poisson_ratio(k + h, g) - poisson_ratio(k - h, g)) / (2.0 * h);
+        let dg = (poisson_ratio(k, g + h) - poisson_ratio(k, g - h)) / (2.0 * h);
+        let expected = ((dk * sk).powi(2) + (dg * sg).powi(2)).sqrt();
+        assert!((poisson_ratio_error(k, g, sk, sg) / expected - 1.0).abs() < 1e-8);
     }
 
     #[test]

@@ -466,11 +466,39 @@ enum Command {
         /// Monte Carlo points per state for phi_MC.
         #[arg(long, default_value_t = 1_000_000)]
         mc_points: u64,
+        /// States per run at which the packing's bulk and shear moduli are
+        /// measured (0 = none), spread evenly in ln(phi - phi_c).
+        #[arg(long, default_value_t = 6)]
+        moduli_states: usize,
+        /// Relaxation before each modulus loading (tau) (paper: 1e4).
+        #[arg(long, default_value_t = 1e3)]
+        moduli_relax_time: f64,
+        /// True strain rate per dimension of the bulk-modulus compression
+        /// (1/tau) (paper: 1e-8); the shear runs at twice it, to 0.04%.
+        #[arg(long, default_value_t = 1e-7)]
+        moduli_rate: f64,
         /// Refit the runs of an earlier OUTPUT/compaction.json and rewrite
         /// its plots and table, without running anything (other options
         /// are ignored).
         #[arg(long)]
         refit: bool,
+    },
+    /// Compares compaction studies (folders written by `bpm compact`):
+    /// pressure, coordination, grain strain and asphericity of each in one
+    /// set of plots, their fits side by side, and the phi_MC from which
+    /// each study's pressure stays within 10% of the first's; writes
+    /// OUTPUT/comparison.svg and OUTPUT/comparison.txt.
+    CompareCompaction {
+        /// Study folders, each with a compaction.json; the first is the
+        /// reference.
+        #[arg(required = true, num_args = 1..)]
+        studies: Vec<PathBuf>,
+        /// A label per study (comma separated); default the folder names.
+        #[arg(long, value_delimiter = ',')]
+        labels: Vec<String>,
+        /// Output folder.
+        #[arg(short, long)]
+        output: PathBuf,
     },
     /// Measures the states of a packing in a LAMMPS dump (e.g. from
     /// lammps_inputs/compaction.in): phi_MC, coordination, grain strain and
@@ -1258,6 +1286,9 @@ fn real_main() -> Result<()> {
             rows_per_stage,
             states_per_stage,
             mc_points,
+            moduli_states,
+            moduli_relax_time,
+            moduli_rate,
             refit,
         } => {
             if refit {
@@ -1306,6 +1337,16 @@ fn real_main() -> Result<()> {
                     mc_points,
                     ..Default::default()
                 },
+                moduli: compaction::ModuliOptions {
+                    states: moduli_states,
+                    protocol: bpm::scene::protocols::PackingModuliProtocol {
+                        dt,
+                        relax_time: moduli_relax_time,
+                        compression_rate: moduli_rate,
+                        shear_rate: 2.0 * moduli_rate,
+                        ..bpm::scene::protocols::PackingModuliProtocol::paper()
+                    },
+                },
             };
             opts.validate()?;
             let exe = std::env::current_exe().context("locating the bpm executable")?;
@@ -1322,6 +1363,36 @@ fn real_main() -> Result<()> {
             println!(
                 "{} run(s); wrote {}/compaction.json, compaction.svg, jamming.svg and compaction.txt",
                 report.runs.len(),
+                output.display()
+            );
+        }
+        Command::CompareCompaction {
+            studies,
+            labels,
+            output,
+        } => {
+            if !labels.is_empty() && labels.len() != studies.len() {
+                anyhow::bail!(
+                    "--labels: {} labels for {} studies",
+                    labels.len(),
+                    studies.len()
+                );
+            }
+            let read: Vec<compaction::compare::Study> = studies
+                .iter()
+                .enumerate()
+                .map(|(k, dir)| {
+                    let label = labels.get(k).cloned().unwrap_or_else(|| {
+                        dir.file_name()
+                            .map_or(dir.display().to_string(), |n| n.to_string_lossy().into())
+                    });
+                    compaction::compare::read_study(dir, &label)
+                })
+                .collect::<Result<_, _>>()?;
+            let table = compaction::compare::write_comparison(&read, &output, &command())?;
+            print!("{table}");
+            println!(
+                "wrote {}/comparison.svg and comparison.txt",
                 output.display()
             );
         }

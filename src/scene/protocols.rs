@@ -289,3 +289,86 @@ impl CompactionProtocol {
 pub fn steps_for_time(time: f64, dt: f64) -> u64 {
     (time / dt).round().max(1.0) as u64
 }
+
+/// The elastic moduli of a packing at a saved state (docs/protocols.md,
+/// "Compaction"): velocities zeroed, a relaxation at fixed box, then
+/// either a small isotropic compression or, from the same relaxed state,
+/// a small simple shear; the moduli are the slopes of stress against
+/// strain over the loading. Times in tau.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct PackingModuliProtocol {
+    /// Time step.
+    pub dt: f64,
+    /// Relaxation at fixed box before each loading (paper: 1e4).
+    pub relax_time: f64,
+    /// Volumetric strain `(V0 - V) / V0` of the compression (paper: 6e-4).
+    pub volumetric_strain: f64,
+    /// True strain rate per dimension of the compression (paper: 1e-8).
+    pub compression_rate: f64,
+    /// Shear strain `xy / ly` (paper: 4e-4).
+    pub shear_strain: f64,
+    /// Shear strain rate (paper: 2e-8).
+    pub shear_rate: f64,
+    /// Thermo rows per stage; the loading's rows are the fit's points.
+    pub rows: u64,
+}
+
+impl PackingModuliProtocol {
+    /// The paper's protocol: 5e5 steps per state.
+    pub fn paper() -> Self {
+        Self {
+            dt: 0.1,
+            relax_time: 1e4,
+            volumetric_strain: 6e-4,
+            compression_rate: 1e-8,
+            shear_strain: 4e-4,
+            shear_rate: 2e-8,
+            rows: 50,
+        }
+    }
+
+    /// The relaxation, recording its pressure (to measure what drift is
+    /// left when the loading starts).
+    pub fn relax_stage(&self) -> StageSpec {
+        let steps = steps_for_time(self.relax_time, self.dt);
+        let mut s = relax(steps, self.dt, (steps / self.rows.max(1)).max(1));
+        s.zero_velocities = true;
+        s
+    }
+
+    fn compression(&self) -> StageSpec {
+        let linear = -(1.0 - self.volumetric_strain).ln() / 3.0;
+        isotropic_compression(linear, self.compression_rate, self.dt, self.rows)
+    }
+
+    fn shear(&self) -> StageSpec {
+        simple_shear(self.shear_strain, self.shear_rate, self.dt, self.rows)
+    }
+
+    /// Relaxation then compression: each box length shrinks at the true
+    /// strain rate until the volume has lost `volumetric_strain`.
+    pub fn compression_stages(&self) -> Vec<StageSpec> {
+        vec![self.relax_stage(), self.compression()]
+    }
+
+    /// Relaxation then simple shear by `xy` tilt.
+    pub fn shear_stages(&self) -> Vec<StageSpec> {
+        vec![self.relax_stage(), self.shear()]
+    }
+
+    /// The control: relaxation, then the box held for as long as either
+    /// loading lasts, recorded on every step either loading records, so
+    /// the creep of the unloaded packing can be subtracted row by row.
+    pub fn control_stages(&self) -> Vec<StageSpec> {
+        let (c, s) = (self.compression(), self.shear());
+        let gcd = |mut a: u64, mut b: u64| {
+            while b != 0 {
+                (a, b) = (b, a % b);
+            }
+            a
+        };
+        let mut hold = StageSpec::hold("hold", c.steps.max(s.steps), self.dt);
+        hold.record.every = gcd(c.record.every, s.record.every).max(1);
+        vec![self.relax_stage(), hold]
+    }
+}

@@ -76,7 +76,7 @@ pub struct Reference {
 }
 
 /// The measurements of one state.
-#[derive(Clone, Debug, Serialize, Deserialize)]
+#[derive(Clone, Debug, Default, Serialize, Deserialize)]
 pub struct PackingState {
     /// Box volume (d^3).
     pub box_volume: f64,

@@ -9,10 +9,11 @@
 
 use crate::analysis::hertz::effective_modulus;
 use crate::analysis::jamming::{
-    coordination_law, power_law_at, power_law_with_jamming_point, PowerLaw,
+    coordination_law, departure, power_law_at, power_law_with_jamming_point, PowerLaw,
 };
 use crate::analysis::packing::{analyse, reference_of, AnalysisOptions, PackingState, Snapshot};
-use crate::analysis::plot::{write_svg, Mark, Panel, PlotError, Series};
+use crate::analysis::plot::PlotError;
+use crate::analysis::slice::SliceFrame;
 use crate::engine::SimBox;
 use crate::file_error::FileError;
 use crate::options::InvalidOption;
@@ -89,6 +90,9 @@ pub struct CompactOptions {
     pub engine: CompactionEngine,
     /// How states are measured.
     pub analysis: AnalysisOptions,
+    /// The packing's elastic moduli at some of the states.
+    #[serde(default)]
+    pub moduli: ModuliOptions,
 }
 
 /// Why the study could not run (a run that stops is a result: it is
@@ -109,12 +113,33 @@ pub enum CompactionError {
         /// Why.
         message: String,
     },
+    /// A file is not a compaction report.
+    #[error("{path}: not a compaction report: {message}")]
+    NotAReport {
+        /// The file.
+        path: String,
+        /// Why.
+        message: String,
+    },
     /// A plot could not be written.
     #[error(transparent)]
     Plot(#[from] PlotError),
     /// A file could not be written.
     #[error(transparent)]
     File(#[from] FileError),
+}
+
+impl CompactionError {
+    /// Maps a failed measurement of `what` to [`CompactionError::Analysis`].
+    pub fn analysing(
+        what: impl Into<String>,
+    ) -> impl FnOnce(crate::analysis::packing::PackingError) -> Self {
+        let what = what.into();
+        move |e| Self::Analysis {
+            what,
+            message: e.to_string(),
+        }
+    }
 }
 
 impl CompactOptions {
@@ -188,6 +213,26 @@ impl CompactOptions {
         }
         if self.seeds.is_empty() {
             return Err(InvalidOption::new("--seeds", "needs at least one value"));
+        }
+        if self.moduli.states > 0 {
+            let m = &self.moduli.protocol;
+            positive("--moduli-relax-time", m.relax_time)?;
+            positive("--moduli-rate", m.compression_rate)?;
+            // Not command-line options: a scripted protocol can set them.
+            positive("moduli shear_rate", m.shear_rate)?;
+            if m.rows < 3 {
+                return Err(InvalidOption::new(
+                    "moduli rows",
+                    "at least 3 rows are needed to fit a modulus with its error",
+                ));
+            }
+            let small = |v: f64| v > 0.0 && v < 0.1;
+            if !(small(m.volumetric_strain) && small(m.shear_strain)) {
+                return Err(InvalidOption::new(
+                    "moduli volumetric_strain and shear_strain",
+                    "must be small and positive (below 0.1)",
+                ));
+            }
         }
         if self.analysis.mc_points < 1000 {
             return Err(InvalidOption::new("--mc-points", "must be at least 1000"));
@@ -300,7 +345,8 @@ pub struct CoordinationFit {
 
 /// The power laws of one run near jamming (analysis::jamming): `phi_c`
 /// from the pressure, then the others at that `phi_c`, each over
-/// `phi - phi_c <= FIT_WINDOW` on the compression stages' states.
+/// `phi - phi_c <= FIT_WINDOW` on the jammed compression states
+/// ([`is_jammed`]).
 #[derive(Clone, Debug, Default, Serialize, Deserialize)]
 pub struct RunFits {
     /// `P / E_eff` against `phi_MC`, `phi_c` fitted.
@@ -313,18 +359,40 @@ pub struct RunFits {
     pub eps_v: Option<PowerLaw>,
     /// Mean `alpha - alpha0`.
     pub asphericity: Option<PowerLaw>,
+    /// Where the pressure leaves its power law for good: the smallest
+    /// `phi - phi_c` from which every state's `P` exceeds the law by
+    /// [`DEPARTURE_FACTOR`] (paper: near 0.1).
+    #[serde(default)]
+    pub pressure_departure: Option<f64>,
+    /// The packing's bulk modulus `K_P / E_eff` (reliable measurements
+    /// only, see [`PackingModuli::is_reliable`]).
+    #[serde(default)]
+    pub bulk_modulus: Option<PowerLaw>,
+    /// The packing's shear modulus `G_P / E_eff`.
+    #[serde(default)]
+    pub shear_modulus: Option<PowerLaw>,
 }
 
 /// Largest `phi - phi_c` of the power-law fits: the paper finds them to
 /// hold up to about 0.1.
 pub const FIT_WINDOW: f64 = 0.1;
 
-/// The fits of a run's compression states.
-pub fn fit_run(states: &[StateRow]) -> RunFits {
-    let compressed: Vec<&StateRow> = states
-        .iter()
-        .filter(|s| s.stage.starts_with("compress"))
-        .collect();
+/// Whether a state is a compression state with a contact network (some
+/// grain keeps three or more force contacts once rattlers are removed):
+/// below jamming the pressure is kinetic and transient, and a power law in
+/// `phi - phi_c` means nothing.
+pub fn is_jammed(state: &StateRow) -> bool {
+    state.stage.starts_with("compress") && state.packing.z_force > 0.0
+}
+
+/// How far above its power law the pressure must lie to count as having
+/// left it.
+pub const DEPARTURE_FACTOR: f64 = 1.25;
+
+/// The fits of a run's compression states and of the moduli measured at
+/// some of them (`e_eff` normalises the moduli).
+pub fn fit_run(states: &[StateRow], moduli: &[StateModuli], e_eff: f64) -> RunFits {
+    let compressed: Vec<&StateRow> = states.iter().filter(|s| is_jammed(s)).collect();
     let phi: Vec<f64> = compressed.iter().map(|s| s.packing.phi_mc).collect();
     let of = |f: &dyn Fn(&StateRow) -> f64| compressed.iter().map(|s| f(s)).collect::<Vec<f64>>();
     let Some(pressure) =
@@ -333,12 +401,19 @@ pub fn fit_run(states: &[StateRow]) -> RunFits {
         return RunFits::default();
     };
     let phi_c = pressure.phi_c;
+    let reliable: Vec<&StateModuli> = moduli.iter().filter(|m| m.moduli.is_reliable()).collect();
+    let moduli_phi: Vec<f64> = reliable.iter().map(|m| m.phi_mc).collect();
+    let modulus_law = |f: &dyn Fn(&PackingModuli) -> f64| {
+        let y: Vec<f64> = reliable.iter().map(|m| f(&m.moduli) / e_eff).collect();
+        power_law_at(&moduli_phi, &y, phi_c, FIT_WINDOW)
+    };
     let z = |f: &dyn Fn(&StateRow) -> f64| {
         coordination_law(&phi, &of(f), phi_c, FIT_WINDOW, 5)
             .map(|(law, z_c)| CoordinationFit { law, z_c })
     };
     RunFits {
         pressure: Some(pressure),
+        pressure_departure: departure(&phi, &of(&|s| s.p_over_e_eff), &pressure, DEPARTURE_FACTOR),
         z_force: z(&|s| s.packing.z_force),
         z_geometry: z(&|s| s.packing.z_geometry),
         eps_v: power_law_at(&phi, &of(&|s| s.packing.eps_v_mean), phi_c, FIT_WINDOW),
@@ -348,6 +423,8 @@ pub fn fit_run(states: &[StateRow]) -> RunFits {
             phi_c,
             FIT_WINDOW,
         ),
+        bulk_modulus: modulus_law(&|m| m.bulk),
+        shear_modulus: modulus_law(&|m| m.shear),
     }
 }
 
@@ -376,6 +453,12 @@ pub struct CompactionRun {
     pub series: RunSeries,
     /// Recorded states: the stress-free packing first, then every checkpoint.
     pub states: Vec<StateRow>,
+    /// The packing's elastic moduli at some states.
+    #[serde(default)]
+    pub moduli: Vec<StateModuli>,
+    /// Why a state's moduli could not be measured, if so.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub moduli_failures: Vec<String>,
     /// Power laws near jamming.
     #[serde(default)]
     pub fits: RunFits,
@@ -490,10 +573,7 @@ fn check_measurable(scene: &Scene, analysis: &AnalysisOptions) -> Result<(), Com
     };
     reference_of(&start, analysis)
         .map(|_| ())
-        .map_err(|e| CompactionError::Analysis {
-            what: "the packing before the run".into(),
-            message: e.to_string(),
-        })
+        .map_err(CompactionError::analysing("the packing before the run"))
 }
 
 /// The compaction scene of a packing: its stages are the protocol's.
@@ -507,19 +587,21 @@ fn column(stage: &StageOutput, name: &str) -> Vec<f64> {
     stage.column(name).unwrap_or_default()
 }
 
-/// Runs the compaction scene in the chosen engine; returns the stages
+/// Runs a scene in the chosen engine (LAMMPS's files are `folder/tag.*`);
+/// returns the stages
 /// (those done, the last possibly partial), the stop message if any, and
 /// the run's seconds.
 fn run_engine(
     scene: &Scene,
-    opts: &CompactOptions,
+    engine: &CompactionEngine,
     folder: &Path,
+    tag: &str,
     threads: usize,
     bpm: Option<&Path>,
     progress: bool,
 ) -> (Vec<StageOutput>, Option<String>, f64) {
     let start = std::time::Instant::now();
-    match &opts.engine {
+    match engine {
         CompactionEngine::Native => {
             let mut sys = build_system(scene, threads);
             let run = RunOptions {
@@ -545,7 +627,7 @@ fn run_engine(
                 bpm: bpm.to_path_buf(),
                 dir: folder.to_path_buf(),
             };
-            match launcher.run(scene, "lammps", *ranks, true) {
+            match launcher.run(scene, tag, *ranks, true) {
                 Ok(run) => (run.stages, None, run.seconds),
                 Err(e) => (
                     Vec::new(),
@@ -576,13 +658,8 @@ fn states_of(
         grain: &grain,
         bonds: &scene.bonds.pairs,
     };
-    let fail = |what: String| {
-        move |e: crate::analysis::packing::PackingError| CompactionError::Analysis {
-            what,
-            message: e.to_string(),
-        }
-    };
-    let reference = reference_of(&start, &opts.analysis).map_err(fail("the packing".into()))?;
+    let reference =
+        reference_of(&start, &opts.analysis).map_err(CompactionError::analysing("the packing"))?;
     let mut rows = vec![StateRow {
         stage: "start".into(),
         rate: 0.0,
@@ -591,7 +668,8 @@ fn states_of(
         pressure: 0.0,
         p_over_e_eff: 0.0,
         ke_per_particle: 0.0,
-        packing: analyse(&start, &reference, &opts.analysis).map_err(fail("the packing".into()))?,
+        packing: analyse(&start, &reference, &opts.analysis)
+            .map_err(CompactionError::analysing("the packing"))?,
     }];
     let mut series = RunSeries::default();
     let mut failed = None;
@@ -661,6 +739,65 @@ fn states_of(
     Ok((rows, series, failed))
 }
 
+/// The checkpoint of a measured state.
+fn checkpoint_of<'a>(stages: &'a [StageOutput], row: &StateRow) -> Option<&'a Checkpoint> {
+    stages
+        .iter()
+        .filter(|s| s.name == row.stage)
+        .flat_map(|s| &s.checkpoints)
+        .find(|c| c.step == row.step)
+}
+
+/// Writes the slice picture of a run: the stress-free packing, the last
+/// state of the jam and the last state measured.
+fn write_slices(
+    packing: &Scene,
+    stages: &[StageOutput],
+    states: &[StateRow],
+    path: &Path,
+) -> Result<(), CompactionError> {
+    let grain = packing.particles.grain.clone().unwrap_or_default();
+    let start_box = simbox_of(packing);
+    let caption = |what: &str, s: &StateRow| {
+        format!(
+            "{what}: phi_MC {:.3}, P/E_eff {:.1e}",
+            s.packing.phi_mc, s.p_over_e_eff
+        )
+    };
+    let mut boxes = Vec::new();
+    let mut picked = Vec::new();
+    let jammed = states.iter().rev().find(|s| s.stage == "jam");
+    let last = states
+        .last()
+        .filter(|s| s.stage != "start" && s.stage != "jam");
+    for (what, row) in [("jammed", jammed), ("end", last)] {
+        let Some(row) = row else { continue };
+        if let Some(c) = checkpoint_of(stages, row) {
+            boxes.push(simbox_of_checkpoint(c, packing.simbox.periodic));
+            picked.push((caption(what, row), &c.positions));
+        }
+    }
+    let mut frames = vec![SliceFrame {
+        title: states
+            .first()
+            .map_or("start".into(), |s| caption("start", s)),
+        simbox: &start_box,
+        positions: &packing.particles.positions,
+        grain: &grain,
+    }];
+    for ((title, positions), simbox) in picked.into_iter().zip(&boxes) {
+        frames.push(SliceFrame {
+            title,
+            simbox,
+            positions,
+            grain: &grain,
+        });
+    }
+    let diameter = packing.force_field.pair.as_ref().map_or(1.0, |p| p.d);
+    crate::analysis::slice::write_slices(path, &frames, diameter)?;
+    Ok(())
+}
+
 /// Runs the study: for each seed a packing, its compaction in the chosen
 /// engine and the analysis of its states; writes `compaction.json`, the
 /// plots and each run's scene and data file into `dir` as it goes.
@@ -716,8 +853,15 @@ pub fn run_compaction(
             scene.stages.iter().map(|s| s.steps).sum::<u64>(),
             scene.stages.len()
         ));
-        let (stages, stopped, run_seconds) =
-            run_engine(&scene, opts, &folder, threads, bpm, progress);
+        let (stages, stopped, run_seconds) = run_engine(
+            &scene,
+            &opts.engine,
+            &folder,
+            "lammps",
+            threads,
+            bpm,
+            progress,
+        );
         if let Some(m) = &stopped {
             print(&format!("seed {seed}: the run stopped: {m}"));
         }
@@ -738,11 +882,20 @@ pub fn run_compaction(
             analysis_seconds: t.elapsed().as_secs_f64(),
             stopped,
             series,
-            fits: fit_run(&states),
+            moduli: Vec::new(),
+            moduli_failures: Vec::new(),
+            fits: fit_run(&states, &[], e_eff),
             states,
             folder: folder.display().to_string(),
         });
         write_report(&report, dir)?;
+        // A picture that cannot be drawn costs only the picture.
+        let measured = report.runs.last().map_or(&[][..], |r| &r.states);
+        if let Err(e) = write_slices(&packing, &stages, measured, &folder.join("slices.svg")) {
+            print(&format!(
+                "seed {seed}: the slice picture was not written: {e}"
+            ));
+        }
         let last = report.runs.last().and_then(|r| r.states.last());
         if let Some(s) = last {
             print(&format!(
@@ -750,418 +903,66 @@ pub fn run_compaction(
                 s.packing.phi_mc, s.p_over_e_eff, s.packing.z_force, s.packing.eps_v_mean
             ));
         }
-    }
-    Ok(report)
-}
-
-/// Writes `compaction.json`, `compaction.svg`, `jamming.svg` and
-/// `compaction.txt` into `dir`.
-pub fn write_report(report: &CompactionReport, dir: &Path) -> Result<(), CompactionError> {
-    let json = dir.join("compaction.json");
-    let text = serde_json::to_string_pretty(report).expect("report serialises");
-    std::fs::write(&json, text).map_err(FileError::on("writing", &json))?;
-    let per_run = |f: &dyn Fn(&StateRow) -> Option<(f64, f64)>, mark| -> Vec<Series> {
-        report
-            .runs
-            .iter()
-            .map(|r| {
-                Series::new(
-                    format!("seed {}", r.seed),
-                    r.states.iter().filter_map(f).collect(),
-                    mark,
-                )
-            })
-            .collect()
-    };
-    let compressed = |s: &StateRow| s.stage != "start";
-    let mut z = per_run(
-        &|s| compressed(s).then_some((s.packing.phi_mc, s.packing.z_force)),
-        Mark::LinePoints,
-    );
-    for (series, run) in z.iter_mut().zip(&report.runs) {
-        series.label = format!("Z_force, seed {}", run.seed);
-    }
-    let mut zg = per_run(
-        &|s| compressed(s).then_some((s.packing.phi_mc, s.packing.z_geometry)),
-        Mark::Rings,
-    );
-    for (series, run) in zg.iter_mut().zip(&report.runs) {
-        series.label = format!("Z_geometry, seed {}", run.seed);
-    }
-    z.extend(zg);
-    let panels = vec![
-        Panel {
-            title: "pressure against volume fraction".into(),
-            x_label: "phi_MC".into(),
-            y_label: "P / E_eff".into(),
-            log_y: true,
-            series: per_run(
-                &|s| compressed(s).then_some((s.packing.phi_mc, s.p_over_e_eff)),
-                Mark::LinePoints,
-            ),
-            ..Panel::default()
-        },
-        Panel {
-            title: "coordination (rattlers removed)".into(),
-            x_label: "phi_MC".into(),
-            y_label: "Z".into(),
-            series: z,
-            ..Panel::default()
-        },
-        Panel {
-            title: "grain volumetric strain".into(),
-            x_label: "phi_MC".into(),
-            y_label: "mean eps_V".into(),
-            series: per_run(
-                &|s| compressed(s).then_some((s.packing.phi_mc, s.packing.eps_v_mean)),
-                Mark::LinePoints,
-            ),
-            ..Panel::default()
-        },
-        Panel {
-            title: "grain asphericity".into(),
-            x_label: "phi_MC".into(),
-            y_label: "mean alpha - alpha0".into(),
-            log_y: true,
-            series: per_run(
-                &|s| compressed(s).then_some((s.packing.phi_mc, s.packing.asphericity_excess_mean)),
-                Mark::LinePoints,
-            ),
-            ..Panel::default()
-        },
-        Panel {
-            title: "pressure and kinetic energy against time".into(),
-            x_label: "time (tau)".into(),
-            y_label: "P (k/d), KE per particle (k d^2)".into(),
-            log_x: true,
-            log_y: true,
-            series: report
-                .runs
-                .iter()
-                .flat_map(|r| {
-                    let pts = |y: &[f64]| {
-                        r.series
-                            .time
-                            .iter()
-                            .zip(y)
-                            .map(|(&t, &y)| (t, y))
-                            .collect::<Vec<_>>()
-                    };
-                    [
-                        Series::new(
-                            format!("P, seed {}", r.seed),
-                            pts(&r.series.pressure),
-                            Mark::Line,
-                        ),
-                        Series::new(
-                            format!("KE/particle, seed {}", r.seed),
-                            pts(&r.series.ke_per_particle),
-                            Mark::Line,
-                        ),
-                    ]
-                })
-                .collect(),
-        },
-    ];
-    write_svg(&dir.join("compaction.svg"), &panels)?;
-    write_svg(&dir.join("jamming.svg"), &jamming_panels(report))?;
-    std::fs::write(dir.join("compaction.txt"), table(report))
-        .map_err(FileError::on("writing", &dir.join("compaction.txt")))?;
-    Ok(())
-}
-
-/// Log-log panels against `phi - phi_c` (each run at its own fitted
-/// `phi_c`), with the fitted power laws as lines.
-fn jamming_panels(report: &CompactionReport) -> Vec<Panel> {
-    type Pick = fn(&StateRow, &RunFits) -> Option<f64>;
-    type Law = fn(&RunFits) -> Option<PowerLaw>;
-    let panel = |title: &str, y_label: &str, pick: Pick, law: Law| {
-        let mut series = Vec::new();
-        for r in &report.runs {
-            let Some(p) = &r.fits.pressure else { continue };
-            let pts: Vec<(f64, f64)> = r
-                .states
-                .iter()
-                .filter(|s| s.stage.starts_with("compress"))
-                .filter_map(|s| Some((s.packing.phi_mc - p.phi_c, pick(s, &r.fits)?)))
-                .filter(|(x, y)| *x > 0.0 && *y > 0.0)
-                .collect();
-            series.push(Series::new(format!("seed {}", r.seed), pts, Mark::Points));
-            if let Some(f) = law(&r.fits) {
-                let line: Vec<(f64, f64)> = (0..=40)
-                    .map(|k| {
-                        let x = 1e-4 * (f.window / 1e-4).powf(k as f64 / 40.0);
-                        (x, f.prefactor * x.powf(f.exponent))
-                    })
-                    .collect();
-                series.push(Series::new(
-                    format!(
-                        "fit, seed {}: exponent {:.2} +- {:.2}",
-                        r.seed, f.exponent, f.exponent_error
-                    ),
-                    line,
-                    Mark::Line,
-                ));
-            }
-        }
-        Panel {
-            title: title.into(),
-            x_label: "phi_MC - phi_c".into(),
-            y_label: y_label.into(),
-            log_x: true,
-            log_y: true,
-            series,
-        }
-    };
-    vec![
-        panel(
-            "pressure near jamming (paper: exponent 3/2)",
-            "P / E_eff",
-            |s, _| Some(s.p_over_e_eff),
-            |f| f.pressure,
-        ),
-        panel(
-            "force coordination (paper: exponent 1/2)",
-            "Z_force - Z_c",
-            |s, f| f.z_force.map(|z| s.packing.z_force - z.z_c),
-            |f| f.z_force.map(|z| z.law),
-        ),
-        panel(
-            "geometric coordination",
-            "Z_geometry - Z_c",
-            |s, f| f.z_geometry.map(|z| s.packing.z_geometry - z.z_c),
-            |f| f.z_geometry.map(|z| z.law),
-        ),
-        panel(
-            "grain volumetric strain (paper: exponent 3/2)",
-            "mean eps_V",
-            |s, _| Some(s.packing.eps_v_mean),
-            |f| f.eps_v,
-        ),
-        panel(
-            "grain asphericity (paper: exponent 5/2 at nu = 1/4)",
-            "mean alpha - alpha0",
-            |s, _| Some(s.packing.asphericity_excess_mean),
-            |f| f.asphericity,
-        ),
-    ]
-}
-
-/// The fits of every run and their mean and spread over runs, beside the
-/// paper's values, as text.
-pub fn table(report: &CompactionReport) -> String {
-    use std::fmt::Write as _;
-    let mut t = String::new();
-    let _ = writeln!(
-        t,
-        "# bpm compact: power laws near jamming (fit window phi - phi_c <= {FIT_WINDOW})\n# {}\n",
-        report.command
-    );
-    let _ = writeln!(
-        t,
-        "{:>6} {:>8} {:>9} {:>13} {:>8} {:>13} {:>8} {:>13} {:>13} {:>13} {:>8}",
-        "seed",
-        "grains",
-        "phi_c",
-        "P exponent",
-        "Z_c",
-        "Z exponent",
-        "Zg_c",
-        "Zg exponent",
-        "eps_V exp.",
-        "alpha exp.",
-        "run s"
-    );
-    let fmt = |f: Option<PowerLaw>| {
-        f.map_or("-".to_string(), |f| {
-            format!("{:.2}+-{:.2}", f.exponent, f.exponent_error)
-        })
-    };
-    let mut columns: [Vec<f64>; 7] = Default::default();
-    for r in &report.runs {
-        let f = &r.fits;
-        let _ = writeln!(
-            t,
-            "{:>6} {:>8} {:>9} {:>13} {:>8} {:>13} {:>8} {:>13} {:>13} {:>13} {:>8.0}",
-            r.seed,
-            r.grains,
-            f.pressure.map_or("-".into(), |p| format!("{:.4}", p.phi_c)),
-            fmt(f.pressure),
-            f.z_force.map_or("-".into(), |z| format!("{:.2}", z.z_c)),
-            fmt(f.z_force.map(|z| z.law)),
-            f.z_geometry.map_or("-".into(), |z| format!("{:.2}", z.z_c)),
-            fmt(f.z_geometry.map(|z| z.law)),
-            fmt(f.eps_v),
-            fmt(f.asphericity),
-            r.run_seconds
+        let last = report.runs.len() - 1;
+        let picked = pick_states(
+            &report.runs[last].states,
+            report.runs[last].fits.pressure.map(|p| p.phi_c),
+            opts.moduli.states,
         );
-        let values = [
-            f.pressure.map(|p| p.phi_c),
-            f.pressure.map(|p| p.exponent),
-            f.z_force.map(|z| z.z_c),
-            f.z_force.map(|z| z.law.exponent),
-            f.z_geometry.map(|z| z.z_c),
-            f.eps_v.map(|p| p.exponent),
-            f.asphericity.map(|p| p.exponent),
-        ];
-        for (c, v) in columns.iter_mut().zip(values) {
-            c.extend(v);
+        for (k, &i) in picked.iter().enumerate() {
+            let run = &mut report.runs[last];
+            let row = run.states[i].clone();
+            let Some(checkpoint) = checkpoint_of(&stages, &row) else {
+                continue;
+            };
+            let measured = moduli::measure_state(
+                &packing,
+                checkpoint,
+                &opts.moduli.protocol,
+                &opts.engine,
+                &folder,
+                threads,
+                bpm,
+            );
+            match measured {
+                Ok(moduli) => {
+                    let m = StateModuli {
+                        stage: row.stage.clone(),
+                        step: row.step,
+                        phi_mc: row.packing.phi_mc,
+                        p_over_e_eff: row.p_over_e_eff,
+                        moduli,
+                    };
+                    print(&format!(
+                        "seed {seed}: moduli {}/{} at phi_MC = {:.4}: K_P/E_eff = {:.3e}, G_P/E_eff = {:.3e}, nu_P = {:.3} ({:.0} s)",
+                        k + 1,
+                        picked.len(),
+                        m.phi_mc,
+                        m.moduli.bulk / e_eff,
+                        m.moduli.shear / e_eff,
+                        m.moduli.poisson,
+                        m.moduli.seconds
+                    ));
+                    run.moduli.push(m);
+                }
+                Err(e) => {
+                    let message = format!("moduli at step {}: {e}", row.step);
+                    print(&format!("seed {seed}: {message}"));
+                    run.moduli_failures.push(message);
+                }
+            }
+            run.fits = fit_run(&run.states, &run.moduli, e_eff);
+            write_report(&report, dir)?;
         }
     }
-    let stats = |v: &[f64]| {
-        if v.is_empty() {
-            return "-".to_string();
-        }
-        let n = v.len() as f64;
-        let m = v.iter().sum::<f64>() / n;
-        if v.len() < 2 {
-            return format!("{m:.4}");
-        }
-        let sd = (v.iter().map(|x| (x - m).powi(2)).sum::<f64>() / (n - 1.0)).sqrt();
-        format!("{m:.4} +- {sd:.4} (sd over {} runs)", v.len())
-    };
-    let _ = writeln!(t, "\nquantity               ours                                 paper (R = 10 d, 1,024 grains)");
-    for (name, k, paper) in [
-        ("phi_c", 0, "0.5979 smoother, 0.5836 rough"),
-        ("P exponent", 1, "3/2"),
-        ("Z_c (force)", 2, "about 5.2 smoother, 5.05 rough"),
-        ("Z exponent", 3, "1/2"),
-        ("Z_c (geometry)", 4, "-"),
-        ("eps_V exponent", 5, "3/2"),
-        (
-            "alpha exponent",
-            6,
-            "5/2 at nu = 1/4 (2.3 to 2.7 across nu)",
-        ),
-    ] {
-        let _ = writeln!(t, "{name:<22} {:<36} {paper}", stats(&columns[k]));
-    }
-    t
-}
-
-/// Reads an earlier `compaction.json`, refits its runs and rewrites the
-/// report, plots and table: the analysis can change without rerunning.
-pub fn refit(dir: &Path) -> Result<CompactionReport, CompactionError> {
-    let json = dir.join("compaction.json");
-    let text = std::fs::read_to_string(&json).map_err(FileError::on("reading", &json))?;
-    let mut report: CompactionReport = serde_json::from_str(&text).map_err(|e| {
-        CompactionError::Packing(format!("{}: not a compaction report: {e}", json.display()))
-    })?;
-    for r in &mut report.runs {
-        r.fits = fit_run(&r.states);
-    }
-    write_report(&report, dir)?;
     Ok(report)
 }
 
-/// One dump frame of a packing, measured.
-#[derive(Clone, Debug, Serialize, Deserialize)]
-pub struct FrameState {
-    /// Step of the frame.
-    pub step: u64,
-    /// The measurements.
-    #[serde(flatten)]
-    pub packing: PackingState,
-}
+pub mod compare;
+mod dump;
+pub mod moduli;
+mod report;
 
-/// What `bpm analyse-packing` writes.
-#[derive(Clone, Debug, Serialize, Deserialize)]
-pub struct DumpAnalysis {
-    /// bpm version.
-    pub version: String,
-    /// The command line.
-    pub command: String,
-    /// The data file: bonds, grains, and the reference state.
-    pub data: String,
-    /// The dump.
-    pub dump: String,
-    /// How states were measured.
-    pub analysis: AnalysisOptions,
-    /// One entry per frame.
-    pub frames: Vec<FrameState>,
-}
-
-/// Measures every frame of a LAMMPS text dump (columns `id mol x y z`,
-/// optional image flags; atom ids as in the data file) of the packing in
-/// the data file `data` (atom_style bond, molecule id = grain), against
-/// the data file's own state as the reference (hull volumes and shapes at
-/// the stress-free start).
-pub fn analyse_dump(
-    data: &Path,
-    dump: &Path,
-    analysis: &AnalysisOptions,
-    command: &str,
-) -> Result<DumpAnalysis, CompactionError> {
-    let scene = read_data_file(data, [true; 3], ForceField::paper(0.0), 1)
-        .map_err(|e| CompactionError::Packing(e.to_string()))?;
-    let frames = crate::scene::trajectory::read_dump(dump)
-        .map_err(|e| CompactionError::Packing(e.to_string()))?;
-    let grain = scene
-        .particles
-        .grain
-        .clone()
-        .ok_or_else(|| CompactionError::Packing("the data file has no molecule ids".into()))?;
-    let simbox = simbox_of(&scene);
-    let start = Snapshot {
-        simbox: &simbox,
-        positions: &scene.particles.positions,
-        grain: &grain,
-        bonds: &scene.bonds.pairs,
-    };
-    let fail = |what: String| {
-        move |e: crate::analysis::packing::PackingError| CompactionError::Analysis {
-            what,
-            message: e.to_string(),
-        }
-    };
-    let reference = reference_of(&start, analysis).map_err(fail(data.display().to_string()))?;
-    let mut out = Vec::with_capacity(frames.len());
-    for f in &frames {
-        if f.x.len() != grain.len() {
-            return Err(CompactionError::Packing(format!(
-                "{} step {}: {} atoms, the data file has {}",
-                dump.display(),
-                f.step,
-                f.x.len(),
-                grain.len()
-            )));
-        }
-        if !f.simbox.periodic.iter().all(|&p| p) {
-            return Err(CompactionError::Packing(format!(
-                "{} step {}: the box is not periodic in every dimension (BOX BOUNDS pp pp pp needed)",
-                dump.display(),
-                f.step
-            )));
-        }
-        if f.grain != grain {
-            return Err(CompactionError::Packing(format!(
-                "{} step {}: the molecule ids differ from the data file's",
-                dump.display(),
-                f.step
-            )));
-        }
-        let fbox = f.simbox.clone();
-        let snap = Snapshot {
-            simbox: &fbox,
-            positions: &f.x,
-            grain: &grain,
-            bonds: &scene.bonds.pairs,
-        };
-        out.push(FrameState {
-            step: f.step,
-            packing: analyse(&snap, &reference, analysis).map_err(fail(format!(
-                "{} step {}",
-                dump.display(),
-                f.step
-            )))?,
-        });
-    }
-    Ok(DumpAnalysis {
-        version: crate::VERSION.into(),
-        command: command.into(),
-        data: data.display().to_string(),
-        dump: dump.display().to_string(),
-        analysis: analysis.clone(),
-        frames: out,
-    })
-}
+pub use dump::{analyse_dump, DumpAnalysis, FrameState};
+pub use moduli::{pick_states, ModuliOptions, PackingModuli, StateModuli};
+pub use report::{read_report, refit, table, write_report};

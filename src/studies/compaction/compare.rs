@@ -1,0 +1,297 @@
+//! `bpm compare-compaction`: several compaction studies side by side
+//! (rough against smoother grains, different `nu`, engines, rates): the
+//! curves of each in one set of plots, their fits in one table, and where
+//! each study's pressure joins the first's (the source study finds that
+//! friction stops mattering near `phi = 0.7`).
+
+use super::{read_report, CompactionError, CompactionReport, CompactionRun, StateRow};
+use crate::analysis::plot::{write_svg, Mark, Panel, Series};
+use crate::file_error::FileError;
+use std::path::Path;
+
+/// One study to compare: its report and its label.
+pub struct Study {
+    /// Legend and table label.
+    pub label: String,
+    /// The study's `compaction.json`.
+    pub report: CompactionReport,
+}
+
+/// Reads `dir/compaction.json`, refitted with this version's analysis.
+pub fn read_study(dir: &Path, label: &str) -> Result<Study, CompactionError> {
+    Ok(Study {
+        label: label.into(),
+        report: read_report(dir)?,
+    })
+}
+
+/// Largest factor between two studies' pressures at the same `phi_MC`
+/// that counts as agreement in [`joins_at`].
+pub const AGREEMENT_FACTOR: f64 = 1.1;
+
+/// `(phi_MC, P / E_eff)` of a run's compression states with `P > 0`,
+/// sorted.
+fn pressure_curve(run: &CompactionRun) -> Vec<(f64, f64)> {
+    let mut points: Vec<(f64, f64)> = run
+        .states
+        .iter()
+        .filter(|s| s.stage.starts_with("compress") && s.p_over_e_eff > 0.0)
+        .map(|s| (s.packing.phi_mc, s.p_over_e_eff))
+        .collect();
+    points.sort_by(|a, b| a.0.total_cmp(&b.0));
+    points
+}
+
+/// `ln P` of `curve` at `phi`, linear between neighbouring states; `None`
+/// outside the curve.
+fn log_pressure_at(curve: &[(f64, f64)], phi: f64) -> Option<f64> {
+    let k = curve.partition_point(|p| p.0 < phi);
+    if curve.get(k).is_some_and(|p| p.0 == phi) {
+        return Some(curve[k].1.ln());
+    }
+    if k == 0 || k == curve.len() {
+        return None;
+    }
+    let ((x0, y0), (x1, y1)) = (curve[k - 1], curve[k]);
+    let t = (phi - x0) / (x1 - x0);
+    Some(y0.ln() + t * (y1.ln() - y0.ln()))
+}
+
+/// The smallest `phi_MC` from which every state of `other` has a pressure
+/// within [`AGREEMENT_FACTOR`] of `reference`'s at the same `phi_MC`
+/// (interpolated), taken over every pair of their runs (seeds are not
+/// pooled: each run's curve is compared with each of the other study's,
+/// and the latest join counts); `None` when some pair still differs at its
+/// last comparable state or no pair overlaps.
+pub fn joins_at(reference: &CompactionReport, other: &CompactionReport) -> Option<f64> {
+    let mut latest: Option<f64> = None;
+    for a in &reference.runs {
+        for b in &other.runs {
+            let join = curves_join_at(&pressure_curve(a), &pressure_curve(b))?;
+            latest = Some(latest.map_or(join, |l| l.max(join)));
+        }
+    }
+    latest
+}
+
+/// Volume fractions at which [`comparison_table`] lists pressure ratios.
+const RATIO_AT: [f64; 6] = [0.6, 0.65, 0.7, 0.8, 0.9, 0.95];
+
+/// `P_other / P_reference` at `phi` (interpolated in `ln P`), the
+/// geometric mean over every pair of their runs; `None` where no pair
+/// covers `phi`.
+pub fn pressure_ratio(
+    reference: &CompactionReport,
+    other: &CompactionReport,
+    phi: f64,
+) -> Option<f64> {
+    let logs: Vec<f64> = reference
+        .runs
+        .iter()
+        .flat_map(|a| other.runs.iter().map(move |b| (a, b)))
+        .filter_map(|(a, b)| {
+            Some(
+                log_pressure_at(&pressure_curve(b), phi)?
+                    - log_pressure_at(&pressure_curve(a), phi)?,
+            )
+        })
+        .collect();
+    (!logs.is_empty()).then(|| (logs.iter().sum::<f64>() / logs.len() as f64).exp())
+}
+
+/// [`joins_at`] on two sorted `(phi, P)` curves.
+fn curves_join_at(base: &[(f64, f64)], other: &[(f64, f64)]) -> Option<f64> {
+    let compared: Vec<(f64, bool)> = other
+        .iter()
+        .copied()
+        .filter_map(|(phi, p)| {
+            log_pressure_at(base, phi).map(|lp| (phi, (p.ln() - lp).abs() <= AGREEMENT_FACTOR.ln()))
+        })
+        .collect();
+    let first = compared.iter().rposition(|c| !c.1).map_or(0, |k| k + 1);
+    compared.get(first).map(|c| c.0)
+}
+
+type Point = dyn Fn(&CompactionRun, &StateRow) -> Option<(f64, f64)>;
+
+/// One series per run of every study, of the compression states' points.
+fn series(studies: &[Study], f: &Point) -> Vec<Series> {
+    studies
+        .iter()
+        .flat_map(|s| {
+            s.report.runs.iter().map(move |r| {
+                Series::new(
+                    format!("{}, seed {}", s.label, r.seed),
+                    r.states
+                        .iter()
+                        .filter(|st| st.stage.starts_with("compress"))
+                        .filter_map(|st| f(r, st))
+                        .collect(),
+                    Mark::LinePoints,
+                )
+            })
+        })
+        .collect()
+}
+
+/// `phi - phi_c` of a state, at its run's fitted `phi_c`.
+fn distance(run: &CompactionRun, state: &StateRow) -> Option<f64> {
+    let d = state.packing.phi_mc - run.fits.pressure?.phi_c;
+    (d > 0.0).then_some(d)
+}
+
+/// Writes `comparison.svg` and `comparison.txt` into `dir`; returns the
+/// table.
+pub fn write_comparison(
+    studies: &[Study],
+    dir: &Path,
+    command: &str,
+) -> Result<String, CompactionError> {
+    std::fs::create_dir_all(dir).map_err(FileError::on("creating", dir))?;
+    let panels = vec![
+        Panel {
+            title: "pressure (paper Fig. 6, 11)".into(),
+            x_label: "phi_MC".into(),
+            y_label: "P / E_eff".into(),
+            log_y: true,
+            series: series(studies, &|_, s| Some((s.packing.phi_mc, s.p_over_e_eff))),
+            ..Panel::default()
+        },
+        Panel {
+            title: "force coordination, rattlers removed (paper Fig. 7)".into(),
+            x_label: "phi_MC".into(),
+            y_label: "Z_force".into(),
+            series: series(studies, &|_, s| Some((s.packing.phi_mc, s.packing.z_force))),
+            ..Panel::default()
+        },
+        Panel {
+            title: "grain volumetric strain (paper Fig. 12a)".into(),
+            x_label: "phi_MC - phi_c".into(),
+            y_label: "mean eps_V".into(),
+            log_x: true,
+            log_y: true,
+            series: series(studies, &|r, s| {
+                Some((distance(r, s)?, s.packing.eps_v_mean))
+            }),
+        },
+        Panel {
+            title: "grain asphericity (paper Fig. 12b)".into(),
+            x_label: "phi_MC - phi_c".into(),
+            y_label: "mean alpha - alpha0".into(),
+            log_x: true,
+            log_y: true,
+            series: series(studies, &|r, s| {
+                Some((distance(r, s)?, s.packing.asphericity_excess_mean))
+            }),
+        },
+    ];
+    write_svg(&dir.join("comparison.svg"), &panels)?;
+    let text = comparison_table(studies, command);
+    let path = dir.join("comparison.txt");
+    std::fs::write(&path, &text).map_err(FileError::on("writing", &path))?;
+    Ok(text)
+}
+
+/// The fits of every study side by side (means over their runs), and
+/// where each study's pressure joins the first's.
+pub fn comparison_table(studies: &[Study], command: &str) -> String {
+    use std::fmt::Write as _;
+    let mut t = format!("# bpm compare-compaction\n# {command}\n\n");
+    let mean = |study: &Study, f: &dyn Fn(&CompactionRun) -> Option<f64>| {
+        let v: Vec<f64> = study.report.runs.iter().filter_map(f).collect();
+        if v.is_empty() {
+            "-".to_string()
+        } else {
+            format!("{:.4}", v.iter().sum::<f64>() / v.len() as f64)
+        }
+    };
+    let _ = write!(t, "{:<24}", "quantity (mean of runs)");
+    for s in studies {
+        let _ = write!(t, " {:>16}", s.label);
+    }
+    let _ = write!(t, "\n{:<24}", "a_B (k d)");
+    for s in studies {
+        let _ = write!(t, " {:>16.2}", s.report.options.a_b);
+    }
+    t.push('\n');
+    type Pick = fn(&CompactionRun) -> Option<f64>;
+    let rows: [(&str, Pick); 10] = [
+        ("phi_c", |r| r.fits.pressure.map(|p| p.phi_c)),
+        ("P exponent", |r| r.fits.pressure.map(|p| p.exponent)),
+        ("Z_c (force)", |r| r.fits.z_force.map(|z| z.z_c)),
+        ("Z exponent", |r| r.fits.z_force.map(|z| z.law.exponent)),
+        ("eps_V exponent", |r| r.fits.eps_v.map(|p| p.exponent)),
+        ("alpha exponent", |r| r.fits.asphericity.map(|p| p.exponent)),
+        ("P leaves its law at", |r| r.fits.pressure_departure),
+        ("K_P exponent", |r| r.fits.bulk_modulus.map(|p| p.exponent)),
+        ("G_P exponent", |r| r.fits.shear_modulus.map(|p| p.exponent)),
+        ("last phi_MC", |r| r.states.last().map(|s| s.packing.phi_mc)),
+    ];
+    for (name, pick) in rows {
+        let _ = write!(t, "{name:<24}");
+        for s in studies {
+            let _ = write!(t, " {:>16}", mean(s, &pick));
+        }
+        t.push('\n');
+    }
+    if let Some((first, rest)) = studies.split_first() {
+        let _ = write!(t, "\nP / P({}) at phi_MC =", first.label);
+        for phi in RATIO_AT {
+            let _ = write!(t, " {phi:>7.2}");
+        }
+        t.push('\n');
+        for s in rest {
+            let _ = write!(t, "  {:<20}", s.label);
+            for phi in RATIO_AT {
+                let cell = pressure_ratio(&first.report, &s.report, phi)
+                    .map_or("-".to_string(), |r| format!("{r:.3}"));
+                let _ = write!(t, " {cell:>7}");
+            }
+            t.push('\n');
+        }
+        let _ = writeln!(
+            t,
+            "\npressure within a factor {AGREEMENT_FACTOR} of {}'s at the same phi_MC from (paper: rough and smoother grains from about phi = 0.7):",
+            first.label
+        );
+        for s in rest {
+            let _ = writeln!(
+                t,
+                "  {:<20} {}",
+                s.label,
+                joins_at(&first.report, &s.report)
+                    .map_or("never".to_string(), |phi| format!("phi_MC = {phi:.4}"))
+            );
+        }
+    }
+    t
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn curves_join_where_they_stay_within_the_factor() {
+        // P = phi^10 against 2 phi^10 below 0.7 and 1.05 phi^10 above.
+        let base: Vec<(f64, f64)> = (0..=40)
+            .map(|k| 0.55 + 0.01 * k as f64)
+            .map(|phi| (phi, phi.powi(10)))
+            .collect();
+        let other: Vec<(f64, f64)> = (0..=35)
+            .map(|k| 0.555 + 0.01 * k as f64)
+            .map(|phi| (phi, phi.powi(10) * if phi < 0.7 { 2.0 } else { 1.05 }))
+            .collect();
+        assert_eq!(curves_join_at(&base, &other), Some(0.555 + 0.01 * 15.0));
+        // Interpolation in ln P is exact for an exponential.
+        let exp: Vec<(f64, f64)> = vec![(0.5, 1.0), (0.7, 2f64.exp())];
+        let lp = log_pressure_at(&exp, 0.6).unwrap();
+        assert!((lp - 1.0).abs() < 1e-12);
+        assert!(log_pressure_at(&exp, 0.8).is_none());
+        assert!((log_pressure_at(&exp, 0.5).unwrap()).abs() < 1e-15);
+        assert!((log_pressure_at(&exp, 0.7).unwrap() - 2.0).abs() < 1e-15);
+        // Still apart at the end: never joins.
+        let apart: Vec<(f64, f64)> = base.iter().map(|&(x, y)| (x + 0.001, 2.0 * y)).collect();
+        assert_eq!(curves_join_at(&base, &apart), None);
+    }
+}
