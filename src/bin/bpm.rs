@@ -382,12 +382,15 @@ enum Command {
     /// packing built per seed (or read with --packing) is jammed with the
     /// Berendsen barostat and compressed isotropically at strain rates
     /// raised stepwise, in the native engine or LAMMPS; every recorded
-    /// state is analysed (phi_MC, Z, grain strain and asphericity) and the
-    /// power laws near jamming are fitted; writes DIR/compaction.json,
-    /// DIR/compaction.svg, DIR/jamming.svg, DIR/compaction.txt and
-    /// DIR/seed-N/ (scene, packing data file). Defaults are a reduced scale that runs in
-    /// minutes; the paper's protocol is --jam-gain 0.1 --jam-time 2e5
-    /// --rate-start 1e-9 --rate-end 1e-6 --rate-levels 10 --stage-time 2e5.
+    /// state is analysed (phi_MC, Z, grain strain and asphericity), the
+    /// packing's moduli are measured at a few states, and the power laws
+    /// near jamming are fitted; writes DIR/compaction.json,
+    /// DIR/compaction.svg, DIR/jamming.svg, DIR/compaction.txt,
+    /// DIR/moduli.svg, DIR/distributions.svg and DIR/seed-N/ (scene,
+    /// packing data file, slice picture). Defaults are a reduced scale that
+    /// runs in minutes; the paper's protocol is --jam-gain 0.1 --jam-time
+    /// 2e5 --rate-start 1e-9 --rate-end 1e-6 --rate-levels 10 --stage-time
+    /// 2e5 --moduli-relax-time 1e4 --moduli-rate 1e-8.
     Compact {
         /// Output folder.
         #[arg(short, long, default_value = "results/compaction")]
@@ -1295,7 +1298,7 @@ fn real_main() -> Result<()> {
                 let report = compaction::refit(&output)?;
                 print!("{}", compaction::table(&report));
                 println!(
-                    "refitted {} run(s); rewrote {}/compaction.json, compaction.svg, jamming.svg and compaction.txt",
+                    "refitted {} run(s); rewrote {}/compaction.json, compaction.svg, jamming.svg, distributions.svg, moduli.svg (if measured) and compaction.txt",
                     report.runs.len(),
                     output.display()
                 );
@@ -1361,7 +1364,7 @@ fn real_main() -> Result<()> {
             )?;
             print!("{}", compaction::table(&report));
             println!(
-                "{} run(s); wrote {}/compaction.json, compaction.svg, jamming.svg and compaction.txt",
+                "{} run(s); wrote {}/compaction.json, compaction.svg, jamming.svg, distributions.svg, moduli.svg (if measured) and compaction.txt",
                 report.runs.len(),
                 output.display()
             );
