@@ -323,7 +323,8 @@ fn numeric_options(help: &str) -> Vec<String> {
             let l = l.trim_start();
             let rest = l.strip_prefix("--")?;
             let (name, value) = rest.split_once(" <")?;
-            let value = value.trim_end_matches(['>', '.', ' ']);
+            // Short help texts follow the value on the same line.
+            let value = value.split('>').next()?;
             (!NOT_NUMBERS.contains(&value)).then(|| format!("--{name}"))
         })
         .collect()
