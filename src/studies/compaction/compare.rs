@@ -4,7 +4,7 @@
 //! each study's pressure joins the first's (the source study finds that
 //! friction stops mattering near `phi = 0.7`).
 
-use super::{read_report, CompactionError, CompactionReport, CompactionRun, StateRow};
+use super::{is_jammed, read_report, CompactionError, CompactionReport, CompactionRun, StateRow};
 use crate::analysis::plot::{write_svg, Mark, Panel, Series};
 use crate::file_error::FileError;
 use std::path::Path;
@@ -42,9 +42,9 @@ fn pressure_curve(run: &CompactionRun) -> Vec<(f64, f64)> {
     points
 }
 
-/// `ln P` of `curve` at `phi`, linear between neighbouring states; `None`
-/// outside the curve.
-fn log_pressure_at(curve: &[(f64, f64)], phi: f64) -> Option<f64> {
+/// `ln y` of a `(x, y)` curve at `x = phi`, linear in `ln y` between
+/// neighbouring points; `None` outside the curve.
+fn log_value_at(curve: &[(f64, f64)], phi: f64) -> Option<f64> {
     let k = curve.partition_point(|p| p.0 < phi);
     if curve.get(k).is_some_and(|p| p.0 == phi) {
         return Some(curve[k].1.ln());
@@ -90,10 +90,35 @@ pub fn pressure_ratio(
         .iter()
         .flat_map(|a| other.runs.iter().map(move |b| (a, b)))
         .filter_map(|(a, b)| {
-            Some(
-                log_pressure_at(&pressure_curve(b), phi)?
-                    - log_pressure_at(&pressure_curve(a), phi)?,
-            )
+            Some(log_value_at(&pressure_curve(b), phi)? - log_value_at(&pressure_curve(a), phi)?)
+        })
+        .collect();
+    (!logs.is_empty()).then(|| (logs.iter().sum::<f64>() / logs.len() as f64).exp())
+}
+
+/// Distances from jamming at which [`comparison_table`] lists grain strain
+/// and shape.
+const DISTANCE_AT: [f64; 4] = [0.01, 0.03, 0.1, 0.3];
+
+/// `pick` of a study's jammed states at `phi - phi_c = x` (each run at its
+/// own `phi_c`, interpolated linearly in log-log), the geometric mean over
+/// runs; `None` where no run covers `x`.
+fn mean_at_distance(report: &CompactionReport, x: f64, pick: fn(&StateRow) -> f64) -> Option<f64> {
+    let logs: Vec<f64> = report
+        .runs
+        .iter()
+        .filter_map(|r| {
+            let phi_c = r.fits.pressure?.phi_c;
+            let mut curve: Vec<(f64, f64)> = r
+                .states
+                .iter()
+                .filter(|s| is_jammed(s))
+                .map(|s| (s.packing.phi_mc - phi_c, pick(s)))
+                .filter(|&(d, y)| d > 0.0 && y > 0.0)
+                .map(|(d, y)| (d.ln(), y))
+                .collect();
+            curve.sort_by(|a, b| a.0.total_cmp(&b.0));
+            log_value_at(&curve, x.ln())
         })
         .collect();
     (!logs.is_empty()).then(|| (logs.iter().sum::<f64>() / logs.len() as f64).exp())
@@ -105,7 +130,7 @@ fn curves_join_at(base: &[(f64, f64)], other: &[(f64, f64)]) -> Option<f64> {
         .iter()
         .copied()
         .filter_map(|(phi, p)| {
-            log_pressure_at(base, phi).map(|lp| (phi, (p.ln() - lp).abs() <= AGREEMENT_FACTOR.ln()))
+            log_value_at(base, phi).map(|lp| (phi, (p.ln() - lp).abs() <= AGREEMENT_FACTOR.ln()))
         })
         .collect();
     let first = compared.iter().rposition(|c| !c.1).map_or(0, |k| k + 1);
@@ -234,6 +259,28 @@ pub fn comparison_table(studies: &[Study], command: &str) -> String {
         }
         t.push('\n');
     }
+    for (name, pick) in [
+        (
+            "mean eps_V",
+            (|s: &StateRow| s.packing.eps_v_mean) as fn(&StateRow) -> f64,
+        ),
+        ("mean alpha - alpha0", |s| s.packing.asphericity_excess_mean),
+    ] {
+        let _ = write!(t, "\n{name} at phi - phi_c =");
+        for x in DISTANCE_AT {
+            let _ = write!(t, " {x:>8}");
+        }
+        t.push('\n');
+        for s in studies {
+            let _ = write!(t, "  {:<20}", s.label);
+            for x in DISTANCE_AT {
+                let cell = mean_at_distance(&s.report, x, pick)
+                    .map_or("-".to_string(), |v| format!("{v:.2e}"));
+                let _ = write!(t, " {cell:>8}");
+            }
+            t.push('\n');
+        }
+    }
     if let Some((first, rest)) = studies.split_first() {
         let _ = write!(t, "\nP / P({}) at phi_MC =", first.label);
         for phi in RATIO_AT {
@@ -285,11 +332,11 @@ mod tests {
         assert_eq!(curves_join_at(&base, &other), Some(0.555 + 0.01 * 15.0));
         // Interpolation in ln P is exact for an exponential.
         let exp: Vec<(f64, f64)> = vec![(0.5, 1.0), (0.7, 2f64.exp())];
-        let lp = log_pressure_at(&exp, 0.6).unwrap();
+        let lp = log_value_at(&exp, 0.6).unwrap();
         assert!((lp - 1.0).abs() < 1e-12);
-        assert!(log_pressure_at(&exp, 0.8).is_none());
-        assert!((log_pressure_at(&exp, 0.5).unwrap()).abs() < 1e-15);
-        assert!((log_pressure_at(&exp, 0.7).unwrap() - 2.0).abs() < 1e-15);
+        assert!(log_value_at(&exp, 0.8).is_none());
+        assert!((log_value_at(&exp, 0.5).unwrap()).abs() < 1e-15);
+        assert!((log_value_at(&exp, 0.7).unwrap() - 2.0).abs() < 1e-15);
         // Still apart at the end: never joins.
         let apart: Vec<(f64, f64)> = base.iter().map(|&(x, y)| (x + 0.001, 2.0 * y)).collect();
         assert_eq!(curves_join_at(&base, &apart), None);

@@ -365,7 +365,7 @@ pub struct RunFits {
     #[serde(default)]
     pub pressure_departure: Option<f64>,
     /// The packing's bulk modulus `K_P / E_eff` (reliable measurements
-    /// only, see [`PackingModuli::is_reliable`]).
+    /// only, see [`PackingModuli::bulk_is_reliable`]; likewise for `G_P`).
     #[serde(default)]
     pub bulk_modulus: Option<PowerLaw>,
     /// The packing's shear modulus `G_P / E_eff`.
@@ -401,11 +401,13 @@ pub fn fit_run(states: &[StateRow], moduli: &[StateModuli], e_eff: f64) -> RunFi
         return RunFits::default();
     };
     let phi_c = pressure.phi_c;
-    let reliable: Vec<&StateModuli> = moduli.iter().filter(|m| m.moduli.is_reliable()).collect();
-    let moduli_phi: Vec<f64> = reliable.iter().map(|m| m.phi_mc).collect();
-    let modulus_law = |f: &dyn Fn(&PackingModuli) -> f64| {
-        let y: Vec<f64> = reliable.iter().map(|m| f(&m.moduli) / e_eff).collect();
-        power_law_at(&moduli_phi, &y, phi_c, FIT_WINDOW)
+    let modulus_law = |reliable: fn(&PackingModuli) -> bool, f: fn(&PackingModuli) -> f64| {
+        let (x, y): (Vec<f64>, Vec<f64>) = moduli
+            .iter()
+            .filter(|m| reliable(&m.moduli))
+            .map(|m| (m.phi_mc, f(&m.moduli) / e_eff))
+            .unzip();
+        power_law_at(&x, &y, phi_c, FIT_WINDOW)
     };
     let z = |f: &dyn Fn(&StateRow) -> f64| {
         coordination_law(&phi, &of(f), phi_c, FIT_WINDOW, 5)
@@ -423,8 +425,8 @@ pub fn fit_run(states: &[StateRow], moduli: &[StateModuli], e_eff: f64) -> RunFi
             phi_c,
             FIT_WINDOW,
         ),
-        bulk_modulus: modulus_law(&|m| m.bulk),
-        shear_modulus: modulus_law(&|m| m.shear),
+        bulk_modulus: modulus_law(PackingModuli::bulk_is_reliable, |m| m.bulk),
+        shear_modulus: modulus_law(PackingModuli::shear_is_reliable, |m| m.shear),
     }
 }
 

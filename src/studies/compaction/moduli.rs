@@ -87,14 +87,36 @@ pub struct PackingModuli {
 /// that the fits and plots take as a modulus.
 pub const MAX_RELATIVE_ERROR: f64 = 0.2;
 
+/// Largest standard error of a Poisson ratio taken as measured.
+pub const MAX_POISSON_ERROR: f64 = 0.05;
+
 impl PackingModuli {
-    /// Whether both moduli are positive and known to within
+    /// Whether `K_P` is positive and known to within
     /// [`MAX_RELATIVE_ERROR`].
+    pub fn bulk_is_reliable(&self) -> bool {
+        self.bulk > 0.0 && self.bulk_error <= MAX_RELATIVE_ERROR * self.bulk
+    }
+
+    /// Whether `G_P` is positive and known to within
+    /// [`MAX_RELATIVE_ERROR`]. Near jamming `G_P` is close to zero and
+    /// often fails this while the Poisson ratio is still well measured.
+    pub fn shear_is_reliable(&self) -> bool {
+        self.shear > 0.0 && self.shear_error <= MAX_RELATIVE_ERROR * self.shear
+    }
+
+    /// Whether both moduli are reliable.
     pub fn is_reliable(&self) -> bool {
-        self.bulk > 0.0
-            && self.shear > 0.0
-            && self.bulk_error <= MAX_RELATIVE_ERROR * self.bulk
-            && self.shear_error <= MAX_RELATIVE_ERROR * self.shear
+        self.bulk_is_reliable() && self.shear_is_reliable()
+    }
+
+    /// Whether the Poisson ratio is measured: `K_P` reliable, `G_P` not
+    /// negative beyond two standard errors (a packing that yields under
+    /// shear has no elastic Poisson ratio), and the ratio known to within
+    /// [`MAX_POISSON_ERROR`].
+    pub fn poisson_is_reliable(&self) -> bool {
+        self.bulk_is_reliable()
+            && self.shear + 2.0 * self.shear_error > 0.0
+            && self.poisson_error <= MAX_POISSON_ERROR
     }
 
     /// The fraction of the plain fit of `K_P` that is creep of the

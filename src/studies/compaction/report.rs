@@ -2,7 +2,8 @@
 //! fits beside the paper's values; `--refit` rewrites them from the JSON.
 
 use super::{
-    fit_run, CompactionError, CompactionReport, RunFits, StateModuli, StateRow, FIT_WINDOW,
+    fit_run, CompactionError, CompactionReport, PackingModuli, RunFits, StateModuli, StateRow,
+    FIT_WINDOW,
 };
 use crate::analysis::distribution::{density_histogram, shape, z_scores};
 use crate::analysis::jamming::PowerLaw;
@@ -283,40 +284,45 @@ fn law_line(f: &PowerLaw) -> Vec<(f64, f64)> {
 }
 
 /// The packing's moduli and Poisson ratio against `phi - phi_c` (each run
-/// at its own `phi_c`); measurements with a modulus not positive or
-/// uncertain by more than 20% are drawn as rings and left out of the fits.
+/// at its own `phi_c`); measurements that fail
+/// [`PackingModuli::bulk_is_reliable`], `shear_is_reliable` or
+/// `poisson_is_reliable` are drawn as rings and left out of the fits.
 fn moduli_panels(report: &CompactionReport) -> Vec<Panel> {
     let mut moduli = Vec::new();
     let mut poisson = Vec::new();
     for r in &report.runs {
         let Some(p) = &r.fits.pressure else { continue };
-        let pick = |reliable: bool, f: &dyn Fn(&StateModuli) -> f64| -> Vec<(f64, f64)> {
+        type Reliable = fn(&PackingModuli) -> bool;
+        let pick = |reliable: Reliable, wanted: bool, f: &dyn Fn(&PackingModuli) -> f64| {
             r.moduli
                 .iter()
-                .filter(|m| m.moduli.is_reliable() == reliable)
-                .map(|m| (m.phi_mc - p.phi_c, f(m)))
-                .collect()
+                .filter(|m| reliable(&m.moduli) == wanted)
+                .map(|m| (m.phi_mc - p.phi_c, f(&m.moduli)))
+                .collect::<Vec<(f64, f64)>>()
         };
-        for (name, f, law) in [
+        let e_eff = report.e_eff;
+        for (name, f, reliable, law) in [
             (
                 "K_P",
-                &(|m: &StateModuli| m.moduli.bulk / report.e_eff) as &dyn Fn(&StateModuli) -> f64,
+                &(move |m: &PackingModuli| m.bulk / e_eff) as &dyn Fn(&PackingModuli) -> f64,
+                PackingModuli::bulk_is_reliable as Reliable,
                 r.fits.bulk_modulus,
             ),
             (
                 "G_P",
-                &|m: &StateModuli| m.moduli.shear / report.e_eff,
+                &move |m: &PackingModuli| m.shear / e_eff,
+                PackingModuli::shear_is_reliable,
                 r.fits.shear_modulus,
             ),
         ] {
             moduli.push(Series::new(
                 format!("{name}, seed {}", r.seed),
-                pick(true, f),
+                pick(reliable, true, f),
                 Mark::Points,
             ));
             moduli.push(Series::new(
                 format!("{name}, seed {}, uncertain", r.seed),
-                pick(false, f),
+                pick(reliable, false, f),
                 Mark::Rings,
             ));
             if let Some(law) = law {
@@ -332,12 +338,12 @@ fn moduli_panels(report: &CompactionReport) -> Vec<Panel> {
         }
         poisson.push(Series::new(
             format!("seed {}", r.seed),
-            pick(true, &|m| m.moduli.poisson),
+            pick(PackingModuli::poisson_is_reliable, true, &|m| m.poisson),
             Mark::LinePoints,
         ));
         poisson.push(Series::new(
             format!("seed {}, uncertain", r.seed),
-            pick(false, &|m| m.moduli.poisson),
+            pick(PackingModuli::poisson_is_reliable, false, &|m| m.poisson),
             Mark::Rings,
         ));
     }
@@ -541,11 +547,11 @@ pub fn table(report: &CompactionReport) -> String {
     t
 }
 
-/// The reliable moduli measurement with the smallest Poisson ratio.
+/// The measured state with the smallest well-measured Poisson ratio.
 fn poisson_minimum(run: &super::CompactionRun) -> Option<&StateModuli> {
     run.moduli
         .iter()
-        .filter(|m| m.moduli.is_reliable())
+        .filter(|m| m.moduli.poisson_is_reliable())
         .min_by(|a, b| a.moduli.poisson.total_cmp(&b.moduli.poisson))
 }
 
