@@ -217,8 +217,10 @@ pub fn write_comparison(
     Ok(text)
 }
 
-/// The fits of every study side by side (means over their runs), and
-/// where each study's pressure joins the first's.
+/// The fits of every study side by side (means over their runs), with the
+/// mean and sample sd over every run of every study (meaningful when the
+/// studies are realisations of one system), and where each study's
+/// pressure joins the first's.
 pub fn comparison_table(studies: &[Study], command: &str) -> String {
     use std::fmt::Write as _;
     let mut t = format!("# bpm compare-compaction\n# {command}\n\n");
@@ -234,13 +236,14 @@ pub fn comparison_table(studies: &[Study], command: &str) -> String {
     for s in studies {
         let _ = write!(t, " {:>16}", s.label);
     }
+    t.push_str("   every run: mean +- sd (runs)");
     let _ = write!(t, "\n{:<24}", "a_B (k d)");
     for s in studies {
         let _ = write!(t, " {:>16.2}", s.report.options.a_b);
     }
     t.push('\n');
     type Pick = fn(&CompactionRun) -> Option<f64>;
-    let rows: [(&str, Pick); 10] = [
+    let rows: [(&str, Pick); 12] = [
         ("phi_c", |r| r.fits.pressure.map(|p| p.phi_c)),
         ("P exponent", |r| r.fits.pressure.map(|p| p.exponent)),
         ("Z_c (force)", |r| r.fits.z_force.map(|z| z.z_c)),
@@ -250,12 +253,27 @@ pub fn comparison_table(studies: &[Study], command: &str) -> String {
         ("P leaves its law at", |r| r.fits.pressure_departure),
         ("K_P exponent", |r| r.fits.bulk_modulus.map(|p| p.exponent)),
         ("G_P exponent", |r| r.fits.shear_modulus.map(|p| p.exponent)),
+        ("nu_P minimum", |r| {
+            super::report::poisson_minimum(r).map(|m| m.moduli.poisson)
+        }),
+        ("phi - phi_c there", |r| {
+            let phi_c = r.fits.pressure?.phi_c;
+            super::report::poisson_minimum(r).map(|m| m.phi_mc - phi_c)
+        }),
         ("last phi_MC", |r| r.states.last().map(|s| s.packing.phi_mc)),
     ];
     for (name, pick) in rows {
         let _ = write!(t, "{name:<24}");
         for s in studies {
             let _ = write!(t, " {:>16}", mean(s, &pick));
+        }
+        let every: Vec<f64> = studies
+            .iter()
+            .flat_map(|s| s.report.runs.iter().filter_map(pick))
+            .collect();
+        let (m, sd) = crate::studies::calibration::mean_sd(&every);
+        if !every.is_empty() {
+            let _ = write!(t, "   {m:.4} +- {sd:.4} ({})", every.len());
         }
         t.push('\n');
     }

@@ -548,7 +548,7 @@ pub fn table(report: &CompactionReport) -> String {
 }
 
 /// The measured state with the smallest well-measured Poisson ratio.
-fn poisson_minimum(run: &super::CompactionRun) -> Option<&StateModuli> {
+pub(super) fn poisson_minimum(run: &super::CompactionRun) -> Option<&StateModuli> {
     run.moduli
         .iter()
         .filter(|m| m.moduli.poisson_is_reliable())
