@@ -236,7 +236,7 @@ pub fn comparison_table(studies: &[Study], command: &str) -> String {
     for s in studies {
         let _ = write!(t, " {:>16}", s.label);
     }
-    t.push_str("   every run: mean +- sd (runs)");
+    t.push_str("   every run: mean +- sd (runs; a spread only if the studies are realisations of one system)");
     let _ = write!(t, "\n{:<24}", "a_B (k d)");
     for s in studies {
         let _ = write!(t, " {:>16.2}", s.report.options.a_b);
@@ -272,8 +272,14 @@ pub fn comparison_table(studies: &[Study], command: &str) -> String {
             .flat_map(|s| s.report.runs.iter().filter_map(pick))
             .collect();
         let (m, sd) = crate::studies::calibration::mean_sd(&every);
-        if !every.is_empty() {
-            let _ = write!(t, "   {m:.4} +- {sd:.4} ({})", every.len());
+        match every.len() {
+            0 => {}
+            1 => {
+                let _ = write!(t, "   {m:.4} (1, no spread)");
+            }
+            n => {
+                let _ = write!(t, "   {m:.4} +- {sd:.4} ({n})");
+            }
         }
         t.push('\n');
     }
@@ -355,6 +361,13 @@ mod tests {
         assert!(log_value_at(&exp, 0.8).is_none());
         assert!((log_value_at(&exp, 0.5).unwrap()).abs() < 1e-15);
         assert!((log_value_at(&exp, 0.7).unwrap() - 2.0).abs() < 1e-15);
+        // Log-log interpolation is exact for a power law.
+        let power: Vec<(f64, f64)> = [0.01f64, 0.1]
+            .iter()
+            .map(|d| (d.ln(), d.powf(1.5)))
+            .collect();
+        let y = log_value_at(&power, 0.03f64.ln()).unwrap().exp();
+        assert!((y / 0.03f64.powf(1.5) - 1.0).abs() < 1e-12, "{y}");
         // Still apart at the end: never joins.
         let apart: Vec<(f64, f64)> = base.iter().map(|&(x, y)| (x + 0.001, 2.0 * y)).collect();
         assert_eq!(curves_join_at(&base, &apart), None);

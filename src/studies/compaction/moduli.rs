@@ -358,6 +358,37 @@ mod tests {
         }
     }
 
+    fn measured(shear: f64, shear_error: f64, poisson_error: f64) -> PackingModuli {
+        PackingModuli {
+            relaxed_pressure: 1e-3,
+            bulk: 1.0,
+            bulk_error: 0.01,
+            shear,
+            shear_error,
+            poisson: 0.45,
+            poisson_error,
+            bulk_uncorrected: 1.0,
+            shear_uncorrected: shear,
+            seconds: 0.0,
+        }
+    }
+
+    #[test]
+    fn reliability_is_judged_per_modulus() {
+        // G near zero: not a reliable G, but nu_P is measured.
+        let near_jamming = measured(-0.001, 0.001, 0.01);
+        assert!(near_jamming.bulk_is_reliable() && !near_jamming.shear_is_reliable());
+        assert!(near_jamming.poisson_is_reliable() && !near_jamming.is_reliable());
+        // G negative by three errors: the packing yields, no nu_P.
+        assert!(!measured(-0.003, 0.001, 0.01).poisson_is_reliable());
+        // nu_P too uncertain, or not a number.
+        assert!(!measured(0.1, 0.001, 0.06).poisson_is_reliable());
+        assert!(!measured(0.1, 0.001, f64::NAN).poisson_is_reliable());
+        let good = measured(0.1, 0.01, 0.01);
+        assert!(good.is_reliable() && good.poisson_is_reliable());
+        assert!(!measured(0.1, 0.03, 0.01).shear_is_reliable());
+    }
+
     #[test]
     fn the_control_s_creep_is_subtracted_row_by_row() {
         // The control creeps linearly in time; the loaded run adds
