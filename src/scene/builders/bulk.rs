@@ -9,7 +9,7 @@ use crate::engine::{BondTopology, NeighbourList, SimBox, System};
 use crate::kernels::PairCoeffs;
 use crate::kernels::Separation;
 use crate::options::{validate_strain_and_rate, InvalidOption};
-use crate::scene::model::{Bonds, BoxSpec, ForceField, Particles, Scene, StageSpec, VelocityInit};
+use crate::scene::model::{Bonds, ForceField, Scene, StageSpec, VelocityInit};
 use crate::scene::protocols;
 use crate::scene::validate::SceneError;
 use rand::{Rng, SeedableRng};
@@ -275,30 +275,16 @@ pub fn build_bulk(
         pair: Some(pair),
         ..params.force_field.clone()
     });
-    let mut scene = Scene {
-        version: crate::scene::SCENE_VERSION,
-        model: crate::scene::ModelKind::Bpm,
-        description: format!("bulk solid, L = {l} d, seed {}", params.seed),
-        seed: params.seed,
-        simbox: BoxSpec {
-            lo: [0.0; 3],
-            lengths: [l; 3],
-            tilt: [0.0; 3],
-            periodic: [true; 3],
-        },
-        particles: Particles {
-            positions,
-            velocities: None,
-            grain: None,
-            mass: crate::scene::Mass::Uniform(1.0),
-            radius: None,
-            kind: None,
-        },
-        bonds: Bonds::default(),
-        force_field: soft,
-        stages: vec![relax, thermal, quench],
-        provenance: serde_json::json!({ "builder": "bulk", "version": crate::VERSION, "parameters": params }),
-    };
+    let mut scene = super::periodic_cube(
+        format!("bulk solid, L = {l} d, seed {}", params.seed),
+        params.seed,
+        l,
+        positions,
+        soft,
+    );
+    scene.stages = vec![relax, thermal, quench];
+    scene.provenance =
+        serde_json::json!({ "builder": "bulk", "version": crate::VERSION, "parameters": params });
     let mut sys = super::run_build_stages(&scene, "bulk builder", threads, progress)?;
     sys.particles.wrap(&sys.simbox);
     sort_spatially(&mut sys.particles.x, &sys.simbox, 2.0 * pair.d);

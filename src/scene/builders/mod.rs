@@ -11,6 +11,42 @@ use crate::scene::model::Scene;
 use crate::scene::run::{run_scene, RunOptions};
 use crate::scene::validate::{validate, SceneError};
 
+/// A bonded-particle scene in the periodic cube `[0, length)^3`: unit
+/// masses, no velocities, grains, bonds or stages; builders fill in the
+/// rest.
+fn periodic_cube(
+    description: String,
+    seed: u64,
+    length: f64,
+    positions: Vec<[f64; 3]>,
+    force_field: crate::scene::ForceField,
+) -> Scene {
+    Scene {
+        version: crate::scene::SCENE_VERSION,
+        model: crate::scene::ModelKind::Bpm,
+        description,
+        seed,
+        simbox: crate::scene::model::BoxSpec {
+            lo: [0.0; 3],
+            lengths: [length; 3],
+            tilt: [0.0; 3],
+            periodic: [true; 3],
+        },
+        particles: crate::scene::model::Particles {
+            positions,
+            velocities: None,
+            grain: None,
+            mass: crate::scene::Mass::Uniform(1.0),
+            radius: None,
+            kind: None,
+        },
+        bonds: crate::scene::model::Bonds::default(),
+        force_field,
+        stages: Vec::new(),
+        provenance: serde_json::Value::Null,
+    }
+}
+
 /// Runs the stages of a builder's working scene and returns the final
 /// system; a failure is reported as an error of the builder `what`.
 fn run_build_stages(

@@ -30,7 +30,7 @@ use super::grain::{build_grain, centre_of, GrainKind, GrainParams};
 use crate::engine::SimBox;
 use crate::kernels::{PairCoeffs, Separation};
 use crate::scene::load::reference_lengths;
-use crate::scene::model::{Bonds, BoxSpec, ForceField, Particles, Scene, StageSpec};
+use crate::scene::model::{Bonds, ForceField, Scene, StageSpec};
 use crate::scene::protocols::uniform_rotation;
 use crate::scene::validate::{simbox_of, SceneError};
 use rand::{Rng, SeedableRng};
@@ -153,30 +153,8 @@ pub fn template_centres(
     const MAX_CHUNKS: u64 = 200;
     let mut relax = StageSpec::hold("relax template", CHUNK, 0.1);
     relax.viscous = 1.0;
-    let mut scene = Scene {
-        version: crate::scene::SCENE_VERSION,
-        model: crate::scene::ModelKind::Bpm,
-        description: "packing template".into(),
-        seed,
-        simbox: BoxSpec {
-            lo: [0.0; 3],
-            lengths: [length; 3],
-            tilt: [0.0; 3],
-            periodic: [true; 3],
-        },
-        particles: Particles {
-            positions,
-            velocities: None,
-            grain: None,
-            mass: crate::scene::Mass::Uniform(1.0),
-            radius: None,
-            kind: None,
-        },
-        bonds: Bonds::default(),
-        force_field: soft,
-        stages: vec![relax],
-        provenance: serde_json::Value::Null,
-    };
+    let mut scene = super::periodic_cube("packing template".into(), seed, length, positions, soft);
+    scene.stages = vec![relax];
     let simbox = simbox_of(&scene);
     for chunk in 1..=MAX_CHUNKS {
         let sys = super::run_build_stages(&scene, "packing template", threads, false)?;
@@ -437,39 +415,19 @@ pub fn build_packing(
     }
     let mut force_field = ForceField::paper(params.grain.a_b);
     force_field.zero_net_multibody = false;
-    let mut scene = Scene {
-        version: crate::scene::SCENE_VERSION,
-        model: crate::scene::ModelKind::Bpm,
-        description: format!(
-            "packing of {} {} grains, R = {} d, a_B = {}, seed {}",
-            params.grains,
-            params.grain.kind.name(),
-            params.grain.radius,
-            params.grain.a_b,
-            params.seed
-        ),
-        seed: params.seed,
-        simbox: BoxSpec {
-            lo: [0.0; 3],
-            lengths: [length; 3],
-            tilt: [0.0; 3],
-            periodic: [true; 3],
-        },
-        particles: Particles {
-            positions,
-            velocities: None,
-            grain: Some(grain),
-            mass: crate::scene::Mass::Uniform(1.0),
-            radius: None,
-            kind: None,
-        },
-        bonds: Bonds {
-            pairs,
-            r0: Some(r0),
-        },
-        force_field,
-        stages: Vec::new(),
-        provenance: serde_json::Value::Null,
+    let description = format!(
+        "packing of {} {} grains, R = {} d, a_B = {}, seed {}",
+        params.grains,
+        params.grain.kind.name(),
+        params.grain.radius,
+        params.grain.a_b,
+        params.seed
+    );
+    let mut scene = super::periodic_cube(description, params.seed, length, positions, force_field);
+    scene.particles.grain = Some(grain);
+    scene.bonds = Bonds {
+        pairs,
+        r0: Some(r0),
     };
     let mut grain_centres = centres.clone();
     let (relax_sweeps, crowding) = relax_overlaps(&mut scene, &mut grain_centres)?;
