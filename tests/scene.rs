@@ -172,3 +172,87 @@ fn a_sphere_wall_moves_at_its_speed_and_writes_no_speed_when_fixed() {
     assert_eq!(fixed.radius_at(4.0), 5.0);
     assert!(!serde_json::to_string(&fixed).unwrap().contains("velocity"));
 }
+
+/// A valid DEM scene: two spheres of radius 1, one material.
+fn valid_dem() -> Value {
+    json!({
+        "version": 2, "model": "dem", "seed": 1,
+        "box": {"lo": [0, 0, 0], "lengths": [8, 8, 8], "periodic": [true, true, true]},
+        "particles": {"positions": [[1, 1, 1], [2.9, 1, 1]], "radius": [1, 1],
+                      "angular_velocities": [[0, 0, 0.1], [0, 0, 0]]},
+        "force_field": {"granular": {"youngs_modulus": 100, "poisson_ratio": 0.25,
+                        "restitution": 0.5, "tangential_damping": 1, "sliding_friction": 0.3,
+                        "rolling": {"stiffness": 10, "damping": 0.5, "friction": 0.1},
+                        "twisting": "marshall"}},
+        "stages": [{"name": "hold", "steps": 10, "dt": 0.01}]
+    })
+}
+
+fn rejects_dem(edit: impl FnOnce(&mut Value), field: &str) {
+    let mut doc = valid_dem();
+    edit(&mut doc);
+    let err = check(doc).expect_err("must be rejected").to_string();
+    assert!(
+        err.contains(field),
+        "message `{err}` does not name `{field}`"
+    );
+}
+
+#[test]
+fn dem_scenes_are_checked_field_by_field() {
+    check(valid_dem()).unwrap();
+    let granular = |d: &mut Value| d["force_field"]["granular"].take();
+    rejects_dem(|d| drop(granular(d)), "force_field.granular");
+    for (field, value) in [
+        ("youngs_modulus", json!(0)),
+        ("poisson_ratio", json!(0.6)),
+        ("poisson_ratio", json!(-1)),
+        ("restitution", json!(0)),
+        ("restitution", json!(1.5)),
+        ("tangential_damping", json!(-1)),
+        ("sliding_friction", json!(-0.1)),
+    ] {
+        rejects_dem(
+            |d| d["force_field"]["granular"][field] = value,
+            &format!("force_field.granular.{field}"),
+        );
+    }
+    rejects_dem(
+        |d| d["force_field"]["granular"]["rolling"]["stiffness"] = json!(0),
+        "force_field.granular.rolling.stiffness",
+    );
+    rejects_dem(
+        |d| {
+            d["force_field"]["granular"]["twisting"] =
+                json!({"sds": {"stiffness": 1, "damping": -1, "friction": 0.1}})
+        },
+        "force_field.granular.twisting.sds.damping",
+    );
+    // What belongs to the other model is refused, with the reason.
+    rejects_dem(|d| d["bonds"] = json!({"pairs": [[0, 1]]}), "bonds.pairs");
+    rejects_dem(
+        |d| d["force_field"]["pair"] = json!({"k": 1, "d": 1, "a": 0, "gamma": 0}),
+        "no bonds and no bpm contacts",
+    );
+    rejects_dem(
+        |d| d["stages"][0]["reset_reference"] = json!(true),
+        "stages[0].reset_reference",
+    );
+    rejects_dem(
+        |d| d["particles"]["angular_velocities"] = json!([[0, 0, 0]]),
+        "particles.angular_velocities",
+    );
+    // Two spheres of radius 1.9 and the skin need a box above 2 (3.8 + 0.3).
+    rejects_dem(
+        |d| d["particles"]["radius"] = json!([1.9, 1]),
+        "box.lengths",
+    );
+    rejects(
+        |d| d["force_field"]["granular"] = valid_dem()["force_field"]["granular"].clone(),
+        "force_field.granular",
+    );
+    rejects(
+        |d| d["particles"]["angular_velocities"] = json!([[0, 0, 0], [0, 0, 0], [0, 0, 0]]),
+        "particles.angular_velocities",
+    );
+}

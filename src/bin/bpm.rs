@@ -288,8 +288,9 @@ enum Command {
         #[arg(short, long)]
         output: PathBuf,
     },
-    /// Read a LAMMPS data file (atom_style bond) as a scene: molecule ids
-    /// become grains, reference lengths are the file's bond lengths.
+    /// Read a LAMMPS data file as a scene: atom_style bond (molecule ids
+    /// become grains, reference lengths are the file's bond lengths), or
+    /// atom_style sphere (DEM spheres: give --granular).
     Import {
         /// The data file.
         data: PathBuf,
@@ -303,11 +304,18 @@ enum Command {
         /// Seed recorded in the scene.
         #[arg(long, default_value_t = 1)]
         seed: u64,
+        /// The sphere material of a DEM data file, as the scene's
+        /// force_field.granular: inline JSON or a JSON file, e.g.
+        /// '{"youngs_modulus": 100, "poisson_ratio": 0.25, "restitution": 0.5,
+        /// "tangential_damping": 1, "sliding_friction": 0.3}'.
+        #[arg(long, value_name = "JSON")]
+        granular: Option<String>,
         /// Output scene (JSON).
         #[arg(short, long)]
         output: PathBuf,
     },
-    /// Write a scene as a LAMMPS data file (atom_style bond).
+    /// Write a scene as a LAMMPS data file (atom_style bond; atom_style
+    /// sphere for DEM spheres).
     Export {
         /// The scene (JSON).
         scene: PathBuf,
@@ -837,13 +845,26 @@ fn real_main() -> Result<()> {
             boundary,
             a_b,
             seed,
+            granular,
             output,
         } => {
             let periodic = parse_boundary(&boundary)?;
             if !a_b.is_finite() {
                 bail!("--a-b must be finite, got {a_b}");
             }
-            let scene = read_data_file(&data, periodic, ForceField::paper(a_b), seed)?;
+            let mut force_field = ForceField::paper(a_b);
+            if let Some(g) = granular {
+                let text = if g.trim_start().starts_with('{') {
+                    g
+                } else {
+                    std::fs::read_to_string(&g)
+                        .with_context(|| format!("reading --granular {g}"))?
+                };
+                force_field.granular = Some(serde_json::from_str(&text).with_context(|| {
+                    "--granular is not a sphere material (force_field.granular)"
+                })?);
+            }
+            let scene = read_data_file(&data, periodic, force_field, seed)?;
             write_scene(&output, &scene)?;
             let grains = scene
                 .particles

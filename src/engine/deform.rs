@@ -13,7 +13,8 @@ pub enum Deformation {
         /// True strain rate (1 / tau).
         true_strain_rate: f64,
     },
-    /// Simple shear by tilt: `tilt(t) = tilt0 + rate t L_perp`.
+    /// Simple shear by tilt: `tilt(t) = tilt0 + rate t L_perp`, the box's
+    /// lower corner fixed.
     SimpleShear {
         /// Which tilt factor: "xy", "xz" or "yz".
         tilt: TiltFactor,
@@ -76,7 +77,9 @@ impl Deformation {
             Deformation::SimpleShear { tilt, rate } => {
                 let mut tilts = start.tilt;
                 tilts[tilt.index()] += rate * elapsed * start.lengths[tilt.perpendicular()];
-                b.resize_about_centre(start.lengths, tilts);
+                // A tilt moves no corner of the box's lower face: the lower
+                // corner stays, as in LAMMPS's `fix deform`.
+                b.tilt = tilts;
             }
         }
         b

@@ -14,6 +14,7 @@
 
 pub mod bpm;
 pub mod deform;
+pub mod dem;
 pub mod external;
 pub mod integrator;
 pub mod model;
@@ -26,6 +27,7 @@ pub mod timers;
 
 pub use bpm::{BondTopology, BpmModel, BpmTerms};
 pub use deform::{Barostat, Deformation, TiltFactor};
+pub use dem::{ContactStore, DemModel};
 pub use external::{ActiveTether, FlatWall, SphereWall, Tether, WallSide};
 pub use integrator::Integrator;
 pub use model::{EnergyTerm, ForceInput, ForceOutput, ModelTally, ParticleModel, MAX_ENERGY_TERMS};

@@ -59,6 +59,13 @@ pub struct ForceInput<'a> {
     pub omega: Option<&'a [[f64; 3]]>,
     /// Particle radii (d).
     pub radius: &'a [f64],
+    /// Particle masses (m).
+    pub mass: &'a [f64],
+    /// The time step this evaluation completes, or `None` for an
+    /// evaluation that is not part of a step (a stage's set-up): models
+    /// with per-contact history advance it only on a step, as LAMMPS does
+    /// outside its set-up.
+    pub step_dt: Option<f64>,
     /// The pair list (empty when the model has no pair cutoff).
     pub neighbours: &'a NeighbourList,
     /// How many times positions were wrapped into the box; a change

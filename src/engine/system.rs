@@ -207,6 +207,18 @@ impl System {
     /// Zeroes and recomputes all forces for the stage's drivers at
     /// `elapsed` time into the stage.
     pub fn compute_forces(&mut self, drivers: &StageDrivers, elapsed: f64, tally: bool) {
+        self.evaluate(drivers, elapsed, tally, None);
+    }
+
+    /// [`System::compute_forces`] as the end of a step of `step_dt` (the
+    /// model advances its contact history) or, with `None`, outside one.
+    fn evaluate(
+        &mut self,
+        drivers: &StageDrivers,
+        elapsed: f64,
+        tally: bool,
+        step_dt: Option<f64>,
+    ) {
         self.particles.clear_forces();
         let p = &mut self.particles;
         let (omega, torque) = match &mut p.rotation {
@@ -219,6 +231,8 @@ impl System {
             v: &p.v,
             omega,
             radius: &p.radius,
+            mass: &p.mass,
+            step_dt,
             neighbours: &self.neighbours,
             wraps: self.wraps,
             threads: self.threads,
@@ -284,7 +298,7 @@ impl System {
         }
         self.update_neighbours(false);
         let elapsed = stage_step as f64 * dt;
-        self.compute_forces(drivers, elapsed, drivers.tally_at(stage_step));
+        self.evaluate(drivers, elapsed, drivers.tally_at(stage_step), Some(dt));
         self.step += 1;
         self.check_faults(dt)?;
         self.check_walls()?;

@@ -12,7 +12,7 @@ use super::{dot, sub, Separation};
 
 /// Coefficients of one bond type.
 #[repr(C)]
-#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct BondCoeffs {
     /// Spring stiffness `k_B` (k units).
@@ -21,6 +21,13 @@ pub struct BondCoeffs {
     pub a: f64,
     /// Damping `Gamma` (sqrt(k m) units); 0 switches velocity terms off.
     pub gamma: f64,
+}
+
+impl BondCoeffs {
+    /// Whether every coefficient is zero (no bond forces at all).
+    pub fn is_zero(&self) -> bool {
+        self.k == 0.0 && self.a == 0.0 && self.gamma == 0.0
+    }
 }
 
 /// One bond: two atom indices and a 1-based type.

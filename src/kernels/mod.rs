@@ -12,6 +12,7 @@
 mod bond;
 mod fault;
 mod geometry;
+mod granular;
 mod isa;
 mod pair;
 mod tally;
@@ -27,6 +28,10 @@ pub use fault::{
     LIMIT_MARGIN, MULTIBODY_LIMIT, OVERSTRETCHED_ABOVE, STIFFEST_MODE,
 };
 pub use geometry::{Separation, Unwrapped};
+pub use granular::{
+    granular_contact, restitution_prefactor, tsuji_prefactor, ContactForce, ContactHistory,
+    GranularCoeffs, GranularMaterial, NormalDamping, Sphere, SpringDashpotSlider, Twisting,
+};
 pub use isa::Isa;
 pub use pair::{pair_energy, pair_force_magnitude, pair_forces, PairCoeffs, PairInputs};
 pub use tally::{Ownership, Tally};

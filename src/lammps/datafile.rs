@@ -2,6 +2,7 @@
 //! `-var` values of the input templates in `lammps_inputs/` (embedded in
 //! the binary, written next to each run by [`super::templates`]).
 
+use crate::kernels::{GranularMaterial, NormalDamping, Twisting};
 pub use crate::scene::datafile::{type_masses, write_data_file};
 use crate::scene::load::reference_lengths;
 use crate::scene::Scene;
@@ -22,22 +23,36 @@ impl ScriptVars {
     /// [`write_templates`](super::templates::write_templates) returns).
     pub fn of(scene: &Scene, data: &str, newton: bool, inputs: &Path) -> Self {
         let ff = &scene.force_field;
-        let pair = ff.pair.unwrap_or(crate::kernels::PairCoeffs {
-            k: 0.0,
-            d: 1.0,
-            a: 0.0,
-            gamma: 0.0,
-        });
         let boundary: Vec<&str> = scene
             .simbox
             .periodic
             .iter()
             .map(|&p| if p { "p" } else { "f" })
             .collect();
+        let g = |v: f64| format!("{v:.17e}");
+        if let Some(material) = &ff.granular {
+            let vars = [
+                ("inputs", inputs.display().to_string()),
+                ("data", data.to_string()),
+                ("boundary", boundary.join(" ")),
+                ("newton", if newton { "on" } else { "off" }.to_string()),
+                ("granular", granular_pair_coeff(material)),
+                ("skin", g(ff.skin)),
+                ("integrator", "nve/sphere".to_string()),
+            ];
+            return Self {
+                vars: vars.into_iter().map(|(k, v)| (k.to_string(), v)).collect(),
+            };
+        }
+        let pair = ff.pair.unwrap_or(crate::kernels::PairCoeffs {
+            k: 0.0,
+            d: 1.0,
+            a: 0.0,
+            gamma: 0.0,
+        });
         let max_r0 = reference_lengths(scene).into_iter().fold(0.0, f64::max);
         // Ghosts must reach every bond partner: the longest bond plus the skin.
         let comm_cutoff = (max_r0 * 1.2).max(pair.d) + ff.skin;
-        let g = |v: f64| format!("{v:.17e}");
         let vars = [
             ("inputs", inputs.display().to_string()),
             ("data", data.to_string()),
@@ -57,6 +72,7 @@ impl ScriptVars {
             ("gP", g(pair.gamma)),
             ("skin", g(ff.skin)),
             ("commcut", g(comm_cutoff)),
+            ("integrator", "nve".to_string()),
         ];
         Self {
             vars: vars.into_iter().map(|(k, v)| (k.to_string(), v)).collect(),
@@ -70,6 +86,49 @@ impl ScriptVars {
             .flat_map(|(k, v)| ["-var".to_string(), k.clone(), v.clone()])
             .collect()
     }
+}
+
+/// The arguments of `pair_coeff * *` for spheres of `m` in LAMMPS's
+/// `pair_style granular`: `hertz/material E e nu damping tsuji tangential
+/// mindlin NULL x_gt mu_s` and the rolling and twisting models. The
+/// restitution form of the damping has no keyword in LAMMPS 2021 (it is
+/// written as `damping coeff_restitution`, which that LAMMPS refuses:
+/// [`crate::lammps::script`] stops such scenes first).
+pub fn granular_pair_coeff(m: &GranularMaterial) -> String {
+    let g = |v: f64| format!("{v:.17e}");
+    let damping = match m.damping {
+        NormalDamping::Tsuji => "tsuji",
+        NormalDamping::CoeffRestitution => "coeff_restitution",
+    };
+    let mut s = format!(
+        "hertz/material {} {} {} damping {damping} tangential mindlin NULL {} {}",
+        g(m.youngs_modulus),
+        g(m.restitution),
+        g(m.poisson_ratio),
+        g(m.tangential_damping),
+        g(m.sliding_friction)
+    );
+    if let Some(r) = &m.rolling {
+        s += &format!(
+            " rolling sds {} {} {}",
+            g(r.stiffness),
+            g(r.damping),
+            g(r.friction)
+        );
+    }
+    match &m.twisting {
+        Twisting::None => {}
+        Twisting::Marshall => s += " twisting marshall",
+        Twisting::Sds(t) => {
+            s += &format!(
+                " twisting sds {} {} {}",
+                g(t.stiffness),
+                g(t.damping),
+                g(t.friction)
+            )
+        }
+    }
+    s
 }
 
 /// The reference length of every bond as `tag_i tag_j r0` lines, read by

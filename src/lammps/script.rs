@@ -9,12 +9,17 @@
 //! harness handles the `run` lines itself (in chunks at position
 //! checkpoints) and reads the recorded rows back after each.
 
-use super::datafile::{type_masses, write_data_file, write_reference_lengths, ScriptVars};
+use super::datafile::{
+    granular_pair_coeff, type_masses, write_data_file, write_reference_lengths, ScriptVars,
+};
 use super::templates::{write_templates, FOLDER as TEMPLATE_FOLDER};
 use crate::engine::{Deformation, TiltFactor, WallSide};
-use crate::scene::observables::{energy_terms, lammps_energy_compute, stage_columns, Column};
+use crate::kernels::NormalDamping;
+use crate::scene::observables::{
+    energy_terms, lammps_energy_compute, rotates, stage_columns, Column,
+};
 use crate::scene::run::{random_velocities, stage_seed};
-use crate::scene::{ForceField, Scene, StageSpec};
+use crate::scene::{ForceField, ModelKind, Scene, StageSpec};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
@@ -148,7 +153,19 @@ fn check_supported(index: usize, stage: &StageSpec, scene: &Scene) -> Result<(),
             ));
         }
     }
-    if type_masses(scene).is_none() {
+    let dem = scene.model == ModelKind::Dem;
+    let restitution_form = |ff: &ForceField| {
+        ff.granular
+            .is_some_and(|m| m.damping == NormalDamping::CoeffRestitution)
+    };
+    if restitution_form(&scene.force_field)
+        || stage.force_field.as_ref().is_some_and(restitution_form)
+    {
+        return Err(unsupported(
+            "the restitution form of the DEM damping (LAMMPS 29Sep2021 has only `damping tsuji`)",
+        ));
+    }
+    if !dem && type_masses(scene).is_none() {
         return Err(unsupported(
             "masses that differ within a particle type (LAMMPS's atom_style bond has one mass per type)",
         ));
@@ -196,6 +213,12 @@ pub(crate) fn yes_no(flag: bool) -> &'static str {
 }
 
 fn force_field_commands(ff: &ForceField) -> Vec<String> {
+    if let Some(material) = &ff.granular {
+        return vec![
+            format!("pair_coeff      * * {}", granular_pair_coeff(material)),
+            format!("neighbor        {} bin", g(ff.skin)),
+        ];
+    }
     let pair = ff.pair.unwrap_or(crate::kernels::PairCoeffs {
         k: 0.0,
         d: 1.0,
@@ -318,10 +341,13 @@ pub fn write_driver(
     })?;
     let data = dir.join(format!("{tag}.data"));
     write(&data, &write_data_file(scene))?;
-    write(
-        Path::new(&format!("{}.r0", data.display())),
-        &write_reference_lengths(scene),
-    )?;
+    let dem = scene.model == ModelKind::Dem;
+    if !dem {
+        write(
+            Path::new(&format!("{}.r0", data.display())),
+            &write_reference_lengths(scene),
+        )?;
+    }
     let mut lines = vec![DriverLine::Command(format!(
         "# Scene `{}` (seed {}) through LAMMPS with bpm's styles; written by bpm {}.\n# By hand: lmp-bpm -in {tag}.in [-var aB -0.8 ...] (any variable of setup.in)",
         scene.description.replace('\n', " "),
@@ -337,7 +363,8 @@ pub fn write_driver(
             format!("variable        {name} index \"{value}\""),
         );
     }
-    cmd(&mut lines, "include         ${inputs}/setup.in".into());
+    let setup = if dem { "setup_dem.in" } else { "setup.in" };
+    cmd(&mut lines, format!("include         ${{inputs}}/{setup}"));
     cmd(
         &mut lines,
         "# What the recorded columns measure (declared in src/scene/observables.rs)".into(),
@@ -353,6 +380,12 @@ pub fn write_driver(
         );
     }
     cmd(&mut lines, "compute         bpm_ke all ke".into());
+    if rotates(scene.model) {
+        cmd(
+            &mut lines,
+            "compute         bpm_erotate all erotate/sphere".into(),
+        );
+    }
     let triclinic = needs_triclinic(scene);
     let n = scene.particles.positions.len();
     let mut stages = Vec::with_capacity(scene.stages.len());
@@ -371,6 +404,9 @@ pub fn write_driver(
         }
         if stage.zero_velocities {
             cmd(&mut lines, "velocity        all set 0 0 0".into());
+            if rotates(scene.model) {
+                cmd(&mut lines, "set             group all omega 0 0 0".into());
+            }
         }
         if let Some(init) = &stage.set_velocities {
             let file = dir.join(format!("{tag}.stage{i}.velocities"));
@@ -400,7 +436,7 @@ pub fn write_driver(
         }
         let external = external_commands(stage);
         lines.extend(external.variables.into_iter().map(DriverLine::Command));
-        let columns = stage_columns(energy_terms(scene.model), stage);
+        let columns = stage_columns(energy_terms(scene.model), rotates(scene.model), stage);
         let template = match &stage.deformation {
             None if stage.barostat.is_some() => {
                 let b = stage.barostat.as_ref().expect("checked by the guard");

@@ -1,10 +1,14 @@
-//! LAMMPS data files (`atom_style bond`) in and out, so users can bring
-//! their own grains and packings and take scenes to LAMMPS.
+//! LAMMPS data files (`atom_style bond`, and `atom_style sphere` for DEM)
+//! in and out, so users can bring their own grains and packings and take
+//! scenes to LAMMPS.
 //!
 //! Reading accepts what LAMMPS's `write_data` produces: any header lines
 //! (counts, box, tilt; others are skipped), coefficient sections (skipped:
 //! the scene's force field is set separately), `Masses`, `Atoms` (`id mol
-//! type x y z`, optional image flags `ix iy iz`), `Velocities` and `Bonds`,
+//! type x y z`, optional image flags `ix iy iz`; or, for spheres, `id type
+//! diameter density x y z [ix iy iz]`, recognised by the `# sphere` comment
+//! or by its 7 or 10 columns), `Velocities` (spheres: with angular
+//! velocities `wx wy wz`) and `Bonds`,
 //! atom ids in any order and not necessarily 1..N. Molecule ids become
 //! grain ids (the distinct molecule ids in increasing order become grains
 //! 0, 1, ...). Reference lengths are the bond lengths in the file (minimum
@@ -42,6 +46,8 @@ struct Atom {
     mol: i64,
     kind: u32,
     x: [f64; 3],
+    /// Radius and mass of a sphere (`atom_style sphere`).
+    sphere: Option<(f64, f64)>,
 }
 
 /// Reads a data file as a scene with `boundary` periodicity (data files do
@@ -72,6 +78,7 @@ fn parse(
         line,
         reason,
     };
+    let raw: Vec<&str> = text.lines().collect();
     let lines: Vec<(usize, &str)> = text
         .lines()
         .enumerate()
@@ -159,6 +166,8 @@ fn parse(
     let mut masses: BTreeMap<u32, f64> = BTreeMap::new();
     let mut atoms: Vec<Atom> = Vec::new();
     let mut velocities: BTreeMap<i64, [f64; 3]> = BTreeMap::new();
+    let mut angular: BTreeMap<i64, [f64; 3]> = BTreeMap::new();
+    let mut sphere = false;
     let mut bond_ids: Vec<(usize, i64, i64)> = Vec::new();
     // Sections: a keyword line, a blank line, then data lines until the
     // next keyword.
@@ -200,30 +209,69 @@ fn parse(
                 }
             }
             "Atoms" => {
-                if let Some(style) = l.split_whitespace().nth(1) {
-                    if style != "bond" && style != "molecular" {
+                let style = raw[k - 1].split('#').nth(1).map(str::trim);
+                let width = body
+                    .first()
+                    .map_or(0, |(_, l)| l.split_whitespace().count());
+                sphere = match style {
+                    Some("sphere") => true,
+                    Some("bond") | Some("molecular") => false,
+                    Some(style) => {
                         return Err(bad(
                             k,
                             format!(
-                                "atom style `{style}`: only `bond` (id mol type x y z) is read"
+                                "atom style `{style}`: only `bond` (id mol type x y z) and `sphere` (id type diameter density x y z) are read"
                             ),
-                        ));
+                        ))
                     }
-                }
+                    None => width == 7 || width == 10,
+                };
+                let (columns, images) = if sphere { (7, 10) } else { (6, 9) };
                 for &(k, l) in &body {
                     let w: Vec<&str> = l.split_whitespace().collect();
-                    if w.len() != 6 && w.len() != 9 {
-                        return Err(bad(k, format!("an atom line needs `id mol type x y z [ix iy iz]`, found {} values", w.len())));
+                    if w.len() != columns && w.len() != images {
+                        let expected = if sphere {
+                            "id type diameter density x y z [ix iy iz]"
+                        } else {
+                            "id mol type x y z [ix iy iz]"
+                        };
+                        return Err(bad(
+                            k,
+                            format!("an atom line needs `{expected}`, found {} values", w.len()),
+                        ));
                     }
-                    let kind = integer(k, w[2])?;
+                    // Spheres have no molecule column: each is its own grain.
+                    let (mol, w) = if sphere {
+                        (integer(k, w[0])?, [&w[..2], &w[4..]].concat())
+                    } else {
+                        (integer(k, w[1])?, [&w[..1], &w[2..]].concat())
+                    };
+                    let kind = integer(k, w[1])?;
                     if kind < 1 {
                         return Err(bad(k, format!("atom type {kind}: types count from 1")));
                     }
-                    let x = [number(k, w[3])?, number(k, w[4])?, number(k, w[5])?];
-                    let image = if w.len() == 9 {
-                        [integer(k, w[6])?, integer(k, w[7])?, integer(k, w[8])?]
+                    let x = [number(k, w[2])?, number(k, w[3])?, number(k, w[4])?];
+                    let image = if w.len() == 8 {
+                        [integer(k, w[5])?, integer(k, w[6])?, integer(k, w[7])?]
                     } else {
                         [0; 3]
+                    };
+                    let sphere = if sphere {
+                        let line: Vec<&str> = l.split_whitespace().collect();
+                        let (diameter, density) = (number(k, line[2])?, number(k, line[3])?);
+                        if diameter <= 0.0 || density <= 0.0 {
+                            return Err(bad(
+                                k,
+                                format!(
+                                    "diameter {diameter} and density {density} must be positive"
+                                ),
+                            ));
+                        }
+                        let r = 0.5 * diameter;
+                        // LAMMPS's mass of a sphere, formed in its order.
+                        Some((r, density * (4.0 * std::f64::consts::PI / 3.0 * r * r * r)))
+                    } else {
+                        None
                     };
                     // Positions whole: grains crossing periodic faces are
                     // unwrapped through their image flags.
@@ -237,9 +285,10 @@ fn parse(
                     ];
                     atoms.push(Atom {
                         id: integer(k, w[0])?,
-                        mol: integer(k, w[1])?,
+                        mol,
                         kind: kind as u32,
                         x,
+                        sphere,
                     });
                 }
             }
@@ -253,6 +302,11 @@ fn parse(
                     let v = [number(k, w[1])?, number(k, w[2])?, number(k, w[3])?];
                     if velocities.insert(id, v).is_some() {
                         return Err(bad(k, format!("atom {id} has two velocities")));
+                    }
+                    // Spheres carry their angular velocity too.
+                    if w.len() >= 7 {
+                        let omega = [number(k, w[4])?, number(k, w[5])?, number(k, w[6])?];
+                        angular.insert(id, omega);
                     }
                 }
             }
@@ -316,9 +370,12 @@ fn parse(
     let mass_of = |t: u32| masses.get(&t).copied();
     let mass: Vec<f64> = atoms
         .iter()
-        .map(|a| mass_of(a.kind).unwrap_or(1.0))
+        .map(|a| {
+            a.sphere
+                .map_or_else(|| mass_of(a.kind).unwrap_or(1.0), |(_, m)| m)
+        })
         .collect();
-    if !masses.is_empty() {
+    if !masses.is_empty() && !sphere {
         if let Some(a) = atoms.iter().find(|a| mass_of(a.kind).is_none()) {
             return Err(bad(
                 0,
@@ -335,10 +392,44 @@ fn parse(
             .collect();
         Some(v.ok_or_else(|| bad(0, "the Velocities section does not list every atom".into()))?)
     };
+    let angular_velocities = if angular.is_empty() {
+        None
+    } else {
+        let w: Option<Vec<[f64; 3]>> = atoms.iter().map(|a| angular.get(&a.id).copied()).collect();
+        Some(w.ok_or_else(|| {
+            bad(
+                0,
+                "the Velocities section gives angular velocities for some atoms only".into(),
+            )
+        })?)
+    };
+    if sphere && !pairs.is_empty() {
+        return Err(bad(0, "a sphere (DEM) data file has no bonds".into()));
+    }
+    let force_field = match (sphere, force_field.granular) {
+        (true, Some(material)) => ForceField::dem(material),
+        (true, None) => {
+            return Err(bad(
+                0,
+                "this is a DEM data file (atom_style sphere): give the sphere material (`bpm import --granular`)".into(),
+            ))
+        }
+        (false, Some(_)) => {
+            return Err(bad(
+                0,
+                "a sphere material was given, but this is a bonded-particle data file (atom_style bond)".into(),
+            ))
+        }
+        (false, None) => force_field,
+    };
     let uniform = mass.iter().all(|&m| m == mass[0]);
     let mut scene = Scene {
         version: super::SCENE_VERSION,
-        model: ModelKind::Bpm,
+        model: if sphere {
+            ModelKind::Dem
+        } else {
+            ModelKind::Bpm
+        },
         description: format!("imported from {}", path.display()),
         seed,
         simbox: BoxSpec {
@@ -350,13 +441,19 @@ fn parse(
         particles: Particles {
             positions: atoms.iter().map(|a| a.x).collect(),
             velocities,
-            grain: Some(grain),
+            angular_velocities,
+            grain: (!sphere).then_some(grain),
             mass: if uniform {
                 Mass::Uniform(mass.first().copied().unwrap_or(1.0))
             } else {
                 Mass::PerParticle(mass)
             },
-            radius: None,
+            radius: sphere.then(|| {
+                atoms
+                    .iter()
+                    .map(|a| a.sphere.map_or(0.5, |s| s.0))
+                    .collect()
+            }),
             kind: Some(atoms.iter().map(|a| a.kind).collect()),
         },
         bonds: Bonds { pairs, r0: None },
@@ -365,8 +462,10 @@ fn parse(
         provenance: serde_json::json!({"imported_from": path.display().to_string()}),
     };
     // The reference: the bond lengths in the file.
-    let r0 = super::load::reference_lengths(&scene);
-    scene.bonds.r0 = Some(r0);
+    if !sphere {
+        let r0 = super::load::reference_lengths(&scene);
+        scene.bonds.r0 = Some(r0);
+    }
     Ok(scene)
 }
 
@@ -404,34 +503,20 @@ pub fn type_masses(scene: &Scene) -> Option<Vec<f64>> {
 /// Masses are per type ([`type_masses`]; the harness refuses scenes where
 /// that fails, and here the first particle's mass stands in).
 pub fn write_data_file(scene: &Scene) -> String {
-    let b = &scene.simbox;
+    if scene.model == ModelKind::Dem {
+        return write_sphere_data_file(scene);
+    }
     let pa = &scene.particles;
     let n = pa.positions.len();
-    let mut s = String::new();
-    let _ = writeln!(
-        s,
-        "LAMMPS data file written by bpm {} (scene seed {})\n",
-        crate::VERSION,
-        scene.seed
-    );
     let masses = type_masses(scene).unwrap_or_else(|| vec![pa.mass.values(n)[0]]);
-    let _ = writeln!(
-        s,
-        "{n} atoms\n{} bonds\n{} atom types\n1 bond types\n",
-        scene.bonds.pairs.len(),
-        masses.len()
+    let mut s = header(
+        scene,
+        &format!(
+            "{n} atoms\n{} bonds\n{} atom types\n1 bond types",
+            scene.bonds.pairs.len(),
+            masses.len()
+        ),
     );
-    let hi = |d: usize| b.lo[d] + b.lengths[d];
-    let _ = writeln!(s, "{:.17e} {:.17e} xlo xhi", b.lo[0], hi(0));
-    let _ = writeln!(s, "{:.17e} {:.17e} ylo yhi", b.lo[1], hi(1));
-    let _ = writeln!(s, "{:.17e} {:.17e} zlo zhi", b.lo[2], hi(2));
-    if needs_triclinic(scene) {
-        let _ = writeln!(
-            s,
-            "{:.17e} {:.17e} {:.17e} xy xz yz",
-            b.tilt[0], b.tilt[1], b.tilt[2]
-        );
-    }
     let _ = writeln!(s, "\nMasses\n");
     for (t, m) in masses.iter().enumerate() {
         let _ = writeln!(s, "{} {m:.17e}", t + 1);
@@ -460,6 +545,86 @@ pub fn write_data_file(scene: &Scene) -> String {
         let _ = writeln!(s, "\nBonds\n");
         for (k, [i, j]) in scene.bonds.pairs.iter().enumerate() {
             let _ = writeln!(s, "{} 1 {} {}", k + 1, i + 1, j + 1);
+        }
+    }
+    s
+}
+
+/// Header and box lines of a data file for `scene` with `counts` (the
+/// lines after the title, e.g. `"8 atoms\n1 atom types"`).
+fn header(scene: &Scene, counts: &str) -> String {
+    let b = &scene.simbox;
+    let mut s = String::new();
+    let _ = writeln!(
+        s,
+        "LAMMPS data file written by bpm {} (scene seed {})\n\n{counts}\n",
+        crate::VERSION,
+        scene.seed
+    );
+    let hi = |d: usize| b.lo[d] + b.lengths[d];
+    let _ = writeln!(s, "{:.17e} {:.17e} xlo xhi", b.lo[0], hi(0));
+    let _ = writeln!(s, "{:.17e} {:.17e} ylo yhi", b.lo[1], hi(1));
+    let _ = writeln!(s, "{:.17e} {:.17e} zlo zhi", b.lo[2], hi(2));
+    if needs_triclinic(scene) {
+        let _ = writeln!(
+            s,
+            "{:.17e} {:.17e} {:.17e} xy xz yz",
+            b.tilt[0], b.tilt[1], b.tilt[2]
+        );
+    }
+    s
+}
+
+/// `4 pi / 3`, formed as LAMMPS forms it when it turns a density into a
+/// mass (`(4 pi / 3) r^3 rho`).
+const SPHERE_VOLUME_FACTOR: f64 = 4.0 * std::f64::consts::PI / 3.0;
+
+/// The data file text of a DEM scene (`atom_style sphere`): atoms (id,
+/// type, diameter, density, x y z), and velocities with angular velocities.
+/// LAMMPS keeps a mass per sphere, made from the density; the density
+/// written is the scene's mass over the sphere's volume, so LAMMPS's mass
+/// matches the scene's to round-off.
+fn write_sphere_data_file(scene: &Scene) -> String {
+    let pa = &scene.particles;
+    let n = pa.positions.len();
+    let ntypes = pa
+        .kind
+        .as_ref()
+        .map_or(1, |t| t.iter().copied().max().unwrap_or(1));
+    let mut s = header(scene, &format!("{n} atoms\n{ntypes} atom types"));
+    let mass = pa.mass.values(n);
+    let _ = writeln!(s, "\nAtoms # sphere\n");
+    for (i, x) in pa.positions.iter().enumerate() {
+        let kind = pa.kind.as_ref().map_or(1, |t| t[i]);
+        let r = pa.radius.as_ref().map_or(0.5, |r| r[i]);
+        let density = mass[i] / (SPHERE_VOLUME_FACTOR * r * r * r);
+        let _ = writeln!(
+            s,
+            "{} {kind} {:.17e} {:.17e} {:.17e} {:.17e} {:.17e}",
+            i + 1,
+            2.0 * r,
+            density,
+            x[0],
+            x[1],
+            x[2]
+        );
+    }
+    if pa.velocities.is_some() || pa.angular_velocities.is_some() {
+        let _ = writeln!(s, "\nVelocities\n");
+        for i in 0..n {
+            let v = pa.velocities.as_ref().map_or([0.0; 3], |v| v[i]);
+            let w = pa.angular_velocities.as_ref().map_or([0.0; 3], |w| w[i]);
+            let _ = writeln!(
+                s,
+                "{} {:.17e} {:.17e} {:.17e} {:.17e} {:.17e} {:.17e}",
+                i + 1,
+                v[0],
+                v[1],
+                v[2],
+                w[0],
+                w[1],
+                w[2]
+            );
         }
     }
     s

@@ -2,7 +2,7 @@
 
 use super::model::{ModelKind, Scene};
 use super::validate::{simbox_of, validate, SceneError};
-use crate::engine::{BondTopology, BpmModel, ParticleModel, Particles, System};
+use crate::engine::{BondTopology, BpmModel, DemModel, ParticleModel, Particles, System};
 use crate::kernels::Separation;
 use std::path::Path;
 
@@ -68,6 +68,16 @@ pub fn model_of(scene: &Scene) -> Box<dyn ParticleModel> {
                 bonds,
             ))
         }
+        ModelKind::Dem => {
+            let radius = particles_of(scene).radius;
+            let max_radius = radius.iter().copied().fold(0.0, f64::max);
+            // Validation requires the material for this model.
+            let material = scene
+                .force_field
+                .granular
+                .expect("a validated dem scene has force_field.granular");
+            Box::new(DemModel::new(material, max_radius))
+        }
     }
 }
 
@@ -87,6 +97,12 @@ pub fn particles_of(scene: &Scene) -> Particles {
     }
     if let Some(r) = &pa.radius {
         p.radius = r.clone();
+    }
+    if let Some(w) = &pa.angular_velocities {
+        p.enable_rotation();
+        if let Some(rotation) = &mut p.rotation {
+            rotation.omega = w.clone();
+        }
     }
     p.mass = pa.mass.values(n);
     p
@@ -116,6 +132,9 @@ pub fn final_scene(scene: &Scene, sys: &System) -> Scene {
     fin.version = super::SCENE_VERSION;
     fin.particles.positions = sys.particles.x.clone();
     fin.particles.velocities = Some(sys.particles.v.clone());
+    if let Some(rotation) = &sys.particles.rotation {
+        fin.particles.angular_velocities = Some(rotation.omega.clone());
+    }
     fin.simbox.lo = sys.simbox.lo;
     fin.simbox.lengths = sys.simbox.lengths;
     fin.simbox.tilt = sys.simbox.tilt;

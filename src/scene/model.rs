@@ -4,7 +4,7 @@
 //! harness turns it into a data file and an input script.
 
 use crate::engine::{Barostat, Deformation, FlatWall, SphereWall, Tether};
-use crate::kernels::{BondCoeffs, PairCoeffs};
+use crate::kernels::{BondCoeffs, GranularMaterial, PairCoeffs};
 use serde::{Deserialize, Serialize};
 
 /// The scene format this build writes. Version 1 (files without a
@@ -23,6 +23,9 @@ pub enum ModelKind {
     /// Bonded particle model with the multibody volume term.
     #[default]
     Bpm,
+    /// DEM spheres: one rigid sphere per grain, Hertz-Mindlin contacts
+    /// with friction (`force_field.granular`), integrated with rotation.
+    Dem,
 }
 
 /// A complete run: particles, bonds, box, force field, protocol, seed.
@@ -81,6 +84,9 @@ pub struct Particles {
     /// Velocities (d / tau); default all zero.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub velocities: Option<Vec<[f64; 3]>>,
+    /// Angular velocities (1 / tau) of DEM spheres; default all zero.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub angular_velocities: Option<Vec<[f64; 3]>>,
     /// Grain id per particle; default all 0.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub grain: Option<Vec<u32>>,
@@ -135,11 +141,14 @@ pub struct Bonds {
     pub r0: Option<Vec<f64>>,
 }
 
-/// Interaction parameters.
+/// Interaction parameters: bonds and contacts of the bonded particle
+/// model, or the sphere material of DEM.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct ForceField {
-    /// Bond coefficients `k`, `a` (a_B), `gamma`.
+    /// Bond coefficients `k`, `a` (a_B), `gamma`; default all zero (no
+    /// bond forces), as a DEM scene leaves them.
+    #[serde(default, skip_serializing_if = "BondCoeffs::is_zero")]
     pub bond: BondCoeffs,
     /// Pair coefficients `k`, `d`, `a` (a_P), `gamma`; absent for no contacts.
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -152,6 +161,9 @@ pub struct ForceField {
     /// (docs/model.md). Default off, the paper's model.
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub zero_net_multibody: bool,
+    /// The sphere material and friction of model `dem`; absent for `bpm`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub granular: Option<GranularMaterial>,
 }
 
 fn default_skin() -> f64 {
@@ -175,6 +187,18 @@ impl ForceField {
             }),
             skin: default_skin(),
             zero_net_multibody: false,
+            granular: None,
+        }
+    }
+
+    /// DEM spheres of `material`, no bonds, the default skin.
+    pub fn dem(material: GranularMaterial) -> Self {
+        Self {
+            bond: BondCoeffs::default(),
+            pair: None,
+            skin: default_skin(),
+            zero_net_multibody: false,
+            granular: Some(material),
         }
     }
 }
@@ -196,7 +220,8 @@ pub struct StageSpec {
     /// Sets random velocities at the stage start.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub set_velocities: Option<VelocityInit>,
-    /// Zeroes velocities at the stage start.
+    /// Zeroes velocities (and the angular velocities of spheres) at the
+    /// stage start.
     #[serde(default)]
     pub zero_velocities: bool,
     /// Makes the current bond lengths the reference lengths at the stage start.

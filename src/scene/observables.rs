@@ -31,6 +31,8 @@ pub enum Quantity {
     ModelEnergy(usize),
     /// Translational kinetic energy.
     Kinetic,
+    /// Rotational kinetic energy of spheres.
+    Rotational,
     /// Energy of walls and tether.
     External,
     /// Normal force on flat wall `w` (k d), >= 0.
@@ -63,11 +65,11 @@ pub fn lammps_energy_compute(column: &str) -> String {
     format!("bpm_{column}")
 }
 
-/// The columns of a stage of a model with energy terms `terms`: step,
-/// time, box, stress, pressure, the model's energies, kinetic and external
-/// energy, then each flat wall's force and position and the sphere wall's
-/// force.
-pub fn stage_columns(terms: &[EnergyTerm], stage: &StageSpec) -> Vec<Column> {
+/// The columns of a stage of a model with energy terms `terms` whose
+/// particles rotate or not: step, time, box, stress, pressure, the model's
+/// energies, kinetic (and rotational) and external energy, then each flat
+/// wall's force and position and the sphere wall's force.
+pub fn stage_columns(terms: &[EnergyTerm], rotational: bool, stage: &StageSpec) -> Vec<Column> {
     let col = |name: &str, quantity, observable: &str, lammps: Option<String>| Column {
         name: name.to_string(),
         quantity,
@@ -103,6 +105,14 @@ pub fn stage_columns(terms: &[EnergyTerm], stage: &StageSpec) -> Vec<Column> {
         "kinetic energy",
         Some("c_bpm_ke".into()),
     ));
+    if rotational {
+        c.push(col(
+            "e_rotational",
+            Quantity::Rotational,
+            "kinetic energy",
+            Some("c_bpm_erotate".into()),
+        ));
+    }
     c.push(col(
         "e_external",
         Quantity::External,
@@ -138,7 +148,7 @@ pub fn stage_columns(terms: &[EnergyTerm], stage: &StageSpec) -> Vec<Column> {
 /// stress, pressure, energies, step, time), by name.
 pub fn standard_column(name: &str) -> Option<Column> {
     let plain = StageSpec::hold("", 0, 0.1);
-    stage_columns(&crate::engine::bpm::ENERGY_TERMS, &plain)
+    stage_columns(&crate::engine::bpm::ENERGY_TERMS, false, &plain)
         .into_iter()
         .find(|c| c.name == name)
 }
@@ -162,6 +172,7 @@ impl Column {
             Quantity::Pressure => (pressure[0] + pressure[1] + pressure[2]) / 3.0,
             Quantity::ModelEnergy(k) => r.interactions.terms[k].energy,
             Quantity::Kinetic => sys.kinetic_energy(),
+            Quantity::Rotational => sys.particles.rotational_energy(),
             Quantity::External => r.external_energy,
             Quantity::WallForce(w) => r.wall_forces[w],
             Quantity::WallPosition(w) => r.wall_positions[w],
@@ -181,11 +192,19 @@ pub fn native_row(columns: &[Column], sys: &System) -> Vec<f64> {
     columns.iter().map(|c| c.native_value(sys, &p)).collect()
 }
 
+/// Whether a scene's model rotates its particles (what its
+/// [`crate::engine::ParticleModel::rotational`] returns), without building
+/// the model.
+pub fn rotates(model: super::model::ModelKind) -> bool {
+    model == super::model::ModelKind::Dem
+}
+
 /// The energy terms of a scene's model (what its
 /// [`crate::engine::ParticleModel::energy_terms`] returns), without
 /// building the model.
 pub fn energy_terms(model: super::model::ModelKind) -> &'static [EnergyTerm] {
     match model {
         super::model::ModelKind::Bpm => &crate::engine::bpm::ENERGY_TERMS,
+        super::model::ModelKind::Dem => &[],
     }
 }

@@ -3,7 +3,7 @@
 use super::model::{Scene, StageSpec, VelocityInit};
 use super::observables::{column_names, native_row, stage_columns, Column};
 use super::trajectory::{DumpWriter, Frame, ThermoWriter, TrajectoryError};
-use crate::engine::{ActiveTether, BpmModel, EngineError, Stage, StageDrivers, System};
+use crate::engine::{ActiveTether, BpmModel, DemModel, EngineError, Stage, StageDrivers, System};
 use indicatif::{ProgressBar, ProgressStyle};
 use rand::{Rng, SeedableRng};
 use serde::{Deserialize, Serialize};
@@ -269,12 +269,16 @@ pub fn run_stage(
     let builds_before = sys.neighbours.builds;
     let n = sys.len();
     if let Some(ff) = &spec.force_field {
-        let bpm = sys
-            .model_as_mut::<BpmModel>()
-            .ok_or(EngineError::Unsupported {
-                what: "a force-field change of a model other than bpm",
-            })?;
-        bpm.set_coefficients(ff.bond, ff.pair, ff.zero_net_multibody, n);
+        if let Some(bpm) = sys.model_as_mut::<BpmModel>() {
+            bpm.set_coefficients(ff.bond, ff.pair, ff.zero_net_multibody, n);
+        } else if let (Some(dem), Some(material)) = (sys.model_as_mut::<DemModel>(), ff.granular) {
+            dem.set_material(material);
+        } else {
+            return Err(EngineError::Unsupported {
+                what: "this force-field change (validation checks the model's fields)",
+            }
+            .into());
+        }
         sys.skin = ff.skin;
     }
     if spec.reset_reference {
@@ -287,6 +291,9 @@ pub fn run_stage(
     }
     if spec.zero_velocities {
         sys.particles.v.fill([0.0; 3]);
+        if let Some(rotation) = &mut sys.particles.rotation {
+            rotation.omega.fill([0.0; 3]);
+        }
     }
     if let Some(init) = &spec.set_velocities {
         sys.particles.v = random_velocities(n, init, stage_seed(seed, index));
@@ -308,7 +315,7 @@ pub fn run_stage(
     };
     let stage_box = sys.simbox.clone();
     sys.setup(&drivers);
-    let columns = stage_columns(sys.model.energy_terms(), spec);
+    let columns = stage_columns(sys.model.energy_terms(), sys.model.rotational(), spec);
     if let Some(t) = out_files.thermo() {
         t.begin_stage(index, &spec.name, &column_names(&columns))?;
     }

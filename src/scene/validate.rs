@@ -1,8 +1,8 @@
 //! Checks a scene once, at load, with errors that name the field.
 
-use super::model::{ForceField, Mass, Scene, StageSpec, SCENE_VERSION};
+use super::model::{ForceField, Mass, ModelKind, Scene, StageSpec, SCENE_VERSION};
 use crate::engine::SimBox;
-use crate::kernels::Separation;
+use crate::kernels::{GranularMaterial, Separation, SpringDashpotSlider, Twisting};
 
 /// Why a scene could not be used.
 #[derive(Debug, thiserror::Error)]
@@ -80,7 +80,67 @@ pub fn simbox_of(scene: &Scene) -> SimBox {
     }
 }
 
-fn check_force_field(prefix: &str, ff: &ForceField) -> Result<(), SceneError> {
+fn check_granular(prefix: &str, m: &GranularMaterial) -> Result<(), SceneError> {
+    positive(&format!("{prefix}.youngs_modulus"), m.youngs_modulus)?;
+    let nu = finite(&format!("{prefix}.poisson_ratio"), m.poisson_ratio)?;
+    if !(nu > -1.0 && nu <= 0.5) {
+        return Err(invalid(
+            format!("{prefix}.poisson_ratio"),
+            format!("must lie in (-1, 1/2] (got {nu})"),
+        ));
+    }
+    let e = finite(&format!("{prefix}.restitution"), m.restitution)?;
+    if !(e > 0.0 && e <= 1.0) {
+        return Err(invalid(
+            format!("{prefix}.restitution"),
+            format!("must lie in (0, 1] (got {e})"),
+        ));
+    }
+    non_negative(
+        &format!("{prefix}.tangential_damping"),
+        m.tangential_damping,
+    )?;
+    non_negative(&format!("{prefix}.sliding_friction"), m.sliding_friction)?;
+    let slider = |name: &str, sds: &SpringDashpotSlider| -> Result<(), SceneError> {
+        positive(&format!("{prefix}.{name}.stiffness"), sds.stiffness)?;
+        non_negative(&format!("{prefix}.{name}.damping"), sds.damping)?;
+        non_negative(&format!("{prefix}.{name}.friction"), sds.friction)?;
+        Ok(())
+    };
+    if let Some(r) = &m.rolling {
+        slider("rolling", r)?;
+    }
+    if let Twisting::Sds(t) = &m.twisting {
+        slider("twisting.sds", t)?;
+    }
+    Ok(())
+}
+
+fn check_force_field(prefix: &str, ff: &ForceField, model: ModelKind) -> Result<(), SceneError> {
+    match (model, &ff.granular) {
+        (ModelKind::Dem, None) => {
+            return Err(invalid(
+                format!("{prefix}.granular"),
+                "model dem needs the sphere material (youngs_modulus, poisson_ratio, restitution, tangential_damping, sliding_friction)",
+            ))
+        }
+        (ModelKind::Dem, Some(m)) => {
+            check_granular(&format!("{prefix}.granular"), m)?;
+            if !ff.bond.is_zero() || ff.pair.is_some() || ff.zero_net_multibody {
+                return Err(invalid(
+                    prefix,
+                    "model dem has no bonds and no bpm contacts: leave out bond, pair and zero_net_multibody",
+                ));
+            }
+        }
+        (ModelKind::Bpm, Some(_)) => {
+            return Err(invalid(
+                format!("{prefix}.granular"),
+                "belongs to model dem; this scene is model bpm (set \"model\": \"dem\" for spheres)",
+            ))
+        }
+        (ModelKind::Bpm, None) => {}
+    }
     non_negative(&format!("{prefix}.bond.k"), ff.bond.k)?;
     finite(&format!("{prefix}.bond.a"), ff.bond.a)?;
     non_negative(&format!("{prefix}.bond.gamma"), ff.bond.gamma)?;
@@ -96,6 +156,16 @@ fn check_force_field(prefix: &str, ff: &ForceField) -> Result<(), SceneError> {
 
 /// The largest pair interaction range plus skin over the scene's force fields.
 fn max_list_cutoff(scene: &Scene) -> (f64, &'static str) {
+    if scene.model == ModelKind::Dem {
+        let radius = scene.particles.radius.as_deref().unwrap_or(&[0.5]);
+        let diameter = 2.0 * radius.iter().copied().fold(0.0, f64::max);
+        let skin = scene
+            .stages
+            .iter()
+            .filter_map(|s| s.force_field.as_ref().map(|ff| ff.skin))
+            .fold(scene.force_field.skin, f64::max);
+        return (diameter + skin, "the largest sphere diameter + skin");
+    }
     let of = |ff: &ForceField| ff.pair.map_or(0.0, |p| p.d + ff.skin);
     let mut cut = of(&scene.force_field);
     for s in &scene.stages {
@@ -106,12 +176,24 @@ fn max_list_cutoff(scene: &Scene) -> (f64, &'static str) {
     (cut, "force_field.pair.d + skin")
 }
 
-fn check_stage(i: usize, stage: &StageSpec, simbox: &SimBox, n: usize) -> Result<(), SceneError> {
+fn check_stage(
+    i: usize,
+    stage: &StageSpec,
+    simbox: &SimBox,
+    n: usize,
+    model: ModelKind,
+) -> Result<(), SceneError> {
     let p = format!("stages[{i}]");
     positive(&format!("{p}.dt"), stage.dt)?;
     non_negative(&format!("{p}.viscous"), stage.viscous)?;
     if let Some(ff) = &stage.force_field {
-        check_force_field(&format!("{p}.force_field"), ff)?;
+        check_force_field(&format!("{p}.force_field"), ff, model)?;
+    }
+    if model == ModelKind::Dem && stage.reset_reference {
+        return Err(invalid(
+            format!("{p}.reset_reference"),
+            "model dem has no bonds to reset",
+        ));
     }
     if let Some(vi) = &stage.set_velocities {
         non_negative(&format!("{p}.set_velocities.rms_speed"), vi.rms_speed)?;
@@ -290,10 +372,26 @@ pub fn validate(scene: &Scene) -> Result<(), SceneError> {
         }
         finite_rows("particles.velocities", v)?;
     }
+    if let Some(w) = &pa.angular_velocities {
+        if scene.model != ModelKind::Dem {
+            return Err(invalid(
+                "particles.angular_velocities",
+                "only DEM spheres rotate (model dem)",
+            ));
+        }
+        per_particle("particles.angular_velocities", w.len())?;
+        finite_rows("particles.angular_velocities", w)?;
+    }
     if let Some(g) = &pa.grain {
         per_particle("particles.grain", g.len())?;
     }
-    check_force_field("force_field", &scene.force_field)?;
+    check_force_field("force_field", &scene.force_field, scene.model)?;
+    if scene.model == ModelKind::Dem && !scene.bonds.pairs.is_empty() {
+        return Err(invalid(
+            "bonds.pairs",
+            "model dem has no bonds (each sphere is a whole grain)",
+        ));
+    }
 
     let faces = simbox.face_distances();
     let half_face = (0..3)
@@ -356,7 +454,7 @@ pub fn validate(scene: &Scene) -> Result<(), SceneError> {
         return Err(invalid("stages", "is empty: nothing to run"));
     }
     for (i, stage) in scene.stages.iter().enumerate() {
-        check_stage(i, stage, &simbox, n)?;
+        check_stage(i, stage, &simbox, n, scene.model)?;
     }
     Ok(())
 }

@@ -13,8 +13,8 @@ pub use compare::{compaction_deviation, compare_runs, Deviation};
 pub use engines::{run_native, EngineRun, HarnessError, LammpsLauncher};
 pub use launch::{LammpsChild, LaunchError, Work};
 pub use scenes::{
-    as_trajectory, contact_solid, contact_solid_reference, grain_pair, grain_squeeze,
-    small_compaction,
+    as_trajectory, contact_solid, contact_solid_reference, dem_check_material, dem_lattice,
+    dem_trajectory, grain_pair, grain_squeeze, small_compaction, DemLoading,
 };
 pub use single_point::{
     lammps_single_point, max_relative_deviation, native_single_point, run_lmp_bpm, SinglePoint,

@@ -1,7 +1,11 @@
 //! Built-in cross-check scenes.
 
-use crate::kernels::{Separation, Unwrapped};
+use crate::engine::{Deformation, TiltFactor};
+use crate::kernels::{
+    GranularMaterial, NormalDamping, Separation, SpringDashpotSlider, Twisting, Unwrapped,
+};
 use crate::scene::builders::bulk::{build_bulk, BulkParams};
+use crate::scene::builders::spheres::{sphere_lattice, SphereLattice};
 use crate::scene::{ForceField, Scene, SceneError, StageSpec};
 use rand::{Rng, SeedableRng};
 
@@ -141,6 +145,7 @@ pub fn grain_pair(radius: f64, seed: u64, a_b: f64) -> Result<Scene, SceneError>
         particles: crate::scene::Particles {
             positions,
             velocities: Some(velocities),
+            angular_velocities: None,
             grain: Some(grain),
             mass: crate::scene::Mass::Uniform(1.0),
             radius: None,
@@ -294,4 +299,92 @@ pub fn small_compaction(seed: u64) -> Result<Scene, SceneError> {
     Ok(crate::studies::compaction::compaction_scene(
         &packing, &protocol,
     ))
+}
+
+/// The sphere material of the DEM cross-check scenes: E = 100 k/d, nu =
+/// 1/4, e = 1/2 (Tsuji), x_gt = 1, mu_s = 0.3; with `rolling_twisting`,
+/// rolling (k_r = 10 k, gamma_r = 0.5, mu_r = 0.1) and Marshall twisting.
+pub fn dem_check_material(rolling_twisting: bool) -> GranularMaterial {
+    GranularMaterial {
+        youngs_modulus: 100.0,
+        poisson_ratio: 0.25,
+        restitution: 0.5,
+        damping: NormalDamping::Tsuji,
+        tangential_damping: 1.0,
+        sliding_friction: 0.3,
+        rolling: rolling_twisting.then_some(SpringDashpotSlider {
+            stiffness: 10.0,
+            damping: 0.5,
+            friction: 0.1,
+        }),
+        twisting: if rolling_twisting {
+            Twisting::Marshall
+        } else {
+            Twisting::None
+        },
+    }
+}
+
+/// 64 DEM spheres of radius 1 +- 10% on a jittered lattice 0.95 diameters
+/// apart, so most neighbours overlap, moving (velocity components up to
+/// 0.05 d/tau) and spinning (up to 0.05 / tau): every term of the contact
+/// force acts. One hold stage of 0 steps.
+pub fn dem_lattice(seed: u64, rolling_twisting: bool) -> Scene {
+    let mut scene = sphere_lattice(&SphereLattice {
+        per_side: 4,
+        radius: 1.0,
+        polydispersity: 0.1,
+        spacing: 0.95,
+        jitter: 0.05,
+        speed: 0.05,
+        spin: 0.05,
+        density: 1.0,
+        material: dem_check_material(rolling_twisting),
+        seed,
+    });
+    scene.stages = vec![StageSpec::hold("point", 0, 0.01)];
+    scene
+}
+
+/// How a DEM cross-check trajectory loads its spheres.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum DemLoading {
+    /// The box held.
+    Hold,
+    /// Isotropic compression at true strain rate -1e-3 / tau.
+    Compress,
+    /// Simple shear (xy) at 1e-2 / tau.
+    Shear,
+}
+
+impl DemLoading {
+    /// Its name in verdicts.
+    pub fn name(self) -> &'static str {
+        match self {
+            DemLoading::Hold => "hold",
+            DemLoading::Compress => "compress",
+            DemLoading::Shear => "shear",
+        }
+    }
+}
+
+/// [`dem_lattice`] run for `steps` steps of 0.01 tau under `loading`,
+/// recording every 50 steps and positions five times.
+pub fn dem_trajectory(seed: u64, rolling_twisting: bool, loading: DemLoading, steps: u64) -> Scene {
+    let mut scene = dem_lattice(seed, rolling_twisting);
+    let mut stage = StageSpec::hold(loading.name(), steps, 0.01);
+    stage.deformation = match loading {
+        DemLoading::Hold => None,
+        DemLoading::Compress => Some(Deformation::Isotropic {
+            true_strain_rate: -1e-3,
+        }),
+        DemLoading::Shear => Some(Deformation::SimpleShear {
+            tilt: TiltFactor::Xy,
+            rate: 1e-2,
+        }),
+    };
+    stage.record.every = 50;
+    stage.record.positions_every = (steps / 5).max(1);
+    scene.stages = vec![stage];
+    scene
 }

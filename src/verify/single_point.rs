@@ -4,7 +4,7 @@ use super::launch::{LammpsChild, LaunchError, Work};
 use crate::engine::StageDrivers;
 use crate::file_error::FileError;
 use crate::lammps::{write_data_file, write_reference_lengths, write_templates, ScriptVars};
-use crate::scene::{build_system, Scene};
+use crate::scene::{build_system, ModelKind, Scene};
 use serde::Serialize;
 use std::path::Path;
 
@@ -29,14 +29,16 @@ pub enum SinglePointError {
     Output(String),
 }
 
-/// Forces, pressure tensor and energies of one evaluation.
+/// Forces, torques, pressure tensor and energies of one evaluation.
 #[derive(Clone, Debug, Serialize)]
 pub struct SinglePoint {
     /// Per-particle forces, by particle index.
     pub forces: Vec<[f64; 3]>,
+    /// Per-particle torques of rotating particles (DEM); empty otherwise.
+    pub torques: Vec<[f64; 3]>,
     /// Pressure tensor `[xx, yy, zz, xy, xz, yz]`.
     pub pressure: [f64; 6],
-    /// `[bond, pair]` energies.
+    /// `[bond, pair]` energies (zero for DEM, which has none).
     pub energies: [f64; 2],
 }
 
@@ -61,8 +63,11 @@ pub fn run_lmp_bpm(
 ) -> Result<String, SinglePointError> {
     let data = dir.join(format!("{tag}.data"));
     std::fs::write(&data, write_data_file(scene)).map_err(FileError::on("writing", &data))?;
-    let r0 = Path::new(&format!("{}.r0", data.display())).to_path_buf();
-    std::fs::write(&r0, write_reference_lengths(scene)).map_err(FileError::on("writing", &r0))?;
+    if scene.model == ModelKind::Bpm {
+        let r0 = Path::new(&format!("{}.r0", data.display())).to_path_buf();
+        std::fs::write(&r0, write_reference_lengths(scene))
+            .map_err(FileError::on("writing", &r0))?;
+    }
     let inputs = write_templates(dir).map_err(|cause| SinglePointError::Templates { cause })?;
     let vars = ScriptVars::of(scene, &data.display().to_string(), newton, &inputs);
     let input = if Path::new(input).is_absolute() {
@@ -108,7 +113,9 @@ pub fn read_dump(path: &Path) -> Result<Vec<Vec<f64>>, SinglePointError> {
         .collect()
 }
 
-/// One evaluation through LAMMPS with our styles (`single_point.in`).
+/// One evaluation through LAMMPS: with our styles for the bonded particle
+/// model (`single_point.in`), with LAMMPS's `pair_style granular` for DEM
+/// spheres (`single_point_dem.in`, which also dumps torques).
 pub fn lammps_single_point(
     lmp_bpm: &Path,
     scene: &Scene,
@@ -118,10 +125,15 @@ pub fn lammps_single_point(
     tag: &str,
 ) -> Result<SinglePoint, SinglePointError> {
     let dump = dir.join(format!("{tag}.dump"));
+    let dem = scene.model == ModelKind::Dem;
     let out = run_lmp_bpm(
         lmp_bpm,
         scene,
-        "single_point.in",
+        if dem {
+            "single_point_dem.in"
+        } else {
+            "single_point.in"
+        },
         newton,
         ranks,
         dir,
@@ -144,23 +156,31 @@ pub fn lammps_single_point(
             .collect()
     };
     let p = numbers("BPM_PRESSURE")?;
-    let e = numbers("BPM_ENERGY")?;
+    let e = if dem {
+        vec![0.0; 2]
+    } else {
+        numbers("BPM_ENERGY")?
+    };
     if p.len() != 6 || e.len() != 2 {
         return Err(output("unexpected BPM_PRESSURE or BPM_ENERGY line".into()));
     }
-    let forces: Vec<[f64; 3]> = read_dump(&dump)?
-        .iter()
-        .map(|v| [v[0], v[1], v[2]])
-        .collect();
-    if forces.len() != scene.particles.positions.len() {
+    let rows = read_dump(&dump)?;
+    let width = if dem { 6 } else { 3 };
+    if rows.len() != scene.particles.positions.len() || rows.iter().any(|r| r.len() != width) {
         return Err(output(format!(
-            "dump has {} atoms, scene {}",
-            forces.len(),
+            "dump has {} atoms with {:?} values, scene {} atoms with {width}",
+            rows.len(),
+            rows.first().map(Vec::len),
             scene.particles.positions.len()
         )));
     }
     Ok(SinglePoint {
-        forces,
+        forces: rows.iter().map(|v| [v[0], v[1], v[2]]).collect(),
+        torques: if dem {
+            rows.iter().map(|v| [v[3], v[4], v[5]]).collect()
+        } else {
+            Vec::new()
+        },
         pressure: [p[0], p[1], p[2], p[3], p[4], p[5]],
         energies: [e[0], e[1]],
     })
@@ -173,13 +193,23 @@ pub fn native_single_point(scene: &Scene) -> SinglePoint {
         dt: 0.1,
         ..Default::default()
     });
+    let terms = &sys.report.interactions.terms;
     SinglePoint {
         forces: sys.particles.f.clone(),
+        torques: sys
+            .particles
+            .rotation
+            .as_ref()
+            .map_or_else(Vec::new, |r| r.torque.clone()),
         pressure: sys.pressure_tensor(),
-        energies: [
-            sys.report.interactions.terms[crate::engine::bpm::BOND_TERM].energy,
-            sys.report.interactions.terms[crate::engine::bpm::PAIR_TERM].energy,
-        ],
+        energies: if scene.model == ModelKind::Bpm {
+            [
+                terms[crate::engine::bpm::BOND_TERM].energy,
+                terms[crate::engine::bpm::PAIR_TERM].energy,
+            ]
+        } else {
+            [0.0; 2]
+        },
     }
 }
 

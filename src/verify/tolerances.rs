@@ -47,6 +47,11 @@ pub const TOLERANCES: &[Tolerance] = &[
         why: "same kernels, different summation order: measured <= 9.5e-15 (1 and 2 ranks, newton on and off)",
     },
     Tolerance {
+        observable: "step-0 torques",
+        tolerance: 1e-12,
+        why: "DEM spheres against LAMMPS's pair_style granular, as the forces: measured <= 6.6e-16",
+    },
+    Tolerance {
         observable: "step-0 stress",
         tolerance: 1e-12,
         why: "as the forces: measured <= 3.0e-15 (bpm check), 3.8e-15 (tests/plugin.rs, 1 rank newton off)",

@@ -4,6 +4,7 @@ pub mod bulk;
 pub mod grain;
 pub mod packing;
 pub mod replicate;
+pub mod spheres;
 
 use crate::engine::System;
 use crate::scene::load::build_system;
@@ -11,9 +12,9 @@ use crate::scene::model::Scene;
 use crate::scene::run::{run_scene, RunOptions};
 use crate::scene::validate::{validate, SceneError};
 
-/// A bonded-particle scene in the periodic cube `[0, length)^3`: unit
+/// A scene of model `bpm` in the periodic cube `[0, length)^3`: unit
 /// masses, no velocities, grains, bonds or stages; builders fill in the
-/// rest.
+/// rest (and change the model).
 fn periodic_cube(
     description: String,
     seed: u64,
@@ -35,6 +36,7 @@ fn periodic_cube(
         particles: crate::scene::model::Particles {
             positions,
             velocities: None,
+            angular_velocities: None,
             grain: None,
             mass: crate::scene::Mass::Uniform(1.0),
             radius: None,
