@@ -6,16 +6,19 @@
 //!
 //! A state is given as positions (wrapped or not), grain ids, bonds and
 //! the box, so it can come from either engine's checkpoints or from a
-//! LAMMPS dump with a data file for the bonds.
+//! LAMMPS dump with a data file for the bonds. DEM spheres, one per grain,
+//! are measured by [`spheres`].
 
 pub mod contacts;
 pub mod grains;
 pub mod hull;
+pub mod spheres;
 pub mod volume_fraction;
 
 pub use contacts::{coordination, force_contacts, geometric_contacts, Coordination};
 pub use grains::{Grains, GrainsError};
 pub use hull::{Hull, HullError};
+pub use spheres::analyse_spheres;
 pub use volume_fraction::{monte_carlo_volume_fraction, VolumeFraction};
 
 use crate::engine::SimBox;
