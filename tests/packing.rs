@@ -360,3 +360,46 @@ fn deformed_members(scene: &bpm::scene::Scene, g: u32) -> Vec<&[f64; 3]> {
         .map(|(x, _)| x)
         .collect()
 }
+
+/// DEM spheres for the comparison sit at the bonded packing's template
+/// centres with the grains' volume-equivalent radius: the template's
+/// volume fraction, no overlap, one sphere per grain with a grain's mass.
+#[test]
+fn a_sphere_packing_fills_the_template_without_overlap() {
+    use bpm::analysis::packing::analyse_spheres;
+    use bpm::scene::builders::packing::build_sphere_packing;
+    let mut params = PackingParams::new(16, GrainKind::Rough, 2.0, 0.0, 5);
+    params.grain.time_scale = 0.05;
+    params.distinct_grains = 2;
+    let material = bpm::verify::dem_check_material(false);
+    let (scene, summary) = build_sphere_packing(&params, material, 1, false).unwrap();
+    assert_eq!(scene.model, bpm::scene::ModelKind::Dem);
+    assert_eq!(scene.particles.positions.len(), 16);
+    assert!((summary.sphere_fraction - params.template_fraction).abs() < 1e-12);
+    let radius = summary.template_radius;
+    assert_eq!(scene.particles.radius, Some(vec![radius; 16]));
+    let simbox = bpm::scene::validate::simbox_of(&scene);
+    let opts = AnalysisOptions {
+        mc_points: 200_000,
+        ..AnalysisOptions::default()
+    };
+    let state = analyse_spheres(&simbox, &scene.particles.positions, radius, &opts).unwrap();
+    // The template relaxes until no overlap exceeds 1e-9 of a diameter:
+    // spheres may touch, none presses.
+    let image = simbox.minimum_image();
+    let x = &scene.particles.positions;
+    for i in 0..16 {
+        for j in i + 1..16 {
+            let r = bpm::kernels::Separation::distance(&image, &x[i], &x[j]);
+            assert!(r > 2.0 * radius * (1.0 - 1e-9), "spheres {i} and {j} at {r}");
+        }
+    }
+    // Without overlaps the union is the sum of the spheres.
+    assert!((state.phi_mc - state.phi_sphere).abs() < 4.0 * state.phi_mc_error);
+    let mut runnable = scene.clone();
+    runnable.stages = vec![bpm::scene::StageSpec::hold("hold", 1, 0.1)];
+    bpm::scene::validate(&runnable).unwrap();
+    // A rough grain of R = 2 d holds a few dozen unit-mass particles.
+    let mass = scene.particles.mass.values(16)[0];
+    assert!(mass > 20.0 && mass < 60.0, "{mass}");
+}

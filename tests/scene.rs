@@ -242,7 +242,7 @@ fn dem_scenes_are_checked_field_by_field() {
         |d| d["particles"]["angular_velocities"] = json!([[0, 0, 0]]),
         "particles.angular_velocities",
     );
-    // Two spheres of radius 1.9 and the skin need a box above 2 (3.8 + 0.3).
+    // A sphere of radius 1.9 and the skin need half the box above 3.8 + 0.3.
     rejects_dem(
         |d| d["particles"]["radius"] = json!([1.9, 1]),
         "box.lengths",

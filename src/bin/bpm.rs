@@ -866,18 +866,27 @@ fn real_main() -> Result<()> {
             }
             let scene = read_data_file(&data, periodic, force_field, seed)?;
             write_scene(&output, &scene)?;
-            let grains = scene
-                .particles
-                .grain
-                .as_ref()
-                .map_or(1, |g| g.iter().max().map_or(0, |m| m + 1));
-            println!(
-                "{}: {} particles in {grains} grain(s), {} bonds -> {}",
-                data.display(),
-                scene.particles.positions.len(),
-                scene.bonds.pairs.len(),
-                output.display()
-            );
+            if scene.model == bpm::scene::ModelKind::Dem {
+                println!(
+                    "{}: {} DEM spheres -> {}",
+                    data.display(),
+                    scene.particles.positions.len(),
+                    output.display()
+                );
+            } else {
+                let grains = scene
+                    .particles
+                    .grain
+                    .as_ref()
+                    .map_or(1, |g| g.iter().max().map_or(0, |m| m + 1));
+                println!(
+                    "{}: {} particles in {grains} grain(s), {} bonds -> {}",
+                    data.display(),
+                    scene.particles.positions.len(),
+                    scene.bonds.pairs.len(),
+                    output.display()
+                );
+            }
         }
         Command::Export { scene, output } => {
             let scene = read_scene_unvalidated(&scene)

@@ -51,10 +51,10 @@ pub enum NormalDamping {
     /// tsuji`).
     #[default]
     Tsuji,
-    /// The linear-spring form: `c_e = sqrt(5) |ln e| / sqrt(ln^2 e + pi^2)`
-    /// (LIGGGHTS's Hertz model; LAMMPS `damping coeff_restitution`, which
-    /// the Debian LAMMPS of 2021 lacks). A Hertzian collision rebounds with
-    /// a restitution close to, but not exactly, `e`.
+    /// `c_e = sqrt(5) |ln e| / sqrt(ln^2 e + pi^2)` (LIGGGHTS's Hertz
+    /// model; LAMMPS `damping coeff_restitution`, which the Debian LAMMPS of
+    /// 2021 lacks): two spheres rebound with `e` (measured to 1e-4, at any
+    /// impact speed).
     CoeffRestitution,
 }
 
@@ -68,8 +68,8 @@ pub struct SpringDashpotSlider {
     /// for twisting).
     pub damping: f64,
     /// Friction coefficient: the spring force (torque for twisting) is
-    /// capped at this times the elastic normal force (times d for
-    /// twisting).
+    /// capped at this times the total normal force `|F_n|`, damping
+    /// included (for twisting the coefficient is a length, d).
     pub friction: f64,
 }
 
@@ -80,8 +80,9 @@ pub enum Twisting {
     /// None.
     #[default]
     None,
-    /// Marshall's model: stiffness `k_t a^2 / 2`, damping `eta_t a^2 / 2`
-    /// and friction `2/3 a mu_s`, from the tangential ones (LAMMPS
+    /// Marshall's model: stiffness `k_t a^2 / 2` with the contact's
+    /// tangential stiffness `k_t = 8 G_eff a` (so it grows as `a^3`),
+    /// damping `eta_t a^2 / 2` and friction `2/3 a mu_s` (LAMMPS 2021
     /// `twisting marshall`).
     Marshall,
     /// Explicit coefficients (LAMMPS `twisting sds`).
@@ -787,6 +788,111 @@ mod tests {
                     "{p:?} {q:?}"
                 );
             }
+        }
+    }
+
+    /// A sliding contact that is also closing: the Coulomb limit follows
+    /// the total normal force, damping included (LAMMPS's `|F_ntot|`).
+    #[test]
+    fn coulomb_limit_includes_the_normal_damping() {
+        let c = GranularCoeffs::of(&material());
+        let del = [1.99, 0.0, 0.0];
+        // Closing at 0.05 along n, sliding fast along y.
+        let si = Sphere {
+            v: [-0.05, 1.0, 0.0],
+            ..at_rest(1.0, 1.0)
+        };
+        let mut h = ContactHistory {
+            tangential: [0.0, 1.0, 0.0],
+            ..Default::default()
+        };
+        let out = granular_contact(&c, &del, &si, &at_rest(1.0, 1.0), &mut h, 0.01, true);
+        let delta: f64 = 0.01;
+        let a = (0.5 * delta).sqrt();
+        let fne = c.normal_stiffness * delta * a;
+        let fntot = fne + c.normal_damping * (0.5 * c.normal_stiffness * a).sqrt() * 0.05;
+        assert!((out.force[0] - fntot).abs() < 1e-14 * fntot);
+        let ft = (out.force[1].powi(2) + out.force[2].powi(2)).sqrt();
+        assert!(
+            (ft - 0.3 * fntot).abs() < 1e-13 * fntot,
+            "{ft} vs {}",
+            0.3 * fntot
+        );
+        assert!(
+            (ft - 0.3 * fne).abs() > 1e-3 * fne,
+            "the elastic force alone would differ"
+        );
+    }
+
+    /// Outside a step (a stage's set-up) the history does not advance, but
+    /// a slider over its cap still rewrites it; one with no history whose
+    /// dashpot alone exceeds the cap gives no force at all (LAMMPS 2021).
+    #[test]
+    fn set_up_evaluations_clip_but_do_not_advance_the_history() {
+        let c = GranularCoeffs::of(&GranularMaterial {
+            sliding_friction: 1e-3,
+            ..material()
+        });
+        let del = [1.99, 0.0, 0.0];
+        let si = Sphere {
+            v: [0.0, 0.5, 0.0],
+            ..at_rest(1.0, 1.0)
+        };
+        let sj = at_rest(1.0, 1.0);
+        let mut fresh = ContactHistory::default();
+        let out = granular_contact(&c, &del, &si, &sj, &mut fresh, 0.01, false);
+        assert_eq!((out.force[1], out.force[2]), (0.0, 0.0));
+        assert_eq!(fresh, ContactHistory::default());
+        let mut loaded = ContactHistory {
+            tangential: [0.0, 0.2, 0.0],
+            ..Default::default()
+        };
+        let out = granular_contact(&c, &del, &si, &sj, &mut loaded, 0.01, false);
+        let (delta, a) = (0.01f64, (0.5f64 * 0.01).sqrt());
+        let fne = c.normal_stiffness * delta * a;
+        assert!((out.force[1].abs() - 1e-3 * fne).abs() < 1e-12 * fne);
+        // The stored stretch now gives exactly the capped force.
+        let k = c.tangential_stiffness * a;
+        let eta = c.tangential_damping * c.normal_damping * (0.5 * c.normal_stiffness * a).sqrt();
+        let again = -k * loaded.tangential[1] - eta * 0.5;
+        assert!(
+            (again - out.force[1]).abs() < 1e-12 * fne,
+            "{again} vs {}",
+            out.force[1]
+        );
+    }
+
+    /// A twist over its cap turns against the twisting velocity, whatever
+    /// the sign of the spring's stretch.
+    #[test]
+    fn a_slipping_twist_resists_the_twisting_velocity() {
+        let c = GranularCoeffs::of(&GranularMaterial {
+            twisting: Twisting::Sds(SpringDashpotSlider {
+                stiffness: 10.0,
+                damping: 0.0,
+                friction: 1e-4,
+            }),
+            ..material()
+        });
+        let del = [1.99, 0.0, 0.0];
+        for (spin, stretch) in [(-0.1, 5.0), (0.1, -5.0), (0.1, 5.0)] {
+            let si = Sphere {
+                omega: [spin, 0.0, 0.0],
+                ..at_rest(1.0, 1.0)
+            };
+            let mut h = ContactHistory {
+                twist: stretch,
+                ..Default::default()
+            };
+            let out = granular_contact(&c, &del, &si, &at_rest(1.0, 1.0), &mut h, 0.01, false);
+            let (delta, a) = (0.01f64, (0.5f64 * 0.01).sqrt());
+            let cap = 1e-4 * c.normal_stiffness * delta * a;
+            // The torque on i about n is -cap sign(spin).
+            assert!(
+                (out.torque_i[0] + cap * spin.signum()).abs() < 1e-15,
+                "{spin} {stretch}: {:?}",
+                out.torque_i
+            );
         }
     }
 }

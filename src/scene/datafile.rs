@@ -304,7 +304,7 @@ fn parse(
                         return Err(bad(k, format!("atom {id} has two velocities")));
                     }
                     // Spheres carry their angular velocity too.
-                    if w.len() >= 7 {
+                    if sphere && w.len() >= 7 {
                         let omega = [number(k, w[4])?, number(k, w[5])?, number(k, w[6])?];
                         angular.insert(id, omega);
                     }

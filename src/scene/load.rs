@@ -47,6 +47,11 @@ pub fn fnv1a(bytes: &[u8]) -> u64 {
 
 /// The engine model of a validated scene, with its own state (for the
 /// bonded particle model: the bonds and their reference lengths).
+///
+/// # Panics
+///
+/// On a scene of model `dem` without `force_field.granular`, which
+/// validation refuses.
 pub fn model_of(scene: &Scene) -> Box<dyn ParticleModel> {
     let n = scene.particles.positions.len();
     match scene.model {

@@ -116,7 +116,22 @@ fn check_granular(prefix: &str, m: &GranularMaterial) -> Result<(), SceneError> 
     Ok(())
 }
 
-fn check_force_field(prefix: &str, ff: &ForceField, model: ModelKind) -> Result<(), SceneError> {
+/// Checks a force field of a scene of `model`; `bonded` says whether the
+/// scene has bonds (then the bonded particle model needs bond
+/// coefficients: a missing `bond` defaults to zero, which would switch the
+/// bonds off silently).
+fn check_force_field(
+    prefix: &str,
+    ff: &ForceField,
+    model: ModelKind,
+    bonded: bool,
+) -> Result<(), SceneError> {
+    if model == ModelKind::Bpm && bonded && ff.bond.is_zero() {
+        return Err(invalid(
+            format!("{prefix}.bond"),
+            "is missing or all zero, but the scene has bonds: give k, a and gamma (a stage's force_field replaces the whole force field)",
+        ));
+    }
     match (model, &ff.granular) {
         (ModelKind::Dem, None) => {
             return Err(invalid(
@@ -176,18 +191,36 @@ fn max_list_cutoff(scene: &Scene) -> (f64, &'static str) {
     (cut, "force_field.pair.d + skin")
 }
 
-fn check_stage(
-    i: usize,
-    stage: &StageSpec,
-    simbox: &SimBox,
-    n: usize,
-    model: ModelKind,
-) -> Result<(), SceneError> {
+fn check_stage(i: usize, stage: &StageSpec, scene: &Scene) -> Result<(), SceneError> {
+    let (simbox, n, model) = (
+        &simbox_of(scene),
+        scene.particles.positions.len(),
+        scene.model,
+    );
     let p = format!("stages[{i}]");
     positive(&format!("{p}.dt"), stage.dt)?;
     non_negative(&format!("{p}.viscous"), stage.viscous)?;
     if let Some(ff) = &stage.force_field {
-        check_force_field(&format!("{p}.force_field"), ff, model)?;
+        let field = format!("{p}.force_field");
+        check_force_field(&field, ff, model, !scene.bonds.pairs.is_empty())?;
+        // LAMMPS sizes each contact's history once, for the rolling and
+        // twisting models of the first pair_coeff: they cannot change.
+        if let (Some(new), Some(old)) = (&ff.granular, &scene.force_field.granular) {
+            if new.rolling.is_some() != old.rolling.is_some()
+                || (new.twisting == Twisting::None) != (old.twisting == Twisting::None)
+            {
+                return Err(invalid(
+                    format!("{field}.granular"),
+                    "switches rolling or twisting resistance on or off: a run keeps the models it starts with (their coefficients may change)",
+                ));
+            }
+        }
+    }
+    if model == ModelKind::Dem && stage.tether.as_ref().is_some_and(|t| t.grain.is_some()) {
+        return Err(invalid(
+            format!("{p}.tether.grain"),
+            "DEM spheres have no grains to pick: tether them all (leave out grain)",
+        ));
     }
     if model == ModelKind::Dem && stage.reset_reference {
         return Err(invalid(
@@ -385,7 +418,12 @@ pub fn validate(scene: &Scene) -> Result<(), SceneError> {
     if let Some(g) = &pa.grain {
         per_particle("particles.grain", g.len())?;
     }
-    check_force_field("force_field", &scene.force_field, scene.model)?;
+    check_force_field(
+        "force_field",
+        &scene.force_field,
+        scene.model,
+        !scene.bonds.pairs.is_empty(),
+    )?;
     if scene.model == ModelKind::Dem && !scene.bonds.pairs.is_empty() {
         return Err(invalid(
             "bonds.pairs",
@@ -454,7 +492,7 @@ pub fn validate(scene: &Scene) -> Result<(), SceneError> {
         return Err(invalid("stages", "is empty: nothing to run"));
     }
     for (i, stage) in scene.stages.iter().enumerate() {
-        check_stage(i, stage, &simbox, n, scene.model)?;
+        check_stage(i, stage, scene)?;
     }
     Ok(())
 }

@@ -126,6 +126,15 @@ pub fn lammps_single_point(
 ) -> Result<SinglePoint, SinglePointError> {
     let dump = dir.join(format!("{tag}.dump"));
     let dem = scene.model == ModelKind::Dem;
+    if scene
+        .force_field
+        .granular
+        .is_some_and(|m| m.damping == crate::kernels::NormalDamping::CoeffRestitution)
+    {
+        return Err(SinglePointError::Output(
+            "the restitution form of the DEM damping has no LAMMPS 29Sep2021 counterpart (only `damping tsuji`)".into(),
+        ));
+    }
     let out = run_lmp_bpm(
         lmp_bpm,
         scene,

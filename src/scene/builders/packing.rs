@@ -24,13 +24,16 @@
 //!
 //! The compaction's first stage then zeroes velocities and resets every
 //! bond's reference length, so the packing starts stress-free.
+//!
+//! DEM spheres for the comparison ([`build_sphere_packing`]) sit at the
+//! template's centres: step 1 only.
 
 use super::bulk::pairs_within;
 use super::grain::{build_grain, centre_of, GrainKind, GrainParams};
 use crate::engine::SimBox;
-use crate::kernels::{PairCoeffs, Separation};
+use crate::kernels::{GranularMaterial, PairCoeffs, Separation};
 use crate::scene::load::reference_lengths;
-use crate::scene::model::{Bonds, ForceField, Scene, StageSpec};
+use crate::scene::model::{Bonds, ForceField, Mass, ModelKind, Scene, StageSpec};
 use crate::scene::protocols::uniform_rotation;
 use crate::scene::validate::{simbox_of, SceneError};
 use rand::{Rng, SeedableRng};
@@ -340,14 +343,37 @@ fn expand_rigidly(scene: &mut Scene, centres: &mut [[f64; 3]], grain: &[u32], fa
     scene.simbox.lengths = scene.simbox.lengths.map(|l| l * factor);
 }
 
-/// Builds the packing; the returned scene holds no protocol stages.
-pub fn build_packing(
+/// One built grain: particle positions relative to its centre of mass,
+/// bonds, reference lengths.
+type BuiltGrain = (Vec<[f64; 3]>, Vec<[usize; 2]>, Vec<f64>);
+
+/// A built packing's grains and the template of their centres.
+struct Template {
+    /// The distinct grains.
+    built: Vec<BuiltGrain>,
+    /// Largest centre-to-particle distance plus d/2.
+    outer_radius: f64,
+    /// Mean volume-equivalent radius of the grains (the template spheres').
+    template_radius: f64,
+    /// Volume of one template sphere.
+    sphere: f64,
+    /// Box edge.
+    length: f64,
+    /// Template centres.
+    centres: Vec<[f64; 3]>,
+    /// Steps of the template's relaxation.
+    template_steps: u64,
+}
+
+/// Builds the distinct grains and the template of centres (steps 1 of the
+/// module doc), shared by bonded grains and DEM spheres so both start from
+/// the same centres.
+fn template(
     params: &PackingParams,
     threads: usize,
     progress: bool,
-) -> Result<(Scene, PackingSummary), SceneError> {
+) -> Result<Template, SceneError> {
     params.validate()?;
-    let start = std::time::Instant::now();
     let distinct = params.distinct_grains.min(params.grains);
     let mut built = Vec::with_capacity(distinct);
     for k in 0..distinct {
@@ -396,6 +422,34 @@ pub fn build_packing(
     }
     let (centres, template_steps) =
         template_centres(params.grains, diameter, length, params.seed, threads)?;
+    Ok(Template {
+        built,
+        outer_radius,
+        template_radius,
+        sphere,
+        length,
+        centres,
+        template_steps,
+    })
+}
+
+/// Builds the packing; the returned scene holds no protocol stages.
+pub fn build_packing(
+    params: &PackingParams,
+    threads: usize,
+    progress: bool,
+) -> Result<(Scene, PackingSummary), SceneError> {
+    let start = std::time::Instant::now();
+    let Template {
+        built,
+        outer_radius,
+        template_radius,
+        sphere,
+        length,
+        centres,
+        template_steps,
+    } = template(params, threads, progress)?;
+    let distinct = built.len();
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(params.seed ^ 0x9e37_79b9_7f4a_7c15);
     let mut positions = Vec::new();
     let mut grain = Vec::new();
@@ -448,6 +502,62 @@ pub fn build_packing(
     };
     scene.provenance = serde_json::json!({
         "builder": "packing",
+        "version": crate::VERSION,
+        "parameters": params,
+        "summary": summary,
+    });
+    Ok((scene, summary))
+}
+
+/// DEM spheres at the centres of the same template as [`build_packing`]
+/// (same parameters, same seed, so the same centres): one sphere per grain
+/// with the grains' volume-equivalent radius `R_eq` (the template's, so the
+/// spheres fill the template's volume fraction and touch nowhere) and the
+/// mean mass of the built grains (unit-mass particles), of `material`. The
+/// scene holds no protocol stages.
+pub fn build_sphere_packing(
+    params: &PackingParams,
+    material: GranularMaterial,
+    threads: usize,
+    progress: bool,
+) -> Result<(Scene, PackingSummary), SceneError> {
+    let start = std::time::Instant::now();
+    let t = template(params, threads, progress)?;
+    let particles_per_grain =
+        t.built.iter().map(|(rel, _, _)| rel.len()).sum::<usize>() as f64 / t.built.len() as f64;
+    let description = format!(
+        "{} DEM spheres of radius {:.4} d (R_eq of {} grains, R = {} d), seed {}",
+        params.grains,
+        t.template_radius,
+        params.grain.kind.name(),
+        params.grain.radius,
+        params.seed
+    );
+    let mut scene = super::periodic_cube(
+        description,
+        params.seed,
+        t.length,
+        t.centres,
+        ForceField::dem(material),
+    );
+    scene.model = ModelKind::Dem;
+    scene.particles.radius = Some(vec![t.template_radius; params.grains]);
+    scene.particles.mass = Mass::Uniform(particles_per_grain);
+    let summary = PackingSummary {
+        grains: params.grains,
+        particles: params.grains,
+        bonds: 0,
+        outer_radius: t.outer_radius,
+        template_radius: t.template_radius,
+        box_length: t.length,
+        template_steps: t.template_steps,
+        relax_sweeps: 0,
+        expansion: 1.0,
+        sphere_fraction: params.grains as f64 * t.sphere / t.length.powi(3),
+        seconds: start.elapsed().as_secs_f64(),
+    };
+    scene.provenance = serde_json::json!({
+        "builder": "sphere packing",
         "version": crate::VERSION,
         "parameters": params,
         "summary": summary,
