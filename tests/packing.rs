@@ -391,7 +391,10 @@ fn a_sphere_packing_fills_the_template_without_overlap() {
     for i in 0..16 {
         for j in i + 1..16 {
             let r = bpm::kernels::Separation::distance(&image, &x[i], &x[j]);
-            assert!(r > 2.0 * radius * (1.0 - 1e-9), "spheres {i} and {j} at {r}");
+            assert!(
+                r > 2.0 * radius * (1.0 - 1e-9),
+                "spheres {i} and {j} at {r}"
+            );
         }
     }
     // Without overlaps the union is the sum of the spheres.
