@@ -20,7 +20,11 @@ fn check(doc: Value) -> Result<(), SceneError> {
 }
 
 fn rejects(edit: impl FnOnce(&mut Value), field: &str) {
-    let mut doc = valid();
+    rejects_in(valid(), edit, field);
+}
+
+/// `doc` after `edit` is refused with a message naming `field`.
+fn rejects_in(mut doc: Value, edit: impl FnOnce(&mut Value), field: &str) {
     edit(&mut doc);
     let err = check(doc).expect_err("must be rejected").to_string();
     assert!(
@@ -189,13 +193,7 @@ fn valid_dem() -> Value {
 }
 
 fn rejects_dem(edit: impl FnOnce(&mut Value), field: &str) {
-    let mut doc = valid_dem();
-    edit(&mut doc);
-    let err = check(doc).expect_err("must be rejected").to_string();
-    assert!(
-        err.contains(field),
-        "message `{err}` does not name `{field}`"
-    );
+    rejects_in(valid_dem(), edit, field);
 }
 
 #[test]

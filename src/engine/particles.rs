@@ -6,6 +6,9 @@ use super::simbox::SimBox;
 /// `fix nve/sphere`).
 pub const SPHERE_INERTIA: f64 = 0.4;
 
+/// A particle's radius (d) when a scene gives none: half the unit diameter.
+pub const DEFAULT_RADIUS: f64 = 0.5;
+
 /// Positions, velocities, forces and per-particle properties.
 #[derive(Clone, Debug, Default)]
 pub struct Particles {
@@ -42,7 +45,8 @@ pub struct Rotation {
 }
 
 impl Particles {
-    /// `n` particles at `x`, at rest, mass 1, radius 1/2, type 1, grain 0.
+    /// `n` particles at `x`, at rest, mass 1, radius [`DEFAULT_RADIUS`],
+    /// type 1, grain 0.
     pub fn at_rest(x: Vec<[f64; 3]>) -> Self {
         let n = x.len();
         Self {
@@ -53,7 +57,7 @@ impl Particles {
             grain: vec![0; n],
             kind: vec![1; n],
             mass: vec![1.0; n],
-            radius: vec![0.5; n],
+            radius: vec![DEFAULT_RADIUS; n],
             rotation: None,
         }
     }

@@ -451,7 +451,10 @@ fn parse(
             radius: sphere.then(|| {
                 atoms
                     .iter()
-                    .map(|a| a.sphere.map_or(0.5, |s| s.0))
+                    .map(|a| {
+                        a.sphere
+                            .map_or(crate::engine::particles::DEFAULT_RADIUS, |s| s.0)
+                    })
                     .collect()
             }),
             kind: Some(atoms.iter().map(|a| a.kind).collect()),
@@ -596,7 +599,10 @@ fn write_sphere_data_file(scene: &Scene) -> String {
     let _ = writeln!(s, "\nAtoms # sphere\n");
     for (i, x) in pa.positions.iter().enumerate() {
         let kind = pa.kind.as_ref().map_or(1, |t| t[i]);
-        let r = pa.radius.as_ref().map_or(0.5, |r| r[i]);
+        let r = pa
+            .radius
+            .as_ref()
+            .map_or(crate::engine::particles::DEFAULT_RADIUS, |r| r[i]);
         let density = mass[i] / (SPHERE_VOLUME_FACTOR * r * r * r);
         let _ = writeln!(
             s,

@@ -2,6 +2,7 @@
 
 use super::model::{ModelKind, Scene};
 use super::validate::{simbox_of, validate, SceneError};
+use crate::engine::particles::DEFAULT_RADIUS;
 use crate::engine::{BondTopology, BpmModel, DemModel, ParticleModel, Particles, System};
 use crate::kernels::Separation;
 use std::path::Path;
@@ -74,8 +75,11 @@ pub fn model_of(scene: &Scene) -> Box<dyn ParticleModel> {
             ))
         }
         ModelKind::Dem => {
-            let radius = particles_of(scene).radius;
-            let max_radius = radius.iter().copied().fold(0.0, f64::max);
+            let max_radius = scene
+                .particles
+                .radius
+                .as_deref()
+                .map_or(DEFAULT_RADIUS, |r| r.iter().copied().fold(0.0, f64::max));
             // Validation requires the material for this model.
             let material = scene
                 .force_field

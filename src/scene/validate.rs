@@ -172,7 +172,11 @@ fn check_force_field(
 /// The largest pair interaction range plus skin over the scene's force fields.
 fn max_list_cutoff(scene: &Scene) -> (f64, &'static str) {
     if scene.model == ModelKind::Dem {
-        let radius = scene.particles.radius.as_deref().unwrap_or(&[0.5]);
+        let radius = scene
+            .particles
+            .radius
+            .as_deref()
+            .unwrap_or(&[crate::engine::particles::DEFAULT_RADIUS]);
         let diameter = 2.0 * radius.iter().copied().fold(0.0, f64::max);
         let skin = scene
             .stages

@@ -81,12 +81,12 @@ impl DemModel {
             mass: mass[i],
         };
         for i in 0..x.len() {
-            let (si_radius, xi) = (radius[i], x[i]);
+            let (si, xi) = (sphere(i), x[i]);
             for k in list.offsets[i]..list.offsets[i + 1] {
                 let j = list.neighbours[k] as usize;
                 let del = sep.delta(&xi, &x[j]);
                 let rsq = del[0] * del[0] + del[1] * del[1] + del[2] * del[2];
-                let radsum = si_radius + radius[j];
+                let radsum = si.radius + radius[j];
                 let history = &mut self.contacts.history[k];
                 if rsq >= radsum * radsum {
                     *history = Default::default();
@@ -96,15 +96,7 @@ impl DemModel {
                     force,
                     torque_i,
                     torque_j,
-                } = granular_contact(
-                    &self.coeffs,
-                    &del,
-                    &sphere(i),
-                    &sphere(j),
-                    history,
-                    dt,
-                    update,
-                );
+                } = granular_contact(&self.coeffs, &del, &si, &sphere(j), history, dt, update);
                 for d in 0..3 {
                     f[i][d] += force[d];
                     f[j][d] -= force[d];
