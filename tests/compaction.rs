@@ -320,6 +320,7 @@ fn a_tiny_compaction_study_measures_moduli_and_writes_its_report() {
                 ..PackingModuliProtocol::paper()
             },
         },
+        dem: None,
     };
     let report = run_compaction(&opts, 1, None, &dir, "test", false, &mut |_| {}).unwrap();
     let run = &report.runs[0];
@@ -374,5 +375,116 @@ fn a_tiny_compaction_study_measures_moduli_and_writes_its_report() {
         compare::pressure_ratio(&a.report, &b.report, last_phi + 0.01),
         None
     );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// `bpm compact --model dem` end to end on a tiny packing: one sphere per
+/// grain of the bonded solid's E_eff, jammed and compressed by the same
+/// protocol (no bond reset), every state measured as spheres: `phi_sphere`
+/// is the spheres' volume over the box's, equal to `phi_MC` while no two
+/// overlap and above it once they do; the report has no grain-shape
+/// output.
+#[test]
+fn a_tiny_dem_compaction_compresses_spheres_and_reports_both_volume_fractions() {
+    use bpm::analysis::packing::AnalysisOptions;
+    use bpm::kernels::GranularCoeffs;
+    use bpm::scene::builders::grain::GrainKind;
+    use bpm::scene::protocols::CompactionProtocol;
+    use bpm::studies::compaction::{
+        compare, run_compaction, CompactOptions, CompactionEngine, DemContact, ModuliOptions,
+        PackingSource,
+    };
+    let dir = common::scratch_dir("tiny-dem-compaction");
+    let dem = DemContact {
+        friction: [0.15, 0.1, 0.1],
+        ..DemContact::default()
+    };
+    let mut opts = CompactOptions {
+        source: PackingSource::Build {
+            grains: 16,
+            kind: GrainKind::Rough,
+            radius: 2.0,
+            distinct_grains: 2,
+            template_fraction: 0.57,
+            time_scale: 0.05,
+        },
+        a_b: 0.0,
+        zero_net: false,
+        seeds: vec![3],
+        protocol: CompactionProtocol {
+            jam_gain: 1.0,
+            jam_time: 2e3,
+            rate_start: 1e-5,
+            rate_end: 1e-4,
+            rate_levels: 2,
+            stage_time: 1e3,
+            volumetric_strain: 0.4,
+            ..CompactionProtocol::paper()
+        },
+        engine: CompactionEngine::Native,
+        analysis: AnalysisOptions {
+            mc_points: 50_000,
+            ..Default::default()
+        },
+        moduli: ModuliOptions {
+            states: 0,
+            ..ModuliOptions::default()
+        },
+        dem: Some(dem),
+    };
+    let report = run_compaction(&opts, 1, None, &dir, "test", false, &mut |_| {}).unwrap();
+    let run = &report.runs[0];
+    assert!(run.stopped.is_none(), "{:?}", run.stopped);
+    assert_eq!((run.grains, run.particles), (16, 16));
+    let scene: bpm::scene::Scene =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("seed-3/scene.json")).unwrap())
+            .unwrap();
+    assert_eq!(scene.model, bpm::scene::ModelKind::Dem);
+    assert!(scene.stages.iter().all(|s| !s.reset_reference));
+    assert_eq!(scene.stages[0].name, "jam");
+    let material = scene.force_field.granular.unwrap();
+    assert_eq!(material.sliding_friction, 0.15);
+    assert_eq!(material.rolling.unwrap().friction, 0.1);
+    let k_n = GranularCoeffs::of(&material).normal_stiffness;
+    assert!((k_n / (4.0 / 3.0 * report.e_eff) - 1.0).abs() < 1e-12);
+    let radius = scene.particles.radius.as_ref().unwrap()[0];
+    let spheres = 16.0 * 4.0 / 3.0 * std::f64::consts::PI * radius.powi(3);
+    for s in &run.states {
+        let p = &s.packing;
+        assert!((p.phi_sphere - spheres / p.box_volume).abs() < 1e-12 * p.phi_sphere);
+        assert!(p.eps_v.is_empty() && p.asphericity.is_empty());
+    }
+    let (start, end) = (&run.states[0], run.states.last().unwrap());
+    assert_eq!(start.packing.force_contacts, 0);
+    let mc = |s: &bpm::studies::compaction::StateRow| 4.0 * s.packing.phi_mc_error;
+    assert!((start.packing.phi_mc - start.packing.phi_sphere).abs() < mc(start));
+    assert!(end.stage.starts_with("compress") && end.p_over_e_eff > 0.0);
+    assert!(end.packing.z_force > 4.0, "{}", end.packing.z_force);
+    assert!(
+        end.packing.phi_sphere > end.packing.phi_mc + 0.05,
+        "{} against {}",
+        end.packing.phi_sphere,
+        end.packing.phi_mc
+    );
+    for file in [
+        "compaction.json",
+        "compaction.svg",
+        "jamming.svg",
+        "seed-3/slices.svg",
+    ] {
+        assert!(dir.join(file).is_file(), "{file} not written");
+    }
+    assert!(!dir.join("distributions.svg").exists());
+    let study = compare::read_study(&dir, "dem").unwrap();
+    let table = compare::comparison_table(&[study], "test");
+    assert!(table.contains("phi_sphere (spheres) where P / E_eff first reaches"));
+    // What a DEM study cannot do is refused, naming the option.
+    opts.moduli.states = 2;
+    let e = run_compaction(&opts, 1, None, &dir, "test", false, &mut |_| {}).unwrap_err();
+    assert!(e.to_string().contains("--moduli-states"), "{e}");
+    opts.moduli.states = 0;
+    opts.zero_net = true;
+    let e = run_compaction(&opts, 1, None, &dir, "test", false, &mut |_| {}).unwrap_err();
+    assert!(e.to_string().contains("--zero-net"), "{e}");
     let _ = std::fs::remove_dir_all(&dir);
 }

@@ -100,36 +100,61 @@ pub fn write_slices(path: &Path, frames: &[SliceFrame], diameter: f64) -> Result
         SVGBackend::new(path, (panel * frames.len() as u32, panel + margin)).into_drawing_area();
     root.fill(&WHITE).map_err(|e| err(e.to_string()))?;
     let style = TextStyle::from(("sans-serif", 16).into_font()).color(&BLACK);
+    let origin = |k: usize| ((k as u32 * panel + margin) as i32, (2 * margin) as i32);
+    let to_pixels = |k: usize, frame: &SliceFrame, x: f64, y: f64| {
+        let (ox, oy) = origin(k);
+        (
+            ox + (x * scale).round() as i32,
+            oy + ((frame.simbox.lengths[1] - y) * scale).round() as i32,
+        )
+    };
+    // Discs that cross a periodic face are drawn at their images too; once
+    // every frame is drawn, whatever lies outside its box is masked.
     for (k, frame) in frames.iter().enumerate() {
-        let ox = (k as u32 * panel + margin) as i32;
-        let oy = (2 * margin) as i32;
-        let px = |x: f64, y: f64| {
-            (
-                ox + (x * scale).round() as i32,
-                oy + ((frame.simbox.lengths[1] - y) * scale).round() as i32,
-            )
-        };
-        root.draw(&Text::new(
-            frame.title.clone(),
-            (ox, margin as i32 / 2),
-            style.clone(),
-        ))
-        .map_err(|e| err(e.to_string()))?;
+        let [lx, ly] = [frame.simbox.lengths[0], frame.simbox.lengths[1]];
         for disc in slice_discs(frame, diameter) {
             let r = (disc.radius * scale).max(0.5).round() as i32;
-            root.draw(&Circle::new(
-                px(disc.x, disc.y),
-                r,
-                grain_colour(disc.grain).filled(),
-            ))
-            .map_err(|e| err(e.to_string()))?;
+            for (ix, iy) in (-1..=1).flat_map(|i| (-1..=1).map(move |j| (i, j))) {
+                let (x, y) = (disc.x + f64::from(ix) * lx, disc.y + f64::from(iy) * ly);
+                let inside = x + disc.radius > 0.0
+                    && x - disc.radius < lx
+                    && y + disc.radius > 0.0
+                    && y - disc.radius < ly;
+                if inside {
+                    let centre = to_pixels(k, frame, x, y);
+                    root.draw(&Circle::new(centre, r, grain_colour(disc.grain).filled()))
+                        .map_err(|e| err(e.to_string()))?;
+                }
+            }
+        }
+    }
+    for (k, frame) in frames.iter().enumerate() {
+        let [lx, ly] = [frame.simbox.lengths[0], frame.simbox.lengths[1]];
+        let (left, top) = to_pixels(k, frame, 0.0, ly);
+        let (right, bottom) = to_pixels(k, frame, lx, 0.0);
+        // One pixel of overlap, so no seam shows between masks.
+        let panel_left = (k as u32 * panel) as i32 - 1;
+        let panel_right = ((k as u32 + 1) * panel) as i32 + 1;
+        // Masks reach past the canvas, over images drawn beyond it.
+        let height = (2 * panel + margin) as i32;
+        for [a, b] in [
+            [(panel_left, -height), (left, height)],
+            [(right, -height), (panel_right, height)],
+            [(left - 1, -height), (right + 1, top)],
+            [(left - 1, bottom), (right + 1, height)],
+        ] {
+            root.draw(&Rectangle::new([a, b], WHITE.filled()))
+                .map_err(|e| err(e.to_string()))?;
         }
         root.draw(&Rectangle::new(
-            [
-                px(0.0, frame.simbox.lengths[1]),
-                px(frame.simbox.lengths[0], 0.0),
-            ],
+            [(left, top), (right, bottom)],
             BLACK.stroke_width(1),
+        ))
+        .map_err(|e| err(e.to_string()))?;
+        root.draw(&Text::new(
+            frame.title.clone(),
+            (origin(k).0, margin as i32 / 2),
+            style.clone(),
         ))
         .map_err(|e| err(e.to_string()))?;
     }

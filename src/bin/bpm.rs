@@ -478,9 +478,10 @@ enum Command {
         #[arg(long, default_value_t = 1_000_000)]
         mc_points: u64,
         /// States per run at which the packing's bulk and shear moduli are
-        /// measured (0 = none), spread evenly in ln(phi - phi_c).
-        #[arg(long, default_value_t = 6)]
-        moduli_states: usize,
+        /// measured (0 = none), spread evenly in ln(phi - phi_c); default 6
+        /// for bonded grains, 0 (the only choice) for DEM spheres.
+        #[arg(long)]
+        moduli_states: Option<usize>,
         /// Relaxation before each modulus loading (tau) (paper: 1e4).
         #[arg(long, default_value_t = 1e3)]
         moduli_relax_time: f64,
@@ -488,6 +489,26 @@ enum Command {
         /// (1/tau) (paper: 1e-8); the shear runs at twice it, to 0.04%.
         #[arg(long, default_value_t = 1e-7)]
         moduli_rate: f64,
+        /// Particle model: bonded grains, or one DEM sphere per grain at
+        /// the same template's centres (docs/protocols.md "DEM
+        /// compaction").
+        #[arg(long, value_enum, default_value = "bpm")]
+        model: CompactModel,
+        /// DEM friction coefficients mu_s,mu_r,mu_t (sliding, rolling,
+        /// twisting) (paper: 0.3,0,0 and 0.15,0.1,0.1 match rough grains,
+        /// 0.15,0,0 and 0.1,0.05,0.05 smoother ones).
+        #[arg(long, value_delimiter = ',', value_name = "MU_S,MU_R,MU_T", default_values_t = [0.3, 0.0, 0.0])]
+        friction: Vec<f64>,
+        /// DEM restitution coefficient (Tsuji's damping).
+        #[arg(long, default_value_t = 0.5)]
+        restitution: f64,
+        /// DEM tangential over normal damping, x_gt.
+        #[arg(long, default_value_t = 1.0)]
+        tangential_damping: f64,
+        /// DEM reference overlap over R_eff of the rolling and twisting
+        /// springs (the tangential spring at this overlap).
+        #[arg(long, default_value_t = 0.01)]
+        reference_overlap: f64,
         /// Refit the runs of an earlier OUTPUT/compaction.json and rewrite
         /// its plots and table, without running anything (other options
         /// are ignored).
@@ -626,6 +647,14 @@ enum Command {
         #[arg(long)]
         zero_net: bool,
     },
+}
+
+#[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
+enum CompactModel {
+    /// Bonded grains.
+    Bpm,
+    /// DEM spheres, one per grain.
+    Dem,
 }
 
 #[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
@@ -1324,6 +1353,11 @@ fn real_main() -> Result<()> {
             moduli_states,
             moduli_relax_time,
             moduli_rate,
+            model,
+            friction,
+            restitution,
+            tangential_damping,
+            reference_overlap,
             refit,
         } => {
             if refit {
@@ -1336,6 +1370,12 @@ fn real_main() -> Result<()> {
                 );
                 return Ok(());
             }
+            let friction: [f64; 3] = friction.try_into().map_err(|given: Vec<f64>| {
+                anyhow::anyhow!(
+                    "--friction takes three values, mu_s,mu_r,mu_t; got {}",
+                    given.len()
+                )
+            })?;
             let opts = compaction::CompactOptions {
                 source: match packing {
                     Some(path) => compaction::PackingSource::File { path },
@@ -1373,7 +1413,10 @@ fn real_main() -> Result<()> {
                     ..Default::default()
                 },
                 moduli: compaction::ModuliOptions {
-                    states: moduli_states,
+                    states: moduli_states.unwrap_or(match model {
+                        CompactModel::Bpm => 6,
+                        CompactModel::Dem => 0,
+                    }),
                     protocol: bpm::scene::protocols::PackingModuliProtocol {
                         dt,
                         relax_time: moduli_relax_time,
@@ -1382,6 +1425,12 @@ fn real_main() -> Result<()> {
                         ..bpm::scene::protocols::PackingModuliProtocol::paper()
                     },
                 },
+                dem: (model == CompactModel::Dem).then_some(compaction::DemContact {
+                    friction,
+                    restitution,
+                    tangential_damping,
+                    reference_overlap,
+                }),
             };
             opts.validate()?;
             let exe = std::env::current_exe().context("locating the bpm executable")?;

@@ -512,9 +512,11 @@ pub fn build_packing(
 /// DEM spheres at the centres of the same template as [`build_packing`]
 /// (same parameters, same seed, so the same centres): one sphere per grain
 /// with the grains' volume-equivalent radius `R_eq` (the template's, so the
-/// spheres fill the template's volume fraction and touch nowhere) and the
-/// mean mass of the built grains (unit-mass particles), of `material`. The
-/// scene holds no protocol stages.
+/// spheres fill the template's volume fraction) and the mean mass of the
+/// built grains (unit-mass particles), of `material`. The template leaves
+/// overlaps of up to `1e-9` diameters; box and centres are expanded
+/// uniformly until no two spheres touch (a stress-free start, as for the
+/// grains). The scene holds no protocol stages.
 pub fn build_sphere_packing(
     params: &PackingParams,
     material: GranularMaterial,
@@ -533,11 +535,28 @@ pub fn build_sphere_packing(
         params.grain.radius,
         params.seed
     );
+    let diameter = 2.0 * t.template_radius;
+    let simbox = SimBox {
+        lo: [0.0; 3],
+        lengths: [t.length; 3],
+        tilt: [0.0; 3],
+        periodic: [true; 3],
+    };
+    let closest = pairs_within(&simbox, &t.centres, diameter)
+        .iter()
+        .fold(diameter, |c, &(_, _, r)| c.min(r));
+    let expansion = if closest < diameter {
+        diameter / closest * (1.0 + 1e-9)
+    } else {
+        1.0
+    };
+    let length = t.length * expansion;
+    let centres = t.centres.iter().map(|c| c.map(|x| x * expansion)).collect();
     let mut scene = super::periodic_cube(
         description,
         params.seed,
-        t.length,
-        t.centres,
+        length,
+        centres,
         ForceField::dem(material),
     );
     scene.model = ModelKind::Dem;
@@ -549,11 +568,11 @@ pub fn build_sphere_packing(
         bonds: 0,
         outer_radius: t.outer_radius,
         template_radius: t.template_radius,
-        box_length: t.length,
+        box_length: length,
         template_steps: t.template_steps,
         relax_sweeps: 0,
-        expansion: 1.0,
-        sphere_fraction: params.grains as f64 * t.sphere / t.length.powi(3),
+        expansion,
+        sphere_fraction: params.grains as f64 * t.sphere / length.powi(3),
         seconds: start.elapsed().as_secs_f64(),
     };
     scene.provenance = serde_json::json!({

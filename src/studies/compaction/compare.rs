@@ -2,7 +2,10 @@
 //! (rough against smoother grains, different `nu`, engines, rates): the
 //! curves of each in one set of plots, their fits in one table, and where
 //! each study's pressure joins the first's (the source study finds that
-//! friction stops mattering near `phi = 0.7`).
+//! friction stops mattering near `phi = 0.7`). Studies of DEM spheres
+//! (`bpm compact --model dem`) sit beside grains as in the source study's
+//! Figs. 6-8: their `phi_sphere` in its own panel, and the volume fractions
+//! of every study at common pressures.
 
 use super::{is_jammed, read_report, CompactionError, CompactionReport, CompactionRun, StateRow};
 use crate::analysis::plot::{write_svg, Mark, Panel, Series};
@@ -137,9 +140,11 @@ fn curves_join_at(base: &[(f64, f64)], other: &[(f64, f64)]) -> Option<f64> {
     compared.get(first).map(|c| c.0)
 }
 
-type Point = dyn Fn(&CompactionRun, &StateRow) -> Option<(f64, f64)>;
+type Point = dyn Fn(&Study, &CompactionRun, &StateRow) -> Option<(f64, f64)>;
 
-/// One series per run of every study, of the compression states' points.
+/// One series per run of every study, of the compression states' points
+/// (runs without any point, such as spheres in a grain-shape panel, are
+/// left out).
 fn series(studies: &[Study], f: &Point) -> Vec<Series> {
     studies
         .iter()
@@ -150,13 +155,63 @@ fn series(studies: &[Study], f: &Point) -> Vec<Series> {
                     r.states
                         .iter()
                         .filter(|st| st.stage.starts_with("compress"))
-                        .filter_map(|st| f(r, st))
+                        .filter_map(|st| f(s, r, st))
                         .collect(),
                     Mark::LinePoints,
                 )
             })
         })
+        .filter(|series| !series.points.is_empty())
         .collect()
+}
+
+/// Pressures at which [`comparison_table`] lists volume fractions.
+const PHI_AT_PRESSURE: [f64; 6] = [1e-5, 1e-4, 1e-3, 1e-2, 3e-2, 1e-1];
+
+/// The volume fraction `pick` of a run where its pressure first reaches
+/// `p` (`P / E_eff`) during compression, interpolated linearly in `ln P`
+/// between the two states around that crossing.
+fn phi_at_pressure(run: &CompactionRun, p: f64, pick: fn(&StateRow) -> f64) -> Option<f64> {
+    let path: Vec<(f64, f64)> = run
+        .states
+        .iter()
+        .filter(|s| s.stage.starts_with("compress") && s.p_over_e_eff > 0.0)
+        .map(|s| (s.p_over_e_eff, pick(s)))
+        .collect();
+    first_crossing(&path, p)
+}
+
+/// `x` where a path of `(P, x)` points (positive `P`, in order) first
+/// steps from `P <= p` to `P > p`, linear in `ln P` between the two.
+fn first_crossing(path: &[(f64, f64)], p: f64) -> Option<f64> {
+    path.windows(2).find_map(|w| {
+        let ((pa, xa), (pb, xb)) = (w[0], w[1]);
+        (pa <= p && p < pb).then(|| xa + (p / pa).ln() / (pb / pa).ln() * (xb - xa))
+    })
+}
+
+/// The mean of [`phi_at_pressure`] over a study's runs that reach `p`.
+fn mean_phi_at_pressure(
+    report: &CompactionReport,
+    p: f64,
+    pick: fn(&StateRow) -> f64,
+) -> Option<f64> {
+    let v: Vec<f64> = report
+        .runs
+        .iter()
+        .filter_map(|r| phi_at_pressure(r, p, pick))
+        .collect();
+    (!v.is_empty()).then(|| v.iter().sum::<f64>() / v.len() as f64)
+}
+
+/// The volume fraction a DEM study usually reports: `phi_sphere` for
+/// spheres; `phi_MC` for grains (the source study's Fig. 6a).
+fn nominal_phi(study: &Study, state: &StateRow) -> f64 {
+    if study.report.options.dem.is_some() {
+        state.packing.phi_sphere
+    } else {
+        state.packing.phi_mc
+    }
 }
 
 /// `phi - phi_c` of a state, at its run's fitted `phi_c`.
@@ -173,20 +228,22 @@ pub fn write_comparison(
     command: &str,
 ) -> Result<String, CompactionError> {
     std::fs::create_dir_all(dir).map_err(FileError::on("creating", dir))?;
-    let panels = vec![
+    let mut panels = vec![
         Panel {
             title: "pressure (paper Fig. 6, 11)".into(),
             x_label: "phi_MC".into(),
             y_label: "P / E_eff".into(),
             log_y: true,
-            series: series(studies, &|_, s| Some((s.packing.phi_mc, s.p_over_e_eff))),
+            series: series(studies, &|_, _, s| Some((s.packing.phi_mc, s.p_over_e_eff))),
             ..Panel::default()
         },
         Panel {
             title: "force coordination, rattlers removed (paper Fig. 7)".into(),
             x_label: "phi_MC".into(),
             y_label: "Z_force".into(),
-            series: series(studies, &|_, s| Some((s.packing.phi_mc, s.packing.z_force))),
+            series: series(studies, &|_, _, s| {
+                Some((s.packing.phi_mc, s.packing.z_force))
+            }),
             ..Panel::default()
         },
         Panel {
@@ -195,7 +252,7 @@ pub fn write_comparison(
             y_label: "mean eps_V".into(),
             log_x: true,
             log_y: true,
-            series: series(studies, &|r, s| {
+            series: series(studies, &|_, r, s| {
                 Some((distance(r, s)?, s.packing.eps_v_mean))
             }),
         },
@@ -205,11 +262,43 @@ pub fn write_comparison(
             y_label: "mean alpha - alpha0".into(),
             log_x: true,
             log_y: true,
-            series: series(studies, &|r, s| {
+            series: series(studies, &|_, r, s| {
                 Some((distance(r, s)?, s.packing.asphericity_excess_mean))
             }),
         },
     ];
+    if studies.iter().any(|s| s.report.options.dem.is_some()) {
+        panels.extend([
+            Panel {
+                title: "pressure, phi_sphere for spheres, phi_MC for grains (paper Fig. 6a)".into(),
+                x_label: "phi".into(),
+                y_label: "P / E_eff".into(),
+                log_y: true,
+                series: series(studies, &|study, _, s| {
+                    Some((nominal_phi(study, s), s.p_over_e_eff))
+                }),
+                ..Panel::default()
+            },
+            Panel {
+                title: "pressure near jamming (paper Fig. 7)".into(),
+                x_label: "phi_MC - phi_c".into(),
+                y_label: "P / E_eff".into(),
+                log_x: true,
+                log_y: true,
+                series: series(studies, &|_, r, s| Some((distance(r, s)?, s.p_over_e_eff))),
+            },
+            Panel {
+                title: "force coordination near jamming (paper Fig. 8a)".into(),
+                x_label: "phi_MC - phi_c".into(),
+                y_label: "Z_force".into(),
+                log_x: true,
+                series: series(studies, &|_, r, s| {
+                    Some((distance(r, s)?, s.packing.z_force))
+                }),
+                ..Panel::default()
+            },
+        ]);
+    }
     write_svg(&dir.join("comparison.svg"), &panels)?;
     let text = comparison_table(studies, command);
     let path = dir.join("comparison.txt");
@@ -305,6 +394,36 @@ pub fn comparison_table(studies: &[Study], command: &str) -> String {
             t.push('\n');
         }
     }
+    for (name, pick) in [
+        (
+            "phi_MC",
+            (|s: &StateRow| s.packing.phi_mc) as fn(&StateRow) -> f64,
+        ),
+        ("phi_sphere (spheres)", |s| s.packing.phi_sphere),
+    ] {
+        let spheres_only = name.ends_with("(spheres)");
+        let shown: Vec<&Study> = studies
+            .iter()
+            .filter(|s| !spheres_only || s.report.options.dem.is_some())
+            .collect();
+        if shown.is_empty() {
+            continue;
+        }
+        let _ = write!(t, "\n{name} where P / E_eff first reaches");
+        for p in PHI_AT_PRESSURE {
+            let _ = write!(t, " {p:>7.0e}");
+        }
+        t.push('\n');
+        for s in shown {
+            let _ = write!(t, "  {:<20}", s.label);
+            for p in PHI_AT_PRESSURE {
+                let cell = mean_phi_at_pressure(&s.report, p, pick)
+                    .map_or("-".to_string(), |v| format!("{v:.4}"));
+                let _ = write!(t, " {cell:>7}");
+            }
+            t.push('\n');
+        }
+    }
     if let Some((first, rest)) = studies.split_first() {
         let _ = write!(t, "\nP / P({}) at phi_MC =", first.label);
         for phi in RATIO_AT {
@@ -368,6 +487,15 @@ mod tests {
             .collect();
         let y = log_value_at(&power, 0.03f64.ln()).unwrap().exp();
         assert!((y / 0.03f64.powf(1.5) - 1.0).abs() < 1e-12, "{y}");
+        // The first upward crossing counts, interpolated in ln P.
+        let path = [(1e-6, 0.60), (4e-6, 0.61), (2e-6, 0.62), (1e-4, 0.70)];
+        let x = first_crossing(&path, 2e-6).unwrap();
+        assert!((x - 0.605).abs() < 1e-12, "{x}");
+        let x = first_crossing(&path, 1e-5).unwrap();
+        let t = (1e-5f64 / 2e-6).ln() / (1e-4f64 / 2e-6).ln();
+        assert!((x - (0.62 + t * 0.08)).abs() < 1e-12, "{x}");
+        assert_eq!(first_crossing(&path, 1e-3), None);
+        assert_eq!(first_crossing(&path, 1e-7), None);
         // Still apart at the end: never joins.
         let apart: Vec<(f64, f64)> = base.iter().map(|&(x, y)| (x + 0.001, 2.0 * y)).collect();
         assert_eq!(curves_join_at(&base, &apart), None);

@@ -6,22 +6,29 @@
 //! analysed (volume fraction, coordination, grain strain and shape), and
 //! the report, per-run folders and plots are written as the runs finish,
 //! so a failure loses nothing already done.
+//!
+//! With a [`DemContact`] the same template and protocol compact DEM
+//! spheres instead (one per grain, [`dem`]), the source study's comparison.
 
 use crate::analysis::hertz::effective_modulus;
 use crate::analysis::jamming::{
     coordination_law, departure, power_law_at, power_law_with_jamming_point, PowerLaw,
 };
-use crate::analysis::packing::{analyse, reference_of, AnalysisOptions, PackingState, Snapshot};
+use crate::analysis::packing::{
+    analyse, analyse_spheres, reference_of, AnalysisOptions, PackingState, Reference, Snapshot,
+};
 use crate::analysis::plot::PlotError;
 use crate::analysis::slice::SliceFrame;
 use crate::engine::SimBox;
 use crate::file_error::FileError;
+use crate::kernels::GranularMaterial;
 use crate::options::InvalidOption;
 use crate::scene::builders::grain::GrainKind;
 use crate::scene::builders::packing::{
-    break_contacts, build_packing, PackingParams, PackingSummary,
+    break_contacts, build_packing, build_sphere_packing, PackingParams, PackingSummary,
 };
 use crate::scene::datafile::{read_data_file, write_data_file};
+use crate::scene::model::{Mass, ModelKind};
 use crate::scene::protocols::CompactionProtocol;
 use crate::scene::run::Checkpoint;
 use crate::scene::validate::simbox_of;
@@ -93,6 +100,9 @@ pub struct CompactOptions {
     /// The packing's elastic moduli at some of the states.
     #[serde(default)]
     pub moduli: ModuliOptions,
+    /// DEM spheres (one per grain, this contact) instead of bonded grains.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub dem: Option<DemContact>,
 }
 
 /// Why the study could not run (a run that stops is a result: it is
@@ -214,6 +224,21 @@ impl CompactOptions {
         if self.seeds.is_empty() {
             return Err(InvalidOption::new("--seeds", "needs at least one value"));
         }
+        if let Some(dem) = &self.dem {
+            dem.validate()?;
+            if self.zero_net {
+                return Err(InvalidOption::new(
+                    "--zero-net",
+                    "is a bonded-grain option; DEM spheres have no multibody term",
+                ));
+            }
+            if self.moduli.states > 0 {
+                return Err(InvalidOption::new(
+                    "--moduli-states",
+                    "must be 0 with --model dem: a modulus run restarts from a recorded state, which keeps positions but not the contacts' friction history",
+                ));
+            }
+        }
         if self.moduli.states > 0 {
             let m = &self.moduli.protocol;
             positive("--moduli-relax-time", m.relax_time)?;
@@ -296,6 +321,18 @@ impl CompactOptions {
         let mut ff = ForceField::paper(self.a_b);
         ff.zero_net_multibody = self.zero_net;
         ff
+    }
+
+    /// The sphere material of DEM spheres of `radius` and `mass`: the
+    /// bonded solid's `E` and `nu` at `a_B` (`moduli`).
+    fn sphere_material(
+        &self,
+        dem: &DemContact,
+        moduli: &Moduli,
+        radius: f64,
+        mass: f64,
+    ) -> GranularMaterial {
+        dem.material(youngs_modulus(moduli.k, moduli.nu), moduli.nu, radius, mass)
     }
 }
 
@@ -511,12 +548,17 @@ fn whole_grains(scene: &mut Scene) -> Result<(), CompactionError> {
     Ok(())
 }
 
-/// The packing of `seed`: built, or read and made contact-free.
+/// The packing of `seed`: built, or read and made contact-free; DEM
+/// spheres when `opts.dem` is set (`moduli` gives their material).
 fn packing(
     opts: &CompactOptions,
+    moduli: &Moduli,
     seed: u64,
     threads: usize,
 ) -> Result<(Scene, Option<PackingSummary>, f64), CompactionError> {
+    if let Some(dem) = &opts.dem {
+        return sphere_packing(opts, dem, moduli, seed, threads);
+    }
     match &opts.source {
         PackingSource::Build {
             grains,
@@ -553,6 +595,97 @@ fn packing(
     }
 }
 
+/// The DEM spheres of `seed`: built at the bonded packing's template
+/// centres, or read from a sphere data file (all of one radius, which the
+/// analysis needs), with the material of [`CompactOptions::sphere_material`].
+fn sphere_packing(
+    opts: &CompactOptions,
+    dem: &DemContact,
+    moduli: &Moduli,
+    seed: u64,
+    threads: usize,
+) -> Result<(Scene, Option<PackingSummary>, f64), CompactionError> {
+    let packing_error =
+        |e: crate::scene::validate::SceneError| CompactionError::Packing(e.to_string());
+    match &opts.source {
+        PackingSource::Build {
+            grains,
+            kind,
+            radius,
+            distinct_grains,
+            template_fraction,
+            time_scale,
+        } => {
+            let mut p = PackingParams::new(*grains, *kind, *radius, opts.a_b, seed);
+            p.distinct_grains = *distinct_grains;
+            p.template_fraction = *template_fraction;
+            p.grain.time_scale = *time_scale;
+            // The material's rolling and twisting springs depend on the
+            // spheres' radius and mass, known once the template is built.
+            let placeholder = opts.sphere_material(dem, moduli, 1.0, 1.0);
+            let (mut scene, summary) =
+                build_sphere_packing(&p, placeholder, threads, false).map_err(packing_error)?;
+            let material =
+                opts.sphere_material(dem, moduli, summary.template_radius, mean_mass(&scene));
+            scene.force_field = ForceField::dem(material);
+            Ok((scene, Some(summary), 1.0))
+        }
+        PackingSource::File { path } => {
+            let placeholder = ForceField::dem(opts.sphere_material(dem, moduli, 1.0, 1.0));
+            let mut scene = read_data_file(path, [true; 3], placeholder, seed)
+                .map_err(|e| CompactionError::Packing(e.to_string()))?;
+            if scene.model != ModelKind::Dem {
+                return Err(CompactionError::Packing(format!(
+                    "{}: --model dem needs a sphere data file (atom_style sphere)",
+                    path.display()
+                )));
+            }
+            if scene.simbox.tilt.iter().any(|&t| t != 0.0) {
+                return Err(CompactionError::Packing(format!(
+                    "{}: the box is tilted; compaction needs an orthogonal periodic box",
+                    path.display()
+                )));
+            }
+            let radius = uniform_radius(&scene).ok_or_else(|| {
+                CompactionError::Packing(format!(
+                    "{}: the spheres differ in radius; the packing analysis measures spheres of one radius",
+                    path.display()
+                ))
+            })?;
+            let material = opts.sphere_material(dem, moduli, radius, mean_mass(&scene));
+            scene.force_field = ForceField::dem(material);
+            Ok((scene, None, 1.0))
+        }
+    }
+}
+
+/// Grains of a packing (a DEM sphere is a grain).
+fn grain_count(packing: &Scene) -> usize {
+    match &packing.particles.grain {
+        _ if packing.model == ModelKind::Dem => packing.particles.positions.len(),
+        Some(g) => g.iter().max().map_or(0, |m| *m as usize + 1),
+        None => 0,
+    }
+}
+
+/// The mean particle mass of a scene.
+fn mean_mass(scene: &Scene) -> f64 {
+    match &scene.particles.mass {
+        Mass::Uniform(m) => *m,
+        Mass::PerParticle(m) => m.iter().sum::<f64>() / m.len().max(1) as f64,
+    }
+}
+
+/// The spheres' common radius, if they have one (to 1e-12 relative).
+fn uniform_radius(scene: &Scene) -> Option<f64> {
+    let radii = scene.particles.radius.as_deref()?;
+    let r = *radii.first()?;
+    radii
+        .iter()
+        .all(|&x| (x - r).abs() <= 1e-12 * r)
+        .then_some(r)
+}
+
 fn simbox_of_checkpoint(c: &Checkpoint, periodic: [bool; 3]) -> SimBox {
     SimBox {
         lo: c.simbox[0],
@@ -565,6 +698,9 @@ fn simbox_of_checkpoint(c: &Checkpoint, periodic: [bool; 3]) -> SimBox {
 /// Fails, naming the grain, when the packing's start cannot be measured
 /// (a grain with fewer than four particles, flat or collinear ones).
 fn check_measurable(scene: &Scene, analysis: &AnalysisOptions) -> Result<(), CompactionError> {
+    if scene.model == ModelKind::Dem {
+        return Ok(());
+    }
     let grain = scene.particles.grain.clone().unwrap_or_default();
     let simbox = simbox_of(scene);
     let start = Snapshot {
@@ -578,10 +714,16 @@ fn check_measurable(scene: &Scene, analysis: &AnalysisOptions) -> Result<(), Com
         .map_err(CompactionError::analysing("the packing before the run"))
 }
 
-/// The compaction scene of a packing: its stages are the protocol's.
+/// The compaction scene of a packing: its stages are the protocol's
+/// (DEM spheres have no bonds whose reference the jam could reset).
 pub fn compaction_scene(packing: &Scene, protocol: &CompactionProtocol) -> Scene {
     let mut scene = packing.clone();
     scene.stages = protocol.stages();
+    if scene.model == ModelKind::Dem {
+        for stage in &mut scene.stages {
+            stage.reset_reference = false;
+        }
+    }
     scene
 }
 
@@ -641,6 +783,66 @@ fn run_engine(
     }
 }
 
+/// How the states of a packing are measured.
+enum Meter {
+    /// Bonded grains, against their stress-free shapes.
+    Grains {
+        /// Grain of each particle.
+        grain: Vec<u32>,
+        /// The stress-free packing's grains.
+        reference: Reference,
+    },
+    /// DEM spheres of one radius.
+    Spheres {
+        /// Their radius.
+        radius: f64,
+    },
+}
+
+impl Meter {
+    /// The meter of `packing`'s particle model.
+    fn of(packing: &Scene, analysis: &AnalysisOptions) -> Result<Self, CompactionError> {
+        if packing.model == ModelKind::Dem {
+            let radius = uniform_radius(packing)
+                .ok_or_else(|| CompactionError::Packing("the spheres differ in radius".into()))?;
+            return Ok(Self::Spheres { radius });
+        }
+        let grain = packing.particles.grain.clone().unwrap_or_default();
+        let simbox = simbox_of(packing);
+        let start = Snapshot {
+            simbox: &simbox,
+            positions: &packing.particles.positions,
+            grain: &grain,
+            bonds: &packing.bonds.pairs,
+        };
+        let reference =
+            reference_of(&start, analysis).map_err(CompactionError::analysing("the packing"))?;
+        Ok(Self::Grains { grain, reference })
+    }
+
+    /// The state of `packing`'s particles at `positions` in `simbox`.
+    fn measure(
+        &self,
+        packing: &Scene,
+        simbox: &SimBox,
+        positions: &[[f64; 3]],
+        analysis: &AnalysisOptions,
+    ) -> Result<PackingState, crate::analysis::packing::PackingError> {
+        match self {
+            Self::Grains { grain, reference } => {
+                let snap = Snapshot {
+                    simbox,
+                    positions,
+                    grain,
+                    bonds: &packing.bonds.pairs,
+                };
+                analyse(&snap, reference, analysis)
+            }
+            Self::Spheres { radius } => analyse_spheres(simbox, positions, *radius, analysis),
+        }
+    }
+}
+
 /// Measures the stress-free packing and every checkpoint of `stages`; a
 /// state that cannot be measured ends the list, and its error is returned
 /// beside the states before it.
@@ -651,17 +853,9 @@ fn states_of(
     e_eff: f64,
     rates: &[f64],
 ) -> Result<(Vec<StateRow>, RunSeries, Option<String>), CompactionError> {
-    let grain = scene.particles.grain.clone().unwrap_or_default();
     let n = scene.particles.positions.len() as f64;
     let simbox = simbox_of(scene);
-    let start = Snapshot {
-        simbox: &simbox,
-        positions: &scene.particles.positions,
-        grain: &grain,
-        bonds: &scene.bonds.pairs,
-    };
-    let reference =
-        reference_of(&start, &opts.analysis).map_err(CompactionError::analysing("the packing"))?;
+    let meter = Meter::of(scene, &opts.analysis)?;
     let mut rows = vec![StateRow {
         stage: "start".into(),
         rate: 0.0,
@@ -670,7 +864,8 @@ fn states_of(
         pressure: 0.0,
         p_over_e_eff: 0.0,
         ke_per_particle: 0.0,
-        packing: analyse(&start, &reference, &opts.analysis)
+        packing: meter
+            .measure(scene, &simbox, &scene.particles.positions, &opts.analysis)
             .map_err(CompactionError::analysing("the packing"))?,
     }];
     let mut series = RunSeries::default();
@@ -710,13 +905,7 @@ fn states_of(
                 break;
             }
             let cbox = simbox_of_checkpoint(c, scene.simbox.periodic);
-            let snap = Snapshot {
-                simbox: &cbox,
-                positions: &c.positions,
-                grain: &grain,
-                bonds: &scene.bonds.pairs,
-            };
-            let packing = match analyse(&snap, &reference, &opts.analysis) {
+            let packing = match meter.measure(scene, &cbox, &c.positions, &opts.analysis) {
                 Ok(p) => p,
                 Err(e) => {
                     failed = Some(format!(
@@ -758,7 +947,17 @@ fn write_slices(
     states: &[StateRow],
     path: &Path,
 ) -> Result<(), CompactionError> {
-    let grain = packing.particles.grain.clone().unwrap_or_default();
+    // A DEM sphere is its own grain, drawn at its diameter.
+    let (grain, diameter) = match uniform_radius(packing) {
+        Some(r) if packing.model == ModelKind::Dem => (
+            (0..packing.particles.positions.len() as u32).collect(),
+            2.0 * r,
+        ),
+        _ => (
+            packing.particles.grain.clone().unwrap_or_default(),
+            packing.force_field.pair.as_ref().map_or(1.0, |p| p.d),
+        ),
+    };
     let start_box = simbox_of(packing);
     let caption = |what: &str, s: &StateRow| {
         format!(
@@ -795,7 +994,6 @@ fn write_slices(
             grain: &grain,
         });
     }
-    let diameter = packing.force_field.pair.as_ref().map_or(1.0, |p| p.d);
     crate::analysis::slice::write_slices(path, &frames, diameter)?;
     Ok(())
 }
@@ -829,7 +1027,7 @@ pub fn run_compaction(
     for &seed in &opts.seeds {
         let folder = dir.join(format!("seed-{seed}"));
         std::fs::create_dir_all(&folder).map_err(FileError::on("creating", &folder))?;
-        let (packing, summary, expansion) = packing(opts, seed, threads)?;
+        let (packing, summary, expansion) = packing(opts, &report.moduli, seed, threads)?;
         // Every grain must have a hull before hours of running, not after.
         check_measurable(&packing, &opts.analysis)?;
         if expansion > 1.0 {
@@ -845,11 +1043,7 @@ pub fn run_compaction(
         write_scene(&scene_path, &scene).map_err(|e| CompactionError::Packing(e.to_string()))?;
         print(&format!(
             "seed {seed}: {} grains, {} particles, box {:.2} d; running {} steps ({} stages)",
-            packing
-                .particles
-                .grain
-                .as_ref()
-                .map_or(0, |g| g.iter().max().map_or(0, |m| *m as usize + 1)),
+            grain_count(&packing),
             packing.particles.positions.len(),
             packing.simbox.lengths[0],
             scene.stages.iter().map(|s| s.steps).sum::<u64>(),
@@ -876,7 +1070,7 @@ pub fn run_compaction(
         };
         report.runs.push(CompactionRun {
             seed,
-            grains: states[0].packing.eps_v.len(),
+            grains: grain_count(&packing),
             particles: packing.particles.positions.len(),
             packing: summary,
             expansion,
@@ -900,9 +1094,14 @@ pub fn run_compaction(
         }
         let last = report.runs.last().and_then(|r| r.states.last());
         if let Some(s) = last {
+            let shape = if opts.dem.is_some() {
+                format!("phi_sphere = {:.4}", s.packing.phi_sphere)
+            } else {
+                format!("eps_V = {:.3}", s.packing.eps_v_mean)
+            };
             print(&format!(
-                "seed {seed}: {run_seconds:.0} s; last state phi_MC = {:.4}, P/E_eff = {:.3e}, Z_force = {:.2}, eps_V = {:.3}",
-                s.packing.phi_mc, s.p_over_e_eff, s.packing.z_force, s.packing.eps_v_mean
+                "seed {seed}: {run_seconds:.0} s; last state phi_MC = {:.4}, P/E_eff = {:.3e}, Z_force = {:.2}, {shape}",
+                s.packing.phi_mc, s.p_over_e_eff, s.packing.z_force
             ));
         }
         let last = report.runs.len() - 1;
@@ -961,10 +1160,12 @@ pub fn run_compaction(
 }
 
 pub mod compare;
+pub mod dem;
 mod dump;
 pub mod moduli;
 mod report;
 
+pub use dem::{youngs_modulus, DemContact};
 pub use dump::{analyse_dump, DumpAnalysis, FrameState};
 pub use moduli::{pick_states, ModuliOptions, PackingModuli, StateModuli};
 pub use report::{read_report, refit, table, write_report};
