@@ -148,7 +148,7 @@ fn each_error_is_printed_once() {
 fn out_of_range_options_are_refused_with_the_argument_named() {
     let x = tmp("never.json");
     let x = x.to_str().unwrap();
-    let cases: [(&[&str], &str); 9] = [
+    let cases: [(&[&str], &str); 13] = [
         (&["--threads", "0", "bench"], "--threads must be at least 1"),
         (
             &["build", "bulk", "--time-scale", "0", "-o", x],
@@ -181,6 +181,22 @@ fn out_of_range_options_are_refused_with_the_argument_named() {
         (
             &["run", x, "-o", x, "--dump", x, "--dump-every", "0"],
             "--dump-every must be at least 1",
+        ),
+        (
+            &["compact", "--model", "dem", "--friction", "0.3,0", "-o", x],
+            "--friction takes three values, mu_s,mu_r,mu_t; got 2",
+        ),
+        (
+            &["compact", "--model", "dem", "--friction", "0.3,-1,0", "-o", x],
+            "--friction mu_s, mu_r and mu_t must be finite and >= 0, got [0.3, -1.0, 0.0]",
+        ),
+        (
+            &["compact", "--restitution", "0.9", "-o", x],
+            "--restitution is a DEM option: add --model dem",
+        ),
+        (
+            &["compact", "--model", "dem", "--moduli-states", "2", "-o", x],
+            "--moduli-states must be 0 with --model dem: a modulus run restarts from a recorded state, which keeps positions but not the contacts' friction history",
         ),
     ];
     for (args, message) in cases {

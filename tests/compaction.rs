@@ -445,9 +445,15 @@ fn a_tiny_dem_compaction_compresses_spheres_and_reports_both_volume_fractions() 
     let material = scene.force_field.granular.unwrap();
     assert_eq!(material.sliding_friction, 0.15);
     assert_eq!(material.rolling.unwrap().friction, 0.1);
+    // The springs are those of the built spheres' radius and mass.
+    let (radius, mass) = (
+        scene.particles.radius.as_ref().unwrap()[0],
+        scene.particles.mass.values(16)[0],
+    );
+    assert!(radius > 1.5 && mass > 20.0, "{radius} {mass}");
+    assert_eq!(material, dem.material_of(&report.moduli, radius, mass));
     let k_n = GranularCoeffs::of(&material).normal_stiffness;
     assert!((k_n / (4.0 / 3.0 * report.e_eff) - 1.0).abs() < 1e-12);
-    let radius = scene.particles.radius.as_ref().unwrap()[0];
     let spheres = 16.0 * 4.0 / 3.0 * std::f64::consts::PI * radius.powi(3);
     for s in &run.states {
         let p = &s.packing;
@@ -477,7 +483,43 @@ fn a_tiny_dem_compaction_compresses_spheres_and_reports_both_volume_fractions() 
     assert!(!dir.join("distributions.svg").exists());
     let study = compare::read_study(&dir, "dem").unwrap();
     let table = compare::comparison_table(&[study], "test");
-    assert!(table.contains("phi_sphere (spheres) where P / E_eff first reaches"));
+    // Pressures the compression passes through have their phi_sphere,
+    // rising with the pressure.
+    let row = table
+        .lines()
+        .skip_while(|l| !l.starts_with("phi_sphere (spheres) where P / E_eff first reaches"))
+        .nth(1)
+        .unwrap();
+    let phis: Vec<f64> = row
+        .split_whitespace()
+        .filter_map(|c| c.parse().ok())
+        .collect();
+    assert!(phis.len() >= 3, "{row}");
+    assert!(phis.windows(2).all(|w| w[0] < w[1]), "{row}");
+    assert!(
+        phis[0] > 0.55 && phis[phis.len() - 1] <= end.packing.phi_sphere,
+        "{row}"
+    );
+    // A sphere file is not a packing of grains.
+    let mut grains = opts.clone();
+    grains.dem = None;
+    grains.source = PackingSource::File {
+        path: dir.join("seed-3/packing.data"),
+    };
+    let e = run_compaction(
+        &grains,
+        1,
+        None,
+        &dir.join("grains"),
+        "test",
+        false,
+        &mut |_| {},
+    )
+    .unwrap_err();
+    assert!(
+        e.to_string().contains("compact them with --model dem"),
+        "{e}"
+    );
     // What a DEM study cannot do is refused, naming the option.
     opts.moduli.states = 2;
     let e = run_compaction(&opts, 1, None, &dir, "test", false, &mut |_| {}).unwrap_err();

@@ -162,6 +162,11 @@ where
                     .filter(|q| q.0.is_finite() && q.1.is_finite())
                     .filter(|q| (!p.log_x || q.0 > 0.0) && (!p.log_y || q.1 > 0.0))
                     .collect();
+                // Nothing to draw, nothing to label; colours stay with the
+                // series' position, so a run keeps its colour in every panel.
+                if pts.is_empty() {
+                    continue;
+                }
                 let legend_colour = colour;
                 if matches!(s.mark, Mark::Line | Mark::LinePoints) {
                     chart

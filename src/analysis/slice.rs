@@ -58,6 +58,47 @@ pub fn slice_discs(frame: &SliceFrame, diameter: f64) -> Vec<Disc> {
         .collect()
 }
 
+/// Sides of the polygon that draws a disc.
+const DISC_SIDES: usize = 48;
+
+/// The part of the disc at `centre` with `radius` inside the box `[0, lx]
+/// x [0, ly]`, as a polygon (a regular `DISC_SIDES`-gon clipped against
+/// each side of the box in turn; empty when they do not meet).
+pub fn disc_in_box(centre: (f64, f64), radius: f64, lx: f64, ly: f64) -> Vec<(f64, f64)> {
+    let mut polygon: Vec<(f64, f64)> = (0..DISC_SIDES)
+        .map(|k| {
+            let t = std::f64::consts::TAU * k as f64 / DISC_SIDES as f64;
+            (centre.0 + radius * t.cos(), centre.1 + radius * t.sin())
+        })
+        .collect();
+    // Each half-plane as (axis, bound, keep below the bound).
+    for (axis, bound, below) in [
+        (0, 0.0, false),
+        (0, lx, true),
+        (1, 0.0, false),
+        (1, ly, true),
+    ] {
+        let coord = |p: (f64, f64)| if axis == 0 { p.0 } else { p.1 };
+        let inside = |p: (f64, f64)| (coord(p) <= bound) == below || coord(p) == bound;
+        let mut kept = Vec::with_capacity(polygon.len() + 2);
+        for (i, &b) in polygon.iter().enumerate() {
+            let a = polygon[(i + polygon.len() - 1) % polygon.len()];
+            if inside(a) != inside(b) {
+                let t = (bound - coord(a)) / (coord(b) - coord(a));
+                kept.push((a.0 + t * (b.0 - a.0), a.1 + t * (b.1 - a.1)));
+            }
+            if inside(b) {
+                kept.push(b);
+            }
+        }
+        polygon = kept;
+        if polygon.is_empty() {
+            break;
+        }
+    }
+    polygon
+}
+
 /// A colour per grain: hues spread by the golden angle, so neighbouring
 /// grain ids differ clearly.
 fn grain_colour(grain: u32) -> RGBColor {
@@ -101,59 +142,36 @@ pub fn write_slices(path: &Path, frames: &[SliceFrame], diameter: f64) -> Result
     root.fill(&WHITE).map_err(|e| err(e.to_string()))?;
     let style = TextStyle::from(("sans-serif", 16).into_font()).color(&BLACK);
     let origin = |k: usize| ((k as u32 * panel + margin) as i32, (2 * margin) as i32);
-    let to_pixels = |k: usize, frame: &SliceFrame, x: f64, y: f64| {
-        let (ox, oy) = origin(k);
-        (
-            ox + (x * scale).round() as i32,
-            oy + ((frame.simbox.lengths[1] - y) * scale).round() as i32,
-        )
-    };
-    // Discs that cross a periodic face are drawn at their images too; once
-    // every frame is drawn, whatever lies outside its box is masked.
     for (k, frame) in frames.iter().enumerate() {
         let [lx, ly] = [frame.simbox.lengths[0], frame.simbox.lengths[1]];
+        let (ox, oy) = origin(k);
+        let px = |(x, y): (f64, f64)| {
+            (
+                ox + (x * scale).round() as i32,
+                oy + ((ly - y) * scale).round() as i32,
+            )
+        };
+        // A disc that crosses a periodic face shows at its images too; each
+        // is cut to the box.
         for disc in slice_discs(frame, diameter) {
-            let r = (disc.radius * scale).max(0.5).round() as i32;
             for (ix, iy) in (-1..=1).flat_map(|i| (-1..=1).map(move |j| (i, j))) {
-                let (x, y) = (disc.x + f64::from(ix) * lx, disc.y + f64::from(iy) * ly);
-                let inside = x + disc.radius > 0.0
-                    && x - disc.radius < lx
-                    && y + disc.radius > 0.0
-                    && y - disc.radius < ly;
-                if inside {
-                    let centre = to_pixels(k, frame, x, y);
-                    root.draw(&Circle::new(centre, r, grain_colour(disc.grain).filled()))
+                let centre = (disc.x + f64::from(ix) * lx, disc.y + f64::from(iy) * ly);
+                let cut = disc_in_box(centre, disc.radius, lx, ly);
+                if cut.len() >= 3 {
+                    let points: Vec<(i32, i32)> = cut.into_iter().map(px).collect();
+                    root.draw(&Polygon::new(points, grain_colour(disc.grain).filled()))
                         .map_err(|e| err(e.to_string()))?;
                 }
             }
         }
-    }
-    for (k, frame) in frames.iter().enumerate() {
-        let [lx, ly] = [frame.simbox.lengths[0], frame.simbox.lengths[1]];
-        let (left, top) = to_pixels(k, frame, 0.0, ly);
-        let (right, bottom) = to_pixels(k, frame, lx, 0.0);
-        // One pixel of overlap, so no seam shows between masks.
-        let panel_left = (k as u32 * panel) as i32 - 1;
-        let panel_right = ((k as u32 + 1) * panel) as i32 + 1;
-        // Masks reach past the canvas, over images drawn beyond it.
-        let height = (2 * panel + margin) as i32;
-        for [a, b] in [
-            [(panel_left, -height), (left, height)],
-            [(right, -height), (panel_right, height)],
-            [(left - 1, -height), (right + 1, top)],
-            [(left - 1, bottom), (right + 1, height)],
-        ] {
-            root.draw(&Rectangle::new([a, b], WHITE.filled()))
-                .map_err(|e| err(e.to_string()))?;
-        }
         root.draw(&Rectangle::new(
-            [(left, top), (right, bottom)],
+            [px((0.0, ly)), px((lx, 0.0))],
             BLACK.stroke_width(1),
         ))
         .map_err(|e| err(e.to_string()))?;
         root.draw(&Text::new(
             frame.title.clone(),
-            (origin(k).0, margin as i32 / 2),
+            (ox, margin as i32 / 2),
             style.clone(),
         ))
         .map_err(|e| err(e.to_string()))?;
@@ -164,6 +182,37 @@ pub fn write_slices(path: &Path, frames: &[SliceFrame], diameter: f64) -> Result
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    fn area(polygon: &[(f64, f64)]) -> f64 {
+        let n = polygon.len();
+        0.5 * (0..n)
+            .map(|i| {
+                let (a, b) = (polygon[i], polygon[(i + 1) % n]);
+                a.0 * b.1 - b.0 * a.1
+            })
+            .sum::<f64>()
+            .abs()
+    }
+
+    /// A disc inside the box is whole, one on a corner keeps a quarter, one
+    /// across a face keeps its half, one outside vanishes.
+    #[test]
+    fn discs_are_cut_to_the_box() {
+        let (lx, ly) = (10.0, 6.0);
+        let whole = disc_in_box((5.0, 3.0), 1.0, lx, ly);
+        let full = area(&whole);
+        let sides = DISC_SIDES as f64;
+        let expected = 0.5 * sides * (std::f64::consts::TAU / sides).sin();
+        assert!((full - expected).abs() < 1e-12, "{full}");
+        let corner = area(&disc_in_box((lx, ly), 1.0, lx, ly));
+        assert!((corner - 0.25 * full).abs() < 1e-12, "{corner}");
+        let face = area(&disc_in_box((0.0, 3.0), 1.0, lx, ly));
+        assert!((face - 0.5 * full).abs() < 1e-12, "{face}");
+        for p in disc_in_box((-0.5, 5.8), 1.0, lx, ly) {
+            assert!(p.0 >= 0.0 && p.0 <= lx && p.1 >= 0.0 && p.1 <= ly, "{p:?}");
+        }
+        assert!(disc_in_box((-2.0, 3.0), 1.0, lx, ly).is_empty());
+    }
 
     #[test]
     fn the_mid_plane_cuts_the_right_discs_across_the_periodic_face() {

@@ -395,10 +395,12 @@ enum Command {
     /// near jamming are fitted; writes DIR/compaction.json,
     /// DIR/compaction.svg, DIR/jamming.svg, DIR/compaction.txt,
     /// DIR/moduli.svg, DIR/distributions.svg and DIR/seed-N/ (scene,
-    /// packing data file, slice picture). Defaults are a reduced scale that
-    /// runs in minutes; the paper's protocol is --jam-gain 0.1 --jam-time
-    /// 2e5 --rate-start 1e-9 --rate-end 1e-6 --rate-levels 10 --stage-time
-    /// 2e5 --moduli-relax-time 1e4 --moduli-rate 1e-8.
+    /// packing data file, slice picture). With --model dem, DEM spheres
+    /// (one per grain) instead: phi_sphere, phi_MC and Z, no moduli, grain
+    /// shapes or distributions. Defaults are a reduced scale that runs in
+    /// minutes; the paper's protocol is --jam-gain 0.1 --jam-time 2e5
+    /// --rate-start 1e-9 --rate-end 1e-6 --rate-levels 10 --stage-time 2e5
+    /// --moduli-relax-time 1e4 --moduli-rate 1e-8.
     Compact {
         /// Output folder.
         #[arg(short, long, default_value = "results/compaction")]
@@ -421,12 +423,14 @@ enum Command {
         /// Scale of the grain builds' times (1 = the full protocol).
         #[arg(long, default_value_t = 1.0)]
         time_scale: f64,
-        /// Compress this packing instead (LAMMPS data file, atom_style
-        /// bond, molecule id = grain; the box is taken as periodic and
-        /// must be orthogonal; image flags honoured).
+        /// Compress this packing instead (LAMMPS data file: atom_style
+        /// bond, molecule id = grain, or with --model dem atom_style sphere,
+        /// one radius; the box is taken as periodic and must be orthogonal;
+        /// image flags honoured).
         #[arg(long)]
         packing: Option<PathBuf>,
-        /// Multibody strength a_B (k d); the force field is the paper's.
+        /// Multibody strength a_B (k d); the force field is the paper's
+        /// (for DEM spheres: the solid's E and nu at a_B).
         #[arg(long = "a-b", allow_hyphen_values = true, default_value_t = 0.0)]
         a_b: f64,
         /// Use the zero-net-multibody variant (docs/model.md).
@@ -495,20 +499,22 @@ enum Command {
         #[arg(long, value_enum, default_value = "bpm")]
         model: CompactModel,
         /// DEM friction coefficients mu_s,mu_r,mu_t (sliding, rolling,
-        /// twisting) (paper: 0.3,0,0 and 0.15,0.1,0.1 match rough grains,
-        /// 0.15,0,0 and 0.1,0.05,0.05 smoother ones).
-        #[arg(long, value_delimiter = ',', value_name = "MU_S,MU_R,MU_T", default_values_t = [0.3, 0.0, 0.0])]
-        friction: Vec<f64>,
-        /// DEM restitution coefficient (Tsuji's damping).
-        #[arg(long, default_value_t = 0.5)]
-        restitution: f64,
-        /// DEM tangential over normal damping, x_gt.
-        #[arg(long, default_value_t = 1.0)]
-        tangential_damping: f64,
+        /// twisting) [default 0.3,0,0] (paper: 0.3,0,0 and 0.15,0.1,0.1
+        /// match rough grains, 0.15,0,0 and 0.1,0.05,0.05 smoother ones).
+        #[arg(long, value_delimiter = ',', value_name = "MU_S,MU_R,MU_T")]
+        friction: Option<Vec<f64>>,
+        /// DEM restitution coefficient (Tsuji's damping) [default 0.5].
+        #[arg(long)]
+        restitution: Option<f64>,
+        /// DEM tangential over normal damping, x_gt [default 1].
+        #[arg(long)]
+        tangential_damping: Option<f64>,
         /// DEM reference overlap over R_eff of the rolling and twisting
-        /// springs (the tangential spring at this overlap).
-        #[arg(long, default_value_t = 0.01)]
-        reference_overlap: f64,
+        /// springs [default 0.01]: the tangential spring at this overlap;
+        /// it also sets the twisting torque cap 2/3 a_ref mu_t, a_ref =
+        /// R_eff sqrt(overlap).
+        #[arg(long)]
+        reference_overlap: Option<f64>,
         /// Refit the runs of an earlier OUTPUT/compaction.json and rewrite
         /// its plots and table, without running anything (other options
         /// are ignored).
@@ -1364,18 +1370,43 @@ fn real_main() -> Result<()> {
                 let report = compaction::refit(&output)?;
                 print!("{}", compaction::table(&report));
                 println!(
-                    "refitted {} run(s); rewrote {}/compaction.json, compaction.svg, jamming.svg, distributions.svg, moduli.svg (if measured) and compaction.txt",
+                    "refitted {} run(s); rewrote {}/compaction.json, compaction.svg, jamming.svg, distributions.svg and moduli.svg (grains; moduli if measured) and compaction.txt",
                     report.runs.len(),
                     output.display()
                 );
                 return Ok(());
             }
-            let friction: [f64; 3] = friction.try_into().map_err(|given: Vec<f64>| {
-                anyhow::anyhow!(
-                    "--friction takes three values, mu_s,mu_r,mu_t; got {}",
-                    given.len()
-                )
-            })?;
+            let dem = match model {
+                CompactModel::Bpm => {
+                    let given = [
+                        ("--friction", friction.is_some()),
+                        ("--restitution", restitution.is_some()),
+                        ("--tangential-damping", tangential_damping.is_some()),
+                        ("--reference-overlap", reference_overlap.is_some()),
+                    ];
+                    if let Some((name, _)) = given.iter().find(|g| g.1) {
+                        anyhow::bail!("{name} is a DEM option: add --model dem");
+                    }
+                    None
+                }
+                CompactModel::Dem => {
+                    let d = compaction::DemContact::default();
+                    Some(compaction::DemContact {
+                        friction: match friction {
+                            Some(given) => given.try_into().map_err(|given: Vec<f64>| {
+                                anyhow::anyhow!(
+                                    "--friction takes three values, mu_s,mu_r,mu_t; got {}",
+                                    given.len()
+                                )
+                            })?,
+                            None => d.friction,
+                        },
+                        restitution: restitution.unwrap_or(d.restitution),
+                        tangential_damping: tangential_damping.unwrap_or(d.tangential_damping),
+                        reference_overlap: reference_overlap.unwrap_or(d.reference_overlap),
+                    })
+                }
+            };
             let opts = compaction::CompactOptions {
                 source: match packing {
                     Some(path) => compaction::PackingSource::File { path },
@@ -1425,12 +1456,7 @@ fn real_main() -> Result<()> {
                         ..bpm::scene::protocols::PackingModuliProtocol::paper()
                     },
                 },
-                dem: (model == CompactModel::Dem).then_some(compaction::DemContact {
-                    friction,
-                    restitution,
-                    tangential_damping,
-                    reference_overlap,
-                }),
+                dem,
             };
             opts.validate()?;
             let exe = std::env::current_exe().context("locating the bpm executable")?;
@@ -1445,7 +1471,7 @@ fn real_main() -> Result<()> {
             )?;
             print!("{}", compaction::table(&report));
             println!(
-                "{} run(s); wrote {}/compaction.json, compaction.svg, jamming.svg, distributions.svg, moduli.svg (if measured) and compaction.txt",
+                "{} run(s); wrote {}/compaction.json, compaction.svg, jamming.svg, distributions.svg and moduli.svg (grains; moduli if measured) and compaction.txt",
                 report.runs.len(),
                 output.display()
             );

@@ -509,14 +509,46 @@ pub fn build_packing(
     Ok((scene, summary))
 }
 
+/// Expands the (orthogonal) box of a DEM scene and its sphere centres
+/// uniformly about the box's lower corner, just enough that no two spheres
+/// touch (by `1e-9` relative beyond contact); returns the linear factor (1
+/// when none touched). Spheres without radii have the default one.
+pub fn separate_spheres(scene: &mut Scene) -> f64 {
+    let n = scene.particles.positions.len();
+    let radii = scene
+        .particles
+        .radius
+        .clone()
+        .unwrap_or_else(|| vec![crate::engine::particles::DEFAULT_RADIUS; n]);
+    let largest = radii.iter().copied().fold(0.0, f64::max);
+    let simbox = simbox_of(scene);
+    let needed = pairs_within(&simbox, &scene.particles.positions, 2.0 * largest)
+        .iter()
+        .map(|&(i, j, r)| (radii[i] + radii[j]) / r)
+        .fold(1.0, f64::max);
+    if needed <= 1.0 {
+        return 1.0;
+    }
+    let factor = needed * (1.0 + 1e-9);
+    let lo = scene.simbox.lo;
+    for x in &mut scene.particles.positions {
+        for d in 0..3 {
+            x[d] = lo[d] + (x[d] - lo[d]) * factor;
+        }
+    }
+    scene.simbox.lengths = scene.simbox.lengths.map(|l| l * factor);
+    factor
+}
+
 /// DEM spheres at the centres of the same template as [`build_packing`]
 /// (same parameters, same seed, so the same centres): one sphere per grain
 /// with the grains' volume-equivalent radius `R_eq` (the template's, so the
 /// spheres fill the template's volume fraction) and the mean mass of the
 /// built grains (unit-mass particles), of `material`. The template leaves
 /// overlaps of up to `1e-9` diameters; box and centres are expanded
-/// uniformly until no two spheres touch (a stress-free start, as for the
-/// grains). The scene holds no protocol stages.
+/// uniformly until no two spheres touch ([`separate_spheres`]: a
+/// stress-free start, as for the grains). The scene holds no protocol
+/// stages.
 pub fn build_sphere_packing(
     params: &PackingParams,
     material: GranularMaterial,
@@ -535,33 +567,18 @@ pub fn build_sphere_packing(
         params.grain.radius,
         params.seed
     );
-    let diameter = 2.0 * t.template_radius;
-    let simbox = SimBox {
-        lo: [0.0; 3],
-        lengths: [t.length; 3],
-        tilt: [0.0; 3],
-        periodic: [true; 3],
-    };
-    let closest = pairs_within(&simbox, &t.centres, diameter)
-        .iter()
-        .fold(diameter, |c, &(_, _, r)| c.min(r));
-    let expansion = if closest < diameter {
-        diameter / closest * (1.0 + 1e-9)
-    } else {
-        1.0
-    };
-    let length = t.length * expansion;
-    let centres = t.centres.iter().map(|c| c.map(|x| x * expansion)).collect();
     let mut scene = super::periodic_cube(
         description,
         params.seed,
-        length,
-        centres,
+        t.length,
+        t.centres,
         ForceField::dem(material),
     );
     scene.model = ModelKind::Dem;
     scene.particles.radius = Some(vec![t.template_radius; params.grains]);
     scene.particles.mass = Mass::Uniform(particles_per_grain);
+    let expansion = separate_spheres(&mut scene);
+    let length = scene.simbox.lengths[0];
     let summary = PackingSummary {
         grains: params.grains,
         particles: params.grains,

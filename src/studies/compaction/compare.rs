@@ -143,8 +143,7 @@ fn curves_join_at(base: &[(f64, f64)], other: &[(f64, f64)]) -> Option<f64> {
 type Point = dyn Fn(&Study, &CompactionRun, &StateRow) -> Option<(f64, f64)>;
 
 /// One series per run of every study, of the compression states' points
-/// (runs without any point, such as spheres in a grain-shape panel, are
-/// left out).
+/// (every panel lists the runs in one order, so each keeps its colour).
 fn series(studies: &[Study], f: &Point) -> Vec<Series> {
     studies
         .iter()
@@ -161,7 +160,6 @@ fn series(studies: &[Study], f: &Point) -> Vec<Series> {
                 )
             })
         })
-        .filter(|series| !series.points.is_empty())
         .collect()
 }
 
@@ -170,7 +168,8 @@ const PHI_AT_PRESSURE: [f64; 6] = [1e-5, 1e-4, 1e-3, 1e-2, 3e-2, 1e-1];
 
 /// The volume fraction `pick` of a run where its pressure first reaches
 /// `p` (`P / E_eff`) during compression, interpolated linearly in `ln P`
-/// between the two states around that crossing.
+/// between the two states around that crossing; `None` if no compression
+/// state lies at or below `p` (the jam ended above it) or none above.
 fn phi_at_pressure(run: &CompactionRun, p: f64, pick: fn(&StateRow) -> f64) -> Option<f64> {
     let path: Vec<(f64, f64)> = run
         .states
@@ -202,6 +201,12 @@ fn mean_phi_at_pressure(
         .filter_map(|r| phi_at_pressure(r, p, pick))
         .collect();
     (!v.is_empty()).then(|| v.iter().sum::<f64>() / v.len() as f64)
+}
+
+/// `Some` for a study of grains, `None` for spheres (which keep their
+/// shape: no grain strain or asphericity).
+fn grains(study: &Study) -> Option<()> {
+    study.report.options.dem.is_none().then_some(())
 }
 
 /// The volume fraction a DEM study usually reports: `phi_sphere` for
@@ -238,7 +243,7 @@ pub fn write_comparison(
             ..Panel::default()
         },
         Panel {
-            title: "force coordination, rattlers removed (paper Fig. 7)".into(),
+            title: "force coordination, rattlers removed (paper Fig. 8)".into(),
             x_label: "phi_MC".into(),
             y_label: "Z_force".into(),
             series: series(studies, &|_, _, s| {
@@ -252,7 +257,8 @@ pub fn write_comparison(
             y_label: "mean eps_V".into(),
             log_x: true,
             log_y: true,
-            series: series(studies, &|_, r, s| {
+            series: series(studies, &|study, r, s| {
+                grains(study)?;
                 Some((distance(r, s)?, s.packing.eps_v_mean))
             }),
         },
@@ -262,7 +268,8 @@ pub fn write_comparison(
             y_label: "mean alpha - alpha0".into(),
             log_x: true,
             log_y: true,
-            series: series(studies, &|_, r, s| {
+            series: series(studies, &|study, r, s| {
+                grains(study)?;
                 Some((distance(r, s)?, s.packing.asphericity_excess_mean))
             }),
         },
@@ -374,9 +381,10 @@ pub fn comparison_table(studies: &[Study], command: &str) -> String {
     }
     for (name, pick) in [
         (
-            "mean eps_V",
-            (|s: &StateRow| s.packing.eps_v_mean) as fn(&StateRow) -> f64,
+            "P / E_eff",
+            (|s: &StateRow| s.p_over_e_eff) as fn(&StateRow) -> f64,
         ),
+        ("mean eps_V", |s| s.packing.eps_v_mean),
         ("mean alpha - alpha0", |s| s.packing.asphericity_excess_mean),
     ] {
         let _ = write!(t, "\n{name} at phi - phi_c =");

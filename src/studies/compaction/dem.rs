@@ -28,6 +28,7 @@ use crate::kernels::{
     GranularCoeffs, GranularMaterial, NormalDamping, SpringDashpotSlider, Twisting,
 };
 use crate::options::InvalidOption;
+use crate::studies::hertz::Moduli;
 use serde::{Deserialize, Serialize};
 
 /// The DEM contact of `bpm compact --model dem`.
@@ -91,6 +92,12 @@ impl DemContact {
             ));
         }
         Ok(())
+    }
+
+    /// The material of equal spheres of `radius` and `mass` made of the
+    /// bonded solid whose calibration is `moduli` (`E = 3 K (1 - 2 nu)`).
+    pub fn material_of(&self, moduli: &Moduli, radius: f64, mass: f64) -> GranularMaterial {
+        self.material(youngs_modulus(moduli.k, moduli.nu), moduli.nu, radius, mass)
     }
 
     /// The material of equal spheres of `radius` and `mass` made of a solid
@@ -177,6 +184,9 @@ mod tests {
         let a = 1.5 * 0.1;
         let rolling = m.rolling.unwrap();
         assert!((rolling.stiffness - c.tangential_stiffness * a).abs() < 1e-15);
+        // eta_t = x_gt c_e sqrt(m_eff k_n a), m_eff = m / 2 (Tsuji, e = 1/2).
+        let eta_t = crate::kernels::tsuji_prefactor(0.5) * (50.0 * c.normal_stiffness * a).sqrt();
+        assert!((rolling.damping - eta_t).abs() < 1e-14 * eta_t);
         assert_eq!(rolling.friction, 0.1);
         let Twisting::Sds(t) = m.twisting else {
             panic!("expected sds twisting, got {:?}", m.twisting)

@@ -21,17 +21,17 @@ use crate::analysis::plot::PlotError;
 use crate::analysis::slice::SliceFrame;
 use crate::engine::SimBox;
 use crate::file_error::FileError;
-use crate::kernels::GranularMaterial;
 use crate::options::InvalidOption;
 use crate::scene::builders::grain::GrainKind;
 use crate::scene::builders::packing::{
-    break_contacts, build_packing, build_sphere_packing, PackingParams, PackingSummary,
+    break_contacts, build_packing, build_sphere_packing, separate_spheres, PackingParams,
+    PackingSummary,
 };
 use crate::scene::datafile::{read_data_file, write_data_file};
 use crate::scene::model::{Mass, ModelKind};
 use crate::scene::protocols::CompactionProtocol;
 use crate::scene::run::Checkpoint;
-use crate::scene::validate::simbox_of;
+use crate::scene::validate::{simbox_of, SceneError};
 use crate::scene::{
     build_system, run_scene, write_scene, ForceField, RunOptions, Scene, StageOutput,
 };
@@ -59,8 +59,9 @@ pub enum PackingSource {
         /// Scale of the grain builds' times (1 = full protocol).
         time_scale: f64,
     },
-    /// A LAMMPS data file of bonded grains (molecule id = grain), periodic
-    /// in every dimension; image flags are honoured.
+    /// A LAMMPS data file, periodic in every dimension, image flags
+    /// honoured: bonded grains (`atom_style bond`, molecule id = grain), or
+    /// DEM spheres of one radius (`atom_style sphere`) with `--model dem`.
     File {
         /// The data file.
         path: PathBuf,
@@ -85,7 +86,9 @@ pub enum CompactionEngine {
 pub struct CompactOptions {
     /// The packings.
     pub source: PackingSource,
-    /// Multibody strength a_B (k d); the force field is otherwise the paper's.
+    /// Multibody strength a_B (k d); the force field is otherwise the
+    /// paper's. For DEM spheres it sets their E and nu (the solid's
+    /// calibration at a_B).
     pub a_b: f64,
     /// The zero-net-multibody variant.
     pub zero_net: bool,
@@ -322,18 +325,6 @@ impl CompactOptions {
         ff.zero_net_multibody = self.zero_net;
         ff
     }
-
-    /// The sphere material of DEM spheres of `radius` and `mass`: the
-    /// bonded solid's `E` and `nu` at `a_B` (`moduli`).
-    fn sphere_material(
-        &self,
-        dem: &DemContact,
-        moduli: &Moduli,
-        radius: f64,
-        mass: f64,
-    ) -> GranularMaterial {
-        dem.material(youngs_modulus(moduli.k, moduli.nu), moduli.nu, radius, mass)
-    }
 }
 
 /// One recorded state of a run.
@@ -548,17 +539,17 @@ fn whole_grains(scene: &mut Scene) -> Result<(), CompactionError> {
     Ok(())
 }
 
-/// The packing of `seed`: built, or read and made contact-free; DEM
-/// spheres when `opts.dem` is set (`moduli` gives their material).
+/// The packing of `seed`, built or read and made contact-free: bonded
+/// grains, or DEM spheres when `opts.dem` is set (`moduli` gives their
+/// material). Returns the scene, the build's summary (none for a file) and
+/// the linear expansion that made it contact-free.
 fn packing(
     opts: &CompactOptions,
     moduli: &Moduli,
     seed: u64,
     threads: usize,
 ) -> Result<(Scene, Option<PackingSummary>, f64), CompactionError> {
-    if let Some(dem) = &opts.dem {
-        return sphere_packing(opts, dem, moduli, seed, threads);
-    }
+    let packing_error = |e: SceneError| CompactionError::Packing(e.to_string());
     match &opts.source {
         PackingSource::Build {
             grains,
@@ -572,91 +563,88 @@ fn packing(
             p.distinct_grains = *distinct_grains;
             p.template_fraction = *template_fraction;
             p.grain.time_scale = *time_scale;
-            let (mut scene, summary) = build_packing(&p, threads, false)
-                .map_err(|e| CompactionError::Packing(e.to_string()))?;
-            scene.force_field = opts.force_field();
+            let (scene, summary) = match &opts.dem {
+                None => {
+                    let (mut scene, summary) =
+                        build_packing(&p, threads, false).map_err(packing_error)?;
+                    scene.force_field = opts.force_field();
+                    (scene, summary)
+                }
+                Some(dem) => {
+                    // The rolling and twisting springs depend on the
+                    // spheres' radius and mass, known once they are built.
+                    let placeholder = dem.material_of(moduli, 1.0, 1.0);
+                    let (mut scene, summary) =
+                        build_sphere_packing(&p, placeholder, threads, false)
+                            .map_err(packing_error)?;
+                    let material =
+                        dem.material_of(moduli, summary.template_radius, mean_mass(&scene));
+                    scene.force_field = ForceField::dem(material);
+                    (scene, summary)
+                }
+            };
             let expansion = summary.expansion;
             Ok((scene, Some(summary), expansion))
         }
         PackingSource::File { path } => {
-            let mut scene = read_data_file(path, [true; 3], opts.force_field(), seed)
-                .map_err(|e| CompactionError::Packing(e.to_string()))?;
-            if scene.simbox.tilt.iter().any(|&t| t != 0.0) {
-                return Err(CompactionError::Packing(format!(
-                    "{}: the box is tilted; compaction needs an orthogonal periodic box",
-                    path.display()
-                )));
-            }
-            whole_grains(&mut scene)?;
-            let expansion =
-                break_contacts(&mut scene).map_err(|e| CompactionError::Packing(e.to_string()))?;
+            let mut scene = read_packing_file(path, opts, moduli, seed)?;
+            let expansion = match &opts.dem {
+                None => {
+                    whole_grains(&mut scene)?;
+                    break_contacts(&mut scene).map_err(packing_error)?
+                }
+                Some(dem) => {
+                    let radius = uniform_radius(&scene).ok_or_else(|| {
+                        CompactionError::Packing(format!(
+                            "{}: the spheres differ in radius; the packing analysis measures spheres of one radius",
+                            path.display()
+                        ))
+                    })?;
+                    let material = dem.material_of(moduli, radius, mean_mass(&scene));
+                    scene.force_field = ForceField::dem(material);
+                    separate_spheres(&mut scene)
+                }
+            };
             Ok((scene, None, expansion))
         }
     }
 }
 
-/// The DEM spheres of `seed`: built at the bonded packing's template
-/// centres, or read from a sphere data file (all of one radius, which the
-/// analysis needs), with the material of [`CompactOptions::sphere_material`].
-fn sphere_packing(
+/// Reads a packing data file of the model `opts` asks for (bonded grains,
+/// or spheres with `opts.dem`); a file of the other model, or with a
+/// tilted box, is refused with a message that says so.
+fn read_packing_file(
+    path: &Path,
     opts: &CompactOptions,
-    dem: &DemContact,
     moduli: &Moduli,
     seed: u64,
-    threads: usize,
-) -> Result<(Scene, Option<PackingSummary>, f64), CompactionError> {
-    let packing_error =
-        |e: crate::scene::validate::SceneError| CompactionError::Packing(e.to_string());
-    match &opts.source {
-        PackingSource::Build {
-            grains,
-            kind,
-            radius,
-            distinct_grains,
-            template_fraction,
-            time_scale,
-        } => {
-            let mut p = PackingParams::new(*grains, *kind, *radius, opts.a_b, seed);
-            p.distinct_grains = *distinct_grains;
-            p.template_fraction = *template_fraction;
-            p.grain.time_scale = *time_scale;
-            // The material's rolling and twisting springs depend on the
-            // spheres' radius and mass, known once the template is built.
-            let placeholder = opts.sphere_material(dem, moduli, 1.0, 1.0);
-            let (mut scene, summary) =
-                build_sphere_packing(&p, placeholder, threads, false).map_err(packing_error)?;
-            let material =
-                opts.sphere_material(dem, moduli, summary.template_radius, mean_mass(&scene));
-            scene.force_field = ForceField::dem(material);
-            Ok((scene, Some(summary), 1.0))
-        }
-        PackingSource::File { path } => {
-            let placeholder = ForceField::dem(opts.sphere_material(dem, moduli, 1.0, 1.0));
-            let mut scene = read_data_file(path, [true; 3], placeholder, seed)
-                .map_err(|e| CompactionError::Packing(e.to_string()))?;
-            if scene.model != ModelKind::Dem {
-                return Err(CompactionError::Packing(format!(
-                    "{}: --model dem needs a sphere data file (atom_style sphere)",
-                    path.display()
-                )));
-            }
-            if scene.simbox.tilt.iter().any(|&t| t != 0.0) {
-                return Err(CompactionError::Packing(format!(
-                    "{}: the box is tilted; compaction needs an orthogonal periodic box",
-                    path.display()
-                )));
-            }
-            let radius = uniform_radius(&scene).ok_or_else(|| {
-                CompactionError::Packing(format!(
-                    "{}: the spheres differ in radius; the packing analysis measures spheres of one radius",
-                    path.display()
-                ))
-            })?;
-            let material = opts.sphere_material(dem, moduli, radius, mean_mass(&scene));
-            scene.force_field = ForceField::dem(material);
-            Ok((scene, None, 1.0))
-        }
+) -> Result<Scene, CompactionError> {
+    let spheres = ForceField::dem(DemContact::default().material_of(moduli, 1.0, 1.0));
+    let (wanted, other) = match opts.dem {
+        None => (opts.force_field(), spheres),
+        Some(_) => (spheres, opts.force_field()),
+    };
+    let scene = read_data_file(path, [true; 3], wanted, seed).map_err(|e| {
+        let message = match read_data_file(path, [true; 3], other, seed) {
+            Ok(_) if opts.dem.is_some() => format!(
+                "{}: this file holds bonded grains (atom_style bond); --model dem needs spheres (atom_style sphere)",
+                path.display()
+            ),
+            Ok(_) => format!(
+                "{}: this file holds DEM spheres (atom_style sphere); compact them with --model dem",
+                path.display()
+            ),
+            Err(_) => e.to_string(),
+        };
+        CompactionError::Packing(message)
+    })?;
+    if scene.simbox.tilt.iter().any(|&t| t != 0.0) {
+        return Err(CompactionError::Packing(format!(
+            "{}: the box is tilted; compaction needs an orthogonal periodic box",
+            path.display()
+        )));
     }
+    Ok(scene)
 }
 
 /// Grains of a packing (a DEM sphere is a grain).
@@ -693,25 +681,6 @@ fn simbox_of_checkpoint(c: &Checkpoint, periodic: [bool; 3]) -> SimBox {
         tilt: c.simbox[2],
         periodic,
     }
-}
-
-/// Fails, naming the grain, when the packing's start cannot be measured
-/// (a grain with fewer than four particles, flat or collinear ones).
-fn check_measurable(scene: &Scene, analysis: &AnalysisOptions) -> Result<(), CompactionError> {
-    if scene.model == ModelKind::Dem {
-        return Ok(());
-    }
-    let grain = scene.particles.grain.clone().unwrap_or_default();
-    let simbox = simbox_of(scene);
-    let start = Snapshot {
-        simbox: &simbox,
-        positions: &scene.particles.positions,
-        grain: &grain,
-        bonds: &scene.bonds.pairs,
-    };
-    reference_of(&start, analysis)
-        .map(|_| ())
-        .map_err(CompactionError::analysing("the packing before the run"))
 }
 
 /// The compaction scene of a packing: its stages are the protocol's
@@ -800,7 +769,9 @@ enum Meter {
 }
 
 impl Meter {
-    /// The meter of `packing`'s particle model.
+    /// The meter of `packing`'s particle model; fails, naming the grain,
+    /// when a grain's stress-free shape cannot be measured (fewer than four
+    /// particles, flat or collinear ones).
     fn of(packing: &Scene, analysis: &AnalysisOptions) -> Result<Self, CompactionError> {
         if packing.model == ModelKind::Dem {
             let radius = uniform_radius(packing)
@@ -848,6 +819,7 @@ impl Meter {
 /// beside the states before it.
 fn states_of(
     scene: &Scene,
+    meter: &Meter,
     stages: &[StageOutput],
     opts: &CompactOptions,
     e_eff: f64,
@@ -855,7 +827,6 @@ fn states_of(
 ) -> Result<(Vec<StateRow>, RunSeries, Option<String>), CompactionError> {
     let n = scene.particles.positions.len() as f64;
     let simbox = simbox_of(scene);
-    let meter = Meter::of(scene, &opts.analysis)?;
     let mut rows = vec![StateRow {
         stage: "start".into(),
         rate: 0.0,
@@ -1024,13 +995,19 @@ pub fn run_compaction(
         rates: opts.protocol.rates(),
         runs: Vec::new(),
     };
+    if let (Some(dem), CompactionEngine::Lammps { .. }) = (&opts.dem, &opts.engine) {
+        if dem.friction[1] > 0.0 || dem.friction[2] > 0.0 {
+            print("warning: LAMMPS negates every history value of a contact when a neighbour-list rebuild swaps the pair's order, which is wrong for the rolling and twisting springs (results/dem/README.md); this run's rolling and twisting friction inherits that");
+        }
+    }
     for &seed in &opts.seeds {
         let folder = dir.join(format!("seed-{seed}"));
         std::fs::create_dir_all(&folder).map_err(FileError::on("creating", &folder))?;
         let (packing, summary, expansion) = packing(opts, &report.moduli, seed, threads)?;
         // Every grain must have a hull before hours of running, not after.
-        check_measurable(&packing, &opts.analysis)?;
-        if expansion > 1.0 {
+        let meter = Meter::of(&packing, &opts.analysis)?;
+        // DEM spheres are separated by far less (below 1e-8) than shown.
+        if expansion > 1.0 + 1e-6 {
             print(&format!(
                 "seed {seed}: the box was expanded by {expansion:.4} (linear) to give the grains room"
             ));
@@ -1063,7 +1040,7 @@ pub fn run_compaction(
         }
         let t = std::time::Instant::now();
         let (states, series, unmeasured) =
-            states_of(&packing, &stages, opts, e_eff, &report.rates)?;
+            states_of(&packing, &meter, &stages, opts, e_eff, &report.rates)?;
         let stopped = match (stopped, unmeasured) {
             (Some(a), Some(b)) => Some(format!("{a}; {b}")),
             (a, b) => a.or(b),
