@@ -278,7 +278,7 @@ fn packing_moduli_of_a_compressed_solid_match_its_calibration_in_both_engines() 
 fn a_tiny_compaction_study_measures_moduli_and_writes_its_report() {
     use bpm::analysis::packing::AnalysisOptions;
     use bpm::scene::builders::grain::GrainKind;
-    use bpm::scene::protocols::{CompactionProtocol, PackingModuliProtocol};
+    use bpm::scene::protocols::PackingModuliProtocol;
     use bpm::studies::compaction::{
         compare, refit, run_compaction, CompactOptions, CompactionEngine, ModuliOptions,
         PackingSource,
@@ -296,16 +296,7 @@ fn a_tiny_compaction_study_measures_moduli_and_writes_its_report() {
         a_b: 0.0,
         zero_net: false,
         seeds: vec![1],
-        protocol: CompactionProtocol {
-            jam_gain: 1.0,
-            jam_time: 2e3,
-            rate_start: 1e-5,
-            rate_end: 1e-4,
-            rate_levels: 2,
-            stage_time: 1e3,
-            volumetric_strain: 0.4,
-            ..CompactionProtocol::paper()
-        },
+        protocol: tiny_protocol(),
         engine: CompactionEngine::Native,
         analysis: AnalysisOptions {
             mc_points: 20_000,
@@ -389,7 +380,6 @@ fn a_tiny_dem_compaction_compresses_spheres_and_reports_both_volume_fractions() 
     use bpm::analysis::packing::AnalysisOptions;
     use bpm::kernels::GranularCoeffs;
     use bpm::scene::builders::grain::GrainKind;
-    use bpm::scene::protocols::CompactionProtocol;
     use bpm::studies::compaction::{
         compare, run_compaction, CompactOptions, CompactionEngine, DemContact, ModuliOptions,
         PackingSource,
@@ -411,16 +401,7 @@ fn a_tiny_dem_compaction_compresses_spheres_and_reports_both_volume_fractions() 
         a_b: 0.0,
         zero_net: false,
         seeds: vec![3],
-        protocol: CompactionProtocol {
-            jam_gain: 1.0,
-            jam_time: 2e3,
-            rate_start: 1e-5,
-            rate_end: 1e-4,
-            rate_levels: 2,
-            stage_time: 1e3,
-            volumetric_strain: 0.4,
-            ..CompactionProtocol::paper()
-        },
+        protocol: tiny_protocol(),
         engine: CompactionEngine::Native,
         analysis: AnalysisOptions {
             mc_points: 50_000,
@@ -529,4 +510,19 @@ fn a_tiny_dem_compaction_compresses_spheres_and_reports_both_volume_fractions() 
     let e = run_compaction(&opts, 1, None, &dir, "test", false, &mut |_| {}).unwrap_err();
     assert!(e.to_string().contains("--zero-net"), "{e}");
     let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// A compaction protocol of a few thousand steps: jam for 2e3 tau, then
+/// two rates to 40% volumetric strain.
+fn tiny_protocol() -> bpm::scene::protocols::CompactionProtocol {
+    bpm::scene::protocols::CompactionProtocol {
+        jam_gain: 1.0,
+        jam_time: 2e3,
+        rate_start: 1e-5,
+        rate_end: 1e-4,
+        rate_levels: 2,
+        stage_time: 1e3,
+        volumetric_strain: 0.4,
+        ..bpm::scene::protocols::CompactionProtocol::paper()
+    }
 }

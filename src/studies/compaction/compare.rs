@@ -387,20 +387,16 @@ pub fn comparison_table(studies: &[Study], command: &str) -> String {
         ("mean eps_V", |s| s.packing.eps_v_mean),
         ("mean alpha - alpha0", |s| s.packing.asphericity_excess_mean),
     ] {
-        let _ = write!(t, "\n{name} at phi - phi_c =");
-        for x in DISTANCE_AT {
-            let _ = write!(t, " {x:>8}");
-        }
-        t.push('\n');
-        for s in studies {
-            let _ = write!(t, "  {:<20}", s.label);
-            for x in DISTANCE_AT {
-                let cell = mean_at_distance(&s.report, x, pick)
-                    .map_or("-".to_string(), |v| format!("{v:.2e}"));
-                let _ = write!(t, " {cell:>8}");
-            }
-            t.push('\n');
-        }
+        let header: Vec<String> = DISTANCE_AT.iter().map(|x| format!("{x:>8}")).collect();
+        let rows: Vec<&Study> = studies.iter().collect();
+        append_grid(
+            &mut t,
+            &format!("{name} at phi - phi_c ="),
+            &header,
+            &rows,
+            8,
+            &|s, k| mean_at_distance(&s.report, DISTANCE_AT[k], pick).map(|v| format!("{v:.2e}")),
+        );
     }
     for (name, pick) in [
         (
@@ -417,36 +413,22 @@ pub fn comparison_table(studies: &[Study], command: &str) -> String {
         if shown.is_empty() {
             continue;
         }
-        let _ = write!(t, "\n{name} where P / E_eff first reaches");
-        for p in PHI_AT_PRESSURE {
-            let _ = write!(t, " {p:>7.0e}");
-        }
-        t.push('\n');
-        for s in shown {
-            let _ = write!(t, "  {:<20}", s.label);
-            for p in PHI_AT_PRESSURE {
-                let cell = mean_phi_at_pressure(&s.report, p, pick)
-                    .map_or("-".to_string(), |v| format!("{v:.4}"));
-                let _ = write!(t, " {cell:>7}");
-            }
-            t.push('\n');
-        }
+        let header: Vec<String> = PHI_AT_PRESSURE
+            .iter()
+            .map(|p| format!("{p:>7.0e}"))
+            .collect();
+        let title = format!("{name} where P / E_eff first reaches");
+        append_grid(&mut t, &title, &header, &shown, 7, &|s, k| {
+            mean_phi_at_pressure(&s.report, PHI_AT_PRESSURE[k], pick).map(|v| format!("{v:.4}"))
+        });
     }
     if let Some((first, rest)) = studies.split_first() {
-        let _ = write!(t, "\nP / P({}) at phi_MC =", first.label);
-        for phi in RATIO_AT {
-            let _ = write!(t, " {phi:>7.2}");
-        }
-        t.push('\n');
-        for s in rest {
-            let _ = write!(t, "  {:<20}", s.label);
-            for phi in RATIO_AT {
-                let cell = pressure_ratio(&first.report, &s.report, phi)
-                    .map_or("-".to_string(), |r| format!("{r:.3}"));
-                let _ = write!(t, " {cell:>7}");
-            }
-            t.push('\n');
-        }
+        let header: Vec<String> = RATIO_AT.iter().map(|phi| format!("{phi:>7.2}")).collect();
+        let rows: Vec<&Study> = rest.iter().collect();
+        let title = format!("P / P({}) at phi_MC =", first.label);
+        append_grid(&mut t, &title, &header, &rows, 7, &|s, k| {
+            pressure_ratio(&first.report, &s.report, RATIO_AT[k]).map(|r| format!("{r:.3}"))
+        });
         let _ = writeln!(
             t,
             "\npressure within a factor {AGREEMENT_FACTOR} of {}'s at the same phi_MC from (paper: rough and smoother grains from about phi = 0.7):",
@@ -463,6 +445,33 @@ pub fn comparison_table(studies: &[Study], command: &str) -> String {
         }
     }
     t
+}
+
+/// Appends a table to `t`: a blank line, `title` and the column
+/// headers, then a row per study of its label and `cell(study, column)`
+/// right-aligned in `width` ("-" where `None`).
+fn append_grid(
+    t: &mut String,
+    title: &str,
+    header: &[String],
+    studies: &[&Study],
+    width: usize,
+    cell: &dyn Fn(&Study, usize) -> Option<String>,
+) {
+    use std::fmt::Write as _;
+    let _ = write!(t, "\n{title}");
+    for h in header {
+        let _ = write!(t, " {h}");
+    }
+    t.push('\n');
+    for s in studies {
+        let _ = write!(t, "  {:<20}", s.label);
+        for k in 0..header.len() {
+            let c = cell(s, k).unwrap_or_else(|| "-".into());
+            let _ = write!(t, " {c:>width$}");
+        }
+        t.push('\n');
+    }
 }
 
 #[cfg(test)]
