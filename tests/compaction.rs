@@ -417,6 +417,7 @@ fn a_tiny_dem_compaction_compresses_spheres_and_reports_both_volume_fractions() 
     let run = &report.runs[0];
     assert!(run.stopped.is_none(), "{:?}", run.stopped);
     assert_eq!((run.grains, run.particles), (16, 16));
+    assert_eq!(run.expansion, run.packing.as_ref().unwrap().expansion);
     let scene: bpm::scene::Scene =
         serde_json::from_str(&std::fs::read_to_string(dir.join("seed-3/scene.json")).unwrap())
             .unwrap();
@@ -509,6 +510,17 @@ fn a_tiny_dem_compaction_compresses_spheres_and_reports_both_volume_fractions() 
     opts.zero_net = true;
     let e = run_compaction(&opts, 1, None, &dir, "test", false, &mut |_| {}).unwrap_err();
     assert!(e.to_string().contains("--zero-net"), "{e}");
+    // LAMMPS's history flaw for rolling and twisting is recorded with the
+    // run (here one that cannot start: no bpm executable to launch).
+    opts.zero_net = false;
+    opts.engine = CompactionEngine::Lammps { ranks: 1 };
+    let lammps = dir.join("lammps");
+    let report = run_compaction(&opts, 1, None, &lammps, "test", false, &mut |_| {}).unwrap();
+    assert!(report.warnings[0].contains("rolling and twisting"));
+    let stopped = report.runs[0].stopped.as_deref().unwrap();
+    assert!(stopped.contains("no bpm executable"), "{stopped}");
+    let table = std::fs::read_to_string(lammps.join("compaction.txt")).unwrap();
+    assert!(table.contains("# warning: LAMMPS negates"), "{table}");
     let _ = std::fs::remove_dir_all(&dir);
 }
 

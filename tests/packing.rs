@@ -407,3 +407,39 @@ fn a_sphere_packing_fills_the_template_without_overlap() {
     let mass = scene.particles.mass.values(16)[0];
     assert!(mass > 20.0 && mass < 60.0, "{mass}");
 }
+
+/// `separate_spheres` expands overlapping polydisperse spheres just enough:
+/// afterwards no pair overlaps and the closest pair touches to 1e-8; two
+/// spheres at one point are refused.
+#[test]
+fn overlapping_spheres_are_separated_just_enough() {
+    use bpm::scene::builders::packing::separate_spheres;
+    let mut scene = bpm::verify::dem_lattice(3, false);
+    let before = scene.simbox.lengths;
+    let factor = separate_spheres(&mut scene).unwrap();
+    assert!(factor > 1.0 && factor < 1.2, "{factor}");
+    for (after, before) in scene.simbox.lengths.iter().zip(before) {
+        assert!((after - before * factor).abs() < 1e-12 * before);
+    }
+    let radii = scene.particles.radius.clone().unwrap();
+    let simbox = bpm::scene::validate::simbox_of(&scene);
+    let image = simbox.minimum_image();
+    let x = &scene.particles.positions;
+    let mut tightest = f64::INFINITY;
+    for i in 0..x.len() {
+        for j in i + 1..x.len() {
+            let r = bpm::kernels::Separation::distance(&image, &x[i], &x[j]);
+            let gap = r / (radii[i] + radii[j]);
+            assert!(gap > 1.0, "spheres {i} and {j}: {gap}");
+            tightest = tightest.min(gap);
+        }
+    }
+    assert!(tightest < 1.0 + 1e-8, "{tightest}");
+    assert_eq!(separate_spheres(&mut scene).unwrap(), 1.0);
+    scene.particles.positions[1] = scene.particles.positions[0];
+    let e = separate_spheres(&mut scene).unwrap_err();
+    assert!(
+        e.to_string().contains("spheres 0 and 1 sit at one point"),
+        "{e}"
+    );
+}

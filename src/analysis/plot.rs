@@ -153,6 +153,7 @@ where
                 .light_line_style(WHITE.mix(0.0))
                 .draw()
                 .map_err(|e| e.to_string())?;
+            let mut labelled = false;
             for (k, s) in p.series.iter().enumerate() {
                 let colour = PALETTE[k % PALETTE.len()];
                 let pts: Vec<(f64, f64)> = s
@@ -167,6 +168,7 @@ where
                 if pts.is_empty() {
                     continue;
                 }
+                labelled = true;
                 let legend_colour = colour;
                 if matches!(s.mark, Mark::Line | Mark::LinePoints) {
                     chart
@@ -203,12 +205,15 @@ where
                     }
                 }
             }
-            chart
-                .configure_series_labels()
-                .background_style(WHITE.mix(0.8))
-                .border_style(BLACK)
-                .draw()
-                .map_err(|e| e.to_string())?;
+            // A panel with nothing drawn gets no empty legend box.
+            if labelled {
+                chart
+                    .configure_series_labels()
+                    .background_style(WHITE.mix(0.8))
+                    .border_style(BLACK)
+                    .draw()
+                    .map_err(|e| e.to_string())?;
+            }
         }};
     }
     match (p.log_x, p.log_y) {

@@ -156,7 +156,8 @@ pub fn write_slices(path: &Path, frames: &[SliceFrame], diameter: f64) -> Result
         for disc in slice_discs(frame, diameter) {
             for (ix, iy) in (-1..=1).flat_map(|i| (-1..=1).map(move |j| (i, j))) {
                 let centre = (disc.x + f64::from(ix) * lx, disc.y + f64::from(iy) * ly);
-                let cut = disc_in_box(centre, disc.radius, lx, ly);
+                // At least half a pixel, so grazing cuts still show.
+                let cut = disc_in_box(centre, disc.radius.max(0.5 / scale), lx, ly);
                 if cut.len() >= 3 {
                     let points: Vec<(i32, i32)> = cut.into_iter().map(px).collect();
                     root.draw(&Polygon::new(points, grain_colour(disc.grain).filled()))
@@ -208,7 +209,9 @@ mod tests {
         assert!((corner - 0.25 * full).abs() < 1e-12, "{corner}");
         let face = area(&disc_in_box((0.0, 3.0), 1.0, lx, ly));
         assert!((face - 0.5 * full).abs() < 1e-12, "{face}");
-        for p in disc_in_box((-0.5, 5.8), 1.0, lx, ly) {
+        let overhang = disc_in_box((-0.5, 5.8), 1.0, lx, ly);
+        assert!(area(&overhang) > 0.1 * full, "{}", area(&overhang));
+        for p in overhang {
             assert!(p.0 >= 0.0 && p.0 <= lx && p.1 >= 0.0 && p.1 <= ly, "{p:?}");
         }
         assert!(disc_in_box((-2.0, 3.0), 1.0, lx, ly).is_empty());

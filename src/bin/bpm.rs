@@ -524,7 +524,8 @@ enum Command {
     /// Compares compaction studies (folders written by `bpm compact`):
     /// pressure, coordination, grain strain and asphericity of each in one
     /// set of plots; their fits side by side with the mean and sd over
-    /// every run; grain strain and shape at fixed phi - phi_c; pressure
+    /// every run; pressure, grain strain and shape at fixed phi - phi_c;
+    /// phi_MC (and phi_sphere of DEM spheres) at fixed pressures; pressure
     /// ratios to the first study at fixed phi_MC; and the phi_MC from which
     /// each study's pressure stays within 10% of the first's; writes
     /// OUTPUT/comparison.svg and OUTPUT/comparison.txt.

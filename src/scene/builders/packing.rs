@@ -512,8 +512,9 @@ pub fn build_packing(
 /// Expands the (orthogonal) box of a DEM scene and its sphere centres
 /// uniformly about the box's lower corner, just enough that no two spheres
 /// touch (by `1e-9` relative beyond contact); returns the linear factor (1
-/// when none touched). Spheres without radii have the default one.
-pub fn separate_spheres(scene: &mut Scene) -> f64 {
+/// when none touched). Spheres without radii have the default one. Two
+/// spheres at one point cannot be separated so: an error names them.
+pub fn separate_spheres(scene: &mut Scene) -> Result<f64, SceneError> {
     let n = scene.particles.positions.len();
     let radii = scene
         .particles
@@ -522,12 +523,19 @@ pub fn separate_spheres(scene: &mut Scene) -> f64 {
         .unwrap_or_else(|| vec![crate::engine::particles::DEFAULT_RADIUS; n]);
     let largest = radii.iter().copied().fold(0.0, f64::max);
     let simbox = simbox_of(scene);
-    let needed = pairs_within(&simbox, &scene.particles.positions, 2.0 * largest)
-        .iter()
-        .map(|&(i, j, r)| (radii[i] + radii[j]) / r)
-        .fold(1.0, f64::max);
+    let mut needed: f64 = 1.0;
+    for (i, j, r) in pairs_within(&simbox, &scene.particles.positions, 2.0 * largest) {
+        let contact = radii[i] + radii[j];
+        if r <= 1e-9 * contact {
+            return Err(SceneError::Invalid {
+                field: "particles.positions".into(),
+                reason: format!("spheres {i} and {j} sit at one point"),
+            });
+        }
+        needed = needed.max(contact / r);
+    }
     if needed <= 1.0 {
-        return 1.0;
+        return Ok(1.0);
     }
     let factor = needed * (1.0 + 1e-9);
     let lo = scene.simbox.lo;
@@ -537,7 +545,7 @@ pub fn separate_spheres(scene: &mut Scene) -> f64 {
         }
     }
     scene.simbox.lengths = scene.simbox.lengths.map(|l| l * factor);
-    factor
+    Ok(factor)
 }
 
 /// DEM spheres at the centres of the same template as [`build_packing`]
@@ -577,7 +585,7 @@ pub fn build_sphere_packing(
     scene.model = ModelKind::Dem;
     scene.particles.radius = Some(vec![t.template_radius; params.grains]);
     scene.particles.mass = Mass::Uniform(particles_per_grain);
-    let expansion = separate_spheres(&mut scene);
+    let expansion = separate_spheres(&mut scene)?;
     let length = scene.simbox.lengths[0];
     let summary = PackingSummary {
         grains: params.grains,

@@ -99,8 +99,8 @@ pub fn pressure_ratio(
     (!logs.is_empty()).then(|| (logs.iter().sum::<f64>() / logs.len() as f64).exp())
 }
 
-/// Distances from jamming at which [`comparison_table`] lists grain strain
-/// and shape.
+/// Distances from jamming at which [`comparison_table`] lists pressure,
+/// grain strain and shape.
 const DISTANCE_AT: [f64; 4] = [0.01, 0.03, 0.1, 0.3];
 
 /// `pick` of a study's jammed states at `phi - phi_c = x` (each run at its

@@ -511,6 +511,10 @@ pub struct CompactionReport {
     pub moduli: Moduli,
     /// The compression stages' rates (1/tau), in order.
     pub rates: Vec<f64>,
+    /// What the run's reader should know (e.g. a known flaw of the engine
+    /// for these options).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub warnings: Vec<String>,
     /// One run per seed.
     pub runs: Vec<CompactionRun>,
 }
@@ -602,7 +606,7 @@ fn packing(
                     })?;
                     let material = dem.material_of(moduli, radius, mean_mass(&scene));
                     scene.force_field = ForceField::dem(material);
-                    separate_spheres(&mut scene)
+                    separate_spheres(&mut scene).map_err(packing_error)?
                 }
             };
             Ok((scene, None, expansion))
@@ -993,11 +997,14 @@ pub fn run_compaction(
         e_eff,
         moduli,
         rates: opts.protocol.rates(),
+        warnings: Vec::new(),
         runs: Vec::new(),
     };
     if let (Some(dem), CompactionEngine::Lammps { .. }) = (&opts.dem, &opts.engine) {
         if dem.friction[1] > 0.0 || dem.friction[2] > 0.0 {
-            print("warning: LAMMPS negates every history value of a contact when a neighbour-list rebuild swaps the pair's order, which is wrong for the rolling and twisting springs (results/dem/README.md); this run's rolling and twisting friction inherits that");
+            let warning = "LAMMPS negates every history value of a contact when a neighbour-list rebuild swaps the pair's order, which is wrong for the rolling and twisting springs (docs/model.md); this run's rolling and twisting friction inherits that";
+            print(&format!("warning: {warning}"));
+            report.warnings.push(warning.into());
         }
     }
     for &seed in &opts.seeds {
@@ -1006,7 +1013,7 @@ pub fn run_compaction(
         let (packing, summary, expansion) = packing(opts, &report.moduli, seed, threads)?;
         // Every grain must have a hull before hours of running, not after.
         let meter = Meter::of(&packing, &opts.analysis)?;
-        // DEM spheres are separated by far less (below 1e-8) than shown.
+        // Built DEM spheres are separated by far less (below 1e-8).
         if expansion > 1.0 + 1e-6 {
             print(&format!(
                 "seed {seed}: the box was expanded by {expansion:.4} (linear) to give the grains room"

@@ -474,9 +474,13 @@ pub fn table(report: &CompactionReport) -> String {
     let mut t = String::new();
     let _ = writeln!(
         t,
-        "# bpm compact: power laws near jamming (fit window phi - phi_c <= {FIT_WINDOW})\n# {}\n",
+        "# bpm compact: power laws near jamming (fit window phi - phi_c <= {FIT_WINDOW})\n# {}",
         report.command
     );
+    for w in &report.warnings {
+        let _ = writeln!(t, "# warning: {w}");
+    }
+    t.push('\n');
     let _ = writeln!(
         t,
         "{:>6} {:>8} {:>9} {:>13} {:>8} {:>13} {:>8} {:>13} {:>13} {:>13} {:>8}",
