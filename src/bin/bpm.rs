@@ -495,7 +495,7 @@ enum Command {
         moduli_rate: f64,
         /// Particle model: bonded grains, or one DEM sphere per grain at
         /// the same template's centres (docs/protocols.md "DEM
-        /// compaction").
+        /// comparison").
         #[arg(long, value_enum, default_value = "bpm")]
         model: CompactModel,
         /// DEM friction coefficients mu_s,mu_r,mu_t (sliding, rolling,

@@ -1,5 +1,5 @@
 //! The DEM side of the compaction comparison (docs/protocols.md, "DEM
-//! compaction"): one Hertz-Mindlin sphere per grain, of the grains'
+//! comparison"): one Hertz-Mindlin sphere per grain, of the grains'
 //! material and the friction coefficients `{mu_s, mu_r, mu_t}`.
 //!
 //! The sphere material follows from the bonded solid's calibration: the
