@@ -442,6 +442,11 @@ fn jamming_panels(report: &CompactionReport, spheres: bool) -> Vec<Panel> {
             |s, f| f.z_force.map(|z| s.packing.z_force - z.z_c),
             |f| f.z_force.map(|z| z.law),
         ),
+    ];
+    if spheres {
+        return panels;
+    }
+    panels.extend([
         panel(
             "geometric coordination",
             "Z_geometry - Z_c",
@@ -460,10 +465,7 @@ fn jamming_panels(report: &CompactionReport, spheres: bool) -> Vec<Panel> {
             |s, _| Some(s.packing.asphericity_excess_mean),
             |f| f.asphericity,
         ),
-    ];
-    if spheres {
-        panels.truncate(2);
-    }
+    ]);
     panels
 }
 
