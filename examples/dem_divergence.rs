@@ -1,7 +1,10 @@
 //! How fast LAMMPS's `pair_style granular` and the native DEM engine drift
 //! apart on the same spheres (64 spheres, Hertz-Mindlin with sliding
-//! friction 0.3, Tsuji damping e = 0.5), held, compressed and sheared, for
-//! `steps` steps of 0.01 tau (default 20,000). Prints the largest relative
+//! friction 0.3, Tsuji damping e = 0.5), held, compressed, sheared
+//! affinely and by Lees-Edwards boundaries (sliding friction only), and
+//! squeezed between granular walls (sliding friction only; the closing
+//! wall slowed so that it moves 0.4 d over the whole run), for `steps`
+//! steps of 0.01 tau (default 20,000). Prints the largest relative
 //! stress deviation and position deviation (d) every 10% of the run. Then
 //! the same with rolling and twisting friction, at rest and drifting as a
 //! whole at 0.58 d/tau: a uniform drift changes no relative motion, so the
@@ -26,33 +29,40 @@ fn main() -> anyhow::Result<()> {
         dir: dir.clone(),
     };
     println!(
-        "{:<10} {:<8} {:>8} {:>12} {:>12}",
+        "{:<12} {:<8} {:>8} {:>12} {:>12}",
         "loading", "friction", "steps", "stress dev", "position dev"
     );
-    for rolling_twisting in [false, true] {
-        for loading in [DemLoading::Hold, DemLoading::Compress, DemLoading::Shear] {
-            let friction = if rolling_twisting { "s+r+t" } else { "sliding" };
-            for k in 1..=10u64 {
-                let n = steps * k / 10;
-                let scene = dem_trajectory(7, rolling_twisting, loading, n);
-                let tag = format!("{}-{friction}-{n}", loading.name());
-                let native = run_native(&scene, &tag, 1)?;
-                let lammps = launcher.run(&scene, &tag, 1, true)?;
-                let devs = compare_runs(&native.stages, &lammps.stages)?;
-                let get = |o: &str| {
-                    devs.iter()
-                        .find(|d| d.observable == o)
-                        .map_or(f64::NAN, |d| d.max_deviation)
-                };
-                println!(
-                    "{:<10} {:<8} {:>8} {:>12.3e} {:>12.3e}",
-                    loading.name(),
-                    friction,
-                    n,
-                    get("stress"),
-                    get("positions")
-                );
+    let cases = [DemLoading::Hold, DemLoading::Compress, DemLoading::Shear]
+        .map(|l| (false, l))
+        .into_iter()
+        .chain([(false, DemLoading::LeesEdwards), (false, DemLoading::Walls)])
+        .chain([DemLoading::Hold, DemLoading::Compress, DemLoading::Shear].map(|l| (true, l)));
+    for (rolling_twisting, loading) in cases {
+        let friction = if rolling_twisting { "s+r+t" } else { "sliding" };
+        for k in 1..=10u64 {
+            let n = steps * k / 10;
+            let mut scene = dem_trajectory(7, rolling_twisting, loading, n);
+            if loading == DemLoading::Walls {
+                let stage = &mut scene.stages[0];
+                stage.granular_walls[1].velocity = -0.4 / (steps as f64 * stage.dt);
             }
+            let tag = format!("{}-{friction}-{n}", loading.name());
+            let native = run_native(&scene, &tag, 1)?;
+            let lammps = launcher.run(&scene, &tag, 1, true)?;
+            let devs = compare_runs(&native.stages, &lammps.stages)?;
+            let get = |o: &str| {
+                devs.iter()
+                    .find(|d| d.observable == o)
+                    .map_or(f64::NAN, |d| d.max_deviation)
+            };
+            println!(
+                "{:<12} {:<8} {:>8} {:>12.3e} {:>12.3e}",
+                loading.name(),
+                friction,
+                n,
+                get("stress"),
+                get("positions")
+            );
         }
     }
     println!("\nrolling and twisting friction, held, at rest and drifting (rotational energy):");

@@ -119,7 +119,8 @@ fn rolling_and_twisting_friction_do_not_see_a_uniform_drift() {
 }
 
 /// Short trajectories agree with LAMMPS within the tolerance table:
-/// sliding friction under compression and under shear (1,000 steps, before
+/// sliding friction under compression, under affine and Lees-Edwards shear
+/// (through a tilt flip) and between granular walls (1,000 steps, before
 /// sheared spheres' chaos amplifies round-off), rolling and twisting
 /// friction held for `bpm check`'s 2,000 steps with its skin, at several
 /// seeds (LAMMPS 2021 flips those histories when a rebuild swaps a pair's
@@ -130,6 +131,8 @@ fn trajectories_under_compression_and_shear_follow_lammps() {
     let mut cases = vec![
         (7, false, DemLoading::Compress, 1000),
         (7, false, DemLoading::Shear, 1000),
+        (7, false, DemLoading::LeesEdwards, 1000),
+        (7, false, DemLoading::Walls, 1000),
     ];
     cases.extend([1, 2, 3, 7].map(|seed| (seed, true, DemLoading::Hold, 2000)));
     for (seed, rolling_twisting, loading, steps) in cases {
@@ -194,4 +197,193 @@ fn sphere_data_file_round_trip() {
     .unwrap_err()
     .to_string();
     assert!(err.contains("--granular"), "{err}");
+}
+
+/// A simple cubic lattice of equal, overlapping spheres moving with the
+/// streaming profile of a shear along x with gradient along y: every pair
+/// of neighbouring layers slides by the same amount, so under Lees-Edwards
+/// boundaries the layers across the sheared face do too, and every sphere
+/// feels no net force. With static images (`remap x`), the top and bottom
+/// layers see a velocity jump of the whole flow across that face instead.
+#[test]
+fn a_uniform_shear_flow_is_homogeneous_under_lees_edwards_boundaries() {
+    use bpm::engine::{Deformation, ShearRemap, StageDrivers, TiltFactor};
+    use bpm::scene::builders::spheres::{sphere_lattice, SphereLattice};
+    let rate = 1e-3;
+    let mut scene = sphere_lattice(&SphereLattice {
+        per_side: 4,
+        radius: 1.0,
+        polydispersity: 0.0,
+        spacing: 0.97,
+        jitter: 0.0,
+        speed: 0.0,
+        spin: 0.0,
+        density: 1.0,
+        material: bpm::verify::dem_check_material(false),
+        seed: 1,
+    });
+    scene.particles.angular_velocities = None;
+    let net_forces = |remap: ShearRemap| {
+        let mut sys = bpm::scene::build_system(&scene, 1);
+        let drivers = StageDrivers {
+            dt: 0.01,
+            deformation: Some(Deformation::SimpleShear {
+                tilt: TiltFactor::Xy,
+                rate,
+                remap,
+            }),
+            ..Default::default()
+        };
+        let ly = sys.simbox.lengths[1];
+        let streaming = bpm::engine::LeesEdwards {
+            tilt_rate: [rate * ly, 0.0, 0.0],
+        };
+        for (x, v) in sys.particles.x.iter().zip(sys.particles.v.iter_mut()) {
+            *v = streaming.streaming_velocity(&sys.simbox, x);
+        }
+        sys.setup(&drivers);
+        let largest = sys
+            .particles
+            .f
+            .iter()
+            .map(|f| f.iter().map(|c| c.abs()).fold(0.0, f64::max))
+            .fold(0.0, f64::max);
+        let volume = sys.simbox.volume();
+        let virial = sys.interaction_tally().virial.map(|w| w / volume);
+        (largest, sys.pressure_tensor(), virial)
+    };
+    let (lees_edwards, p_le, w_le) = net_forces(ShearRemap::V);
+    let (static_images, p_x, w_x) = net_forces(ShearRemap::X);
+    // Static images: the top and bottom layers feel the tangential dashpot
+    // of the velocity jump across the face, 1.3e-2 k d here. Lees-Edwards:
+    // what is left is the round-off of the normal forces, which are of
+    // order 1 k d and cancel (measured 1.6e-14).
+    assert!(static_images > 1e-2, "{static_images}");
+    assert!(lees_edwards < 1e-12, "{lees_edwards}");
+    // The stress: peculiar velocities are all zero under Lees-Edwards, so
+    // only the contacts' virial remains; the affine remap counts the flow
+    // as thermal motion, sum m u_x^2 / V in xx.
+    assert!(
+        (p_le[0] - w_le[0]).abs() < 1e-15 * w_le[0].abs(),
+        "{p_le:?} vs virial {w_le:?}"
+    );
+    assert!(p_le[3] == w_le[3]);
+    assert!(p_x[0] - w_x[0] > 1e-8, "{p_x:?} vs virial {w_x:?}");
+}
+
+/// The rebound speed over the impact speed of a head-on collision at
+/// `speed`, in the native engine: a sphere of radius 1 thrown at a
+/// granular wall of its own material (`wall`) or two such spheres thrown
+/// at each other.
+fn rebound(wall: bool, speed: f64) -> f64 {
+    use bpm::engine::{ActiveGranularWall, GranularWall, StageDrivers, WallSide};
+    let material = bpm::verify::dem_check_material(false);
+    let (positions, velocities) = if wall {
+        (vec![[5.0, 5.0, 1.0 + 1e-9]], vec![[0.0, 0.0, -speed]])
+    } else {
+        (
+            vec![[5.0, 5.0, 4.0], [5.0, 5.0, 6.0 + 1e-9]],
+            vec![[0.0, 0.0, 0.5 * speed], [0.0, 0.0, -0.5 * speed]],
+        )
+    };
+    let n = positions.len();
+    let scene: bpm::scene::Scene = serde_json::from_value(serde_json::json!({
+        "model": "dem", "seed": 1,
+        "box": {"lo": [0, 0, -1], "lengths": [10, 10, 12], "periodic": [true, true, false]},
+        "particles": {"positions": positions, "velocities": velocities, "radius": vec![1.0; n]},
+        "force_field": {"granular": material},
+        "stages": [{"name": "bounce", "steps": 0}]
+    }))
+    .unwrap();
+    bpm::scene::validate(&scene).unwrap();
+    let mut sys = bpm::scene::build_system(&scene, 1);
+    let plane = GranularWall {
+        axis: 2,
+        side: WallSide::Lo,
+        position: 0.0,
+        velocity: 0.0,
+        material,
+    };
+    let drivers = StageDrivers {
+        dt: 1e-3,
+        granular_walls: if wall {
+            vec![ActiveGranularWall::new(&plane, &material)]
+        } else {
+            Vec::new()
+        },
+        ..Default::default()
+    };
+    sys.setup(&drivers);
+    let start = sys.simbox.clone();
+    let closing = |sys: &bpm::engine::System| {
+        let v = &sys.particles.v;
+        if wall {
+            -v[0][2]
+        } else {
+            v[0][2] - v[1][2]
+        }
+    };
+    let mut touched = false;
+    for step in 1..=100_000 {
+        sys.step(&drivers, step, &start).unwrap();
+        let pushing = sys.particles.f[0][2] != 0.0;
+        touched |= pushing;
+        if touched && !pushing {
+            if wall {
+                // The wall's recorded force is the sphere's, both zero now.
+                assert_eq!(sys.report.granular_wall_forces, vec![0.0]);
+            }
+            return -closing(&sys) / speed;
+        }
+        if wall && pushing {
+            let f = sys.report.granular_wall_forces[0];
+            assert_eq!(f, sys.particles.f[0][2], "the wall feels what it pushes");
+        }
+    }
+    panic!("no rebound");
+}
+
+/// A sphere rebounds from a wall of its own material as it does from an
+/// equal sphere: with Hertz contacts and damping that scales as
+/// sqrt(m_eff k_n a), the restitution depends on neither the effective
+/// mass nor the effective radius. At e = 1/2 Tsuji's damping gives 0.616
+/// (docs/model.md).
+#[test]
+fn a_sphere_rebounds_from_a_wall_as_from_an_equal_sphere() {
+    for speed in [0.05, 0.2] {
+        let (off_wall, off_sphere) = (rebound(true, speed), rebound(false, speed));
+        eprintln!("speed {speed}: wall {off_wall}, sphere {off_sphere}");
+        // Measured within 3.2e-5 of each other (the collisions' time
+        // discretisation, contact time / dt about 1,500).
+        assert!(
+            (off_wall - off_sphere).abs() < 2e-4,
+            "{off_wall} vs {off_sphere}"
+        );
+        assert!((off_wall - 0.616).abs() < 3e-3, "{off_wall}");
+    }
+}
+
+/// A sphere pushed through a granular wall's plane stops the run with an
+/// error naming the wall and the sphere.
+#[test]
+fn a_sphere_through_a_granular_wall_stops_the_run() {
+    let material = bpm::verify::dem_check_material(false);
+    let scene: bpm::scene::Scene = serde_json::from_value(serde_json::json!({
+        "model": "dem", "seed": 1,
+        "box": {"lo": [0, 0, -1], "lengths": [10, 10, 12], "periodic": [true, true, false]},
+        "particles": {"positions": [[5.0, 5.0, 2.0], [2.0, 2.0, 6.0]], "radius": [1.0, 1.0]},
+        "force_field": {"granular": material},
+        "stages": [{"name": "crush", "steps": 1000, "dt": 0.01,
+                    "granular_walls": [{"axis": 2, "side": "lo", "position": 0.0, "velocity": 150.0,
+                                        "material": material}]}]
+    }))
+    .unwrap();
+    bpm::scene::validate(&scene).unwrap();
+    let mut sys = bpm::scene::build_system(&scene, 1);
+    let (_, err) = bpm::scene::run_scene(&mut sys, &scene, &bpm::scene::RunOptions::quiet(1));
+    let err = err.expect("the run must stop").to_string();
+    assert!(
+        err.contains("sphere 0 reached the plane of granular wall 0"),
+        "{err}"
+    );
 }

@@ -302,6 +302,7 @@ fn bond_split_into_interior_and_boundary_matches_minimum_image_after_wraps() {
     stage.deformation = Some(bpm::engine::Deformation::SimpleShear {
         tilt: bpm::engine::TiltFactor::Xy,
         rate: 1e-4,
+        remap: bpm::engine::ShearRemap::X,
     });
     let mut scene = solid_with(ForceField::paper(-0.5), vec![stage]);
     let n = scene.particles.positions.len();

@@ -254,3 +254,51 @@ fn dem_scenes_are_checked_field_by_field() {
         "particles.angular_velocities",
     );
 }
+
+fn granular_wall() -> Value {
+    json!({"axis": 2, "side": "lo", "position": 0, "velocity": 0.01,
+           "material": {"youngs_modulus": 1e4, "poisson_ratio": 0.3, "restitution": 0.9,
+                        "tangential_damping": 1, "sliding_friction": 0.03}})
+}
+
+#[test]
+fn granular_walls_need_dem_spheres_a_closed_axis_and_a_valid_material() {
+    let mut doc = valid_dem();
+    doc["box"]["periodic"] = json!([true, true, false]);
+    doc["stages"][0]["granular_walls"] = json!([granular_wall()]);
+    check(doc.clone()).unwrap();
+    rejects_in(
+        doc.clone(),
+        |d| d["stages"][0]["granular_walls"][0]["axis"] = json!(0),
+        "stages[0].granular_walls[0].axis",
+    );
+    rejects_in(
+        doc,
+        |d| d["stages"][0]["granular_walls"][0]["material"]["restitution"] = json!(0),
+        "stages[0].granular_walls[0].material.restitution",
+    );
+    // The bonded model's walls are the harmonic ones.
+    rejects(
+        |d| {
+            d["box"]["periodic"] = json!([true, true, false]);
+            d["stages"][0]["granular_walls"] = json!([granular_wall()]);
+        },
+        "stages[0].granular_walls[0]",
+    );
+}
+
+#[test]
+fn lees_edwards_shear_needs_dem_spheres() {
+    let shear = json!({"simple_shear": {"tilt": "xy", "rate": 0.01, "remap": "v"}});
+    let mut doc = valid_dem();
+    doc["stages"][0]["deformation"] = shear.clone();
+    check(doc).unwrap();
+    rejects(
+        |d| d["stages"][0]["deformation"] = shear,
+        "stages[0].deformation.simple_shear.remap",
+    );
+    // Affine shear of the bonded model stays allowed.
+    let mut doc = valid();
+    doc["stages"][0]["deformation"] = json!({"simple_shear": {"tilt": "xy", "rate": 0.01}});
+    check(doc).unwrap();
+}

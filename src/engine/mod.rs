@@ -26,8 +26,8 @@ pub mod system;
 pub mod timers;
 
 pub use bpm::{BondTopology, BpmModel, BpmTerms};
-pub use deform::{Barostat, Deformation, TiltFactor};
-pub use dem::{ContactStore, DemModel};
+pub use deform::{Barostat, Deformation, LeesEdwards, ShearRemap, TiltFactor};
+pub use dem::{ActiveGranularWall, ContactStore, DemModel, GranularWall};
 pub use external::{ActiveTether, FlatWall, SphereWall, Tether, WallSide};
 pub use integrator::Integrator;
 pub use model::{EnergyTerm, ForceInput, ForceOutput, ModelTally, ParticleModel, MAX_ENERGY_TERMS};
@@ -79,6 +79,17 @@ pub enum EngineError {
         /// Step of the force evaluation that found it.
         step: u64,
         /// Index of the wall in the stage's `walls`.
+        wall: usize,
+        /// Particle index.
+        particle: usize,
+    },
+    /// A sphere's centre reached the plane of a granular wall: the
+    /// sphere overlapped the wall by its whole radius.
+    #[error("sphere {particle} reached the plane of granular wall {wall} at step {step}: it overlapped the wall by its whole radius (the wall moved too fast, pressed too hard for its stiffness, or the time step is too long)")]
+    ThroughGranularWall {
+        /// Step of the force evaluation that found it.
+        step: u64,
+        /// Index of the wall in the stage's `granular_walls`.
         wall: usize,
         /// Particle index.
         particle: usize,

@@ -8,6 +8,7 @@
 //! through this trait once per step, never per interaction, so the hot
 //! loops stay monomorphic inside the model.
 
+use super::deform::LeesEdwards;
 use super::neighbor::{Exclusions, NeighbourList};
 use super::simbox::SimBox;
 use super::timers::Timers;
@@ -75,6 +76,11 @@ pub struct ForceInput<'a> {
     pub threads: usize,
     /// Whether to sum energies and virials in this evaluation.
     pub tally: bool,
+    /// Lees-Edwards boundaries, if the box is sheared with them: a pair
+    /// across a sheared face sees its partner's image moving at
+    /// [`LeesEdwards::image_velocity`]. Only models with velocity-dependent
+    /// pair forces read it (the scene refuses it for the others).
+    pub lees_edwards: Option<LeesEdwards>,
 }
 
 /// Where a model adds its forces (and torques).

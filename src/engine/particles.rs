@@ -1,5 +1,6 @@
 //! Per-particle state, structure of arrays.
 
+use super::deform::LeesEdwards;
 use super::simbox::SimBox;
 
 /// Moment-of-inertia factor of a solid sphere, `I = 0.4 m r^2` (as LAMMPS's
@@ -123,9 +124,42 @@ impl Particles {
     }
 
     /// Wraps every position into the box, updating the image counters.
-    pub fn wrap(&mut self, simbox: &SimBox) {
-        for (x, n) in self.x.iter_mut().zip(self.image.iter_mut()) {
-            simbox.wrap(x, n);
+    /// Under Lees-Edwards boundaries a particle moved to another image
+    /// takes that image's velocity: `v - w(k)` for a shift by `h k`.
+    pub fn wrap(&mut self, simbox: &SimBox, lees_edwards: Option<&LeesEdwards>) {
+        for ((x, n), v) in self
+            .x
+            .iter_mut()
+            .zip(self.image.iter_mut())
+            .zip(&mut self.v)
+        {
+            let k = simbox.wrap(x, n);
+            if let (Some(le), true) = (lees_edwards, k != [0; 3]) {
+                let w = le.image_velocity(&k.map(f64::from));
+                for d in 0..3 {
+                    v[d] -= w[d];
+                }
+            }
+        }
+    }
+
+    /// [`Particles::add_kinetic_tensor`] with velocities taken relative to
+    /// the Lees-Edwards streaming profile of `simbox` (peculiar velocities).
+    pub fn add_peculiar_kinetic_tensor(
+        &self,
+        simbox: &SimBox,
+        lees_edwards: &LeesEdwards,
+        p: &mut [f64; 6],
+    ) {
+        for ((v, x), &m) in self.v.iter().zip(&self.x).zip(&self.mass) {
+            let u = lees_edwards.streaming_velocity(simbox, x);
+            let c = [v[0] - u[0], v[1] - u[1], v[2] - u[2]];
+            p[0] += m * c[0] * c[0];
+            p[1] += m * c[1] * c[1];
+            p[2] += m * c[2] * c[2];
+            p[3] += m * c[0] * c[1];
+            p[4] += m * c[0] * c[2];
+            p[5] += m * c[1] * c[2];
         }
     }
 

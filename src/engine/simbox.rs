@@ -57,8 +57,9 @@ impl SimBox {
     }
 
     /// Moves `x` into the primary cell along periodic dimensions and records
-    /// the shift in `image` so unwrapped positions stay available.
-    pub fn wrap(&self, x: &mut [f64; 3], image: &mut [i32; 3]) {
+    /// the shift in `image` so unwrapped positions stay available; returns
+    /// the shift.
+    pub fn wrap(&self, x: &mut [f64; 3], image: &mut [i32; 3]) -> [i32; 3] {
         let s = self.to_fractional(x);
         let mut shift = [0i32; 3];
         for d in 0..3 {
@@ -75,6 +76,7 @@ impl SimBox {
                 image[d] = image[d].saturating_add(shift[d]);
             }
         }
+        shift
     }
 
     /// Distance between opposite faces, per dimension.
@@ -167,10 +169,12 @@ impl SimBox {
     }
 }
 
-impl Separation for MinimumImage {
-    /// Minimum image in LAMMPS's order: z, then y, then x.
+impl MinimumImage {
+    /// The minimum-image separation `x_i - (x_j + h k)` and the image `k`
+    /// of `j` it picks (as floats), for quantities that depend on which
+    /// image interacts, such as the velocity of a Lees-Edwards image.
     #[inline(always)]
-    fn delta(&self, xi: &[f64; 3], xj: &[f64; 3]) -> [f64; 3] {
+    pub fn delta_image(&self, xi: &[f64; 3], xj: &[f64; 3]) -> ([f64; 3], [f64; 3]) {
         let [lx, ly, lz] = self.lengths;
         let [xy, xz, yz] = self.tilt;
         let mut dx = xi[0] - xj[0];
@@ -185,7 +189,15 @@ impl Separation for MinimumImage {
         dx -= ky * xy;
         let kx = round_nearest(dx * self.inv[0]);
         dx -= kx * lx;
-        [dx, dy, dz]
+        ([dx, dy, dz], [kx, ky, kz])
+    }
+}
+
+impl Separation for MinimumImage {
+    /// Minimum image in LAMMPS's order: z, then y, then x.
+    #[inline(always)]
+    fn delta(&self, xi: &[f64; 3], xj: &[f64; 3]) -> [f64; 3] {
+        self.delta_image(xi, xj).0
     }
 }
 

@@ -2,9 +2,11 @@
 //!
 //! One step follows LAMMPS's order so both engines can be compared step for
 //! step: half kick and drift, neighbour check, forces (model, then external),
-//! half kick, then box changes (deformation, barostat) with affine remap.
+//! half kick, then box changes (deformation, barostat) with affine remap
+//! (or, for Lees-Edwards shear, none: the images move instead).
 
-use super::deform::{Barostat, Deformation};
+use super::deform::{Barostat, Deformation, LeesEdwards};
+use super::dem::ActiveGranularWall;
 use super::external::{apply_viscous, ActiveTether, FlatWall, SphereWall};
 use super::integrator::Integrator;
 use super::model::{ForceInput, ForceOutput, ModelTally, ParticleModel};
@@ -13,7 +15,7 @@ use super::particles::Particles;
 use super::simbox::SimBox;
 use super::timers::{Stage, Timers};
 use super::EngineError;
-use crate::kernels::{Fault, Separation, Tally};
+use crate::kernels::{ContactHistory, Fault, Separation, Tally};
 
 /// Everything a stage adds on top of the interaction model.
 #[derive(Debug, Default)]
@@ -24,6 +26,9 @@ pub struct StageDrivers {
     pub walls: Vec<FlatWall>,
     /// A spherical wall.
     pub sphere_wall: Option<SphereWall>,
+    /// Flat granular walls (DEM spheres), resolved against the spheres'
+    /// material.
+    pub granular_walls: Vec<ActiveGranularWall>,
     /// A centre-of-mass tether, resolved against the particles.
     pub tether: Option<ActiveTether>,
     /// Viscous damping coefficient (m / tau), 0 for none.
@@ -52,6 +57,14 @@ pub struct StepReport {
     pub wall_forces: Vec<f64>,
     /// Position of each flat wall.
     pub wall_positions: Vec<f64>,
+    /// Normal force on each granular wall (k d units, positive when
+    /// pushed).
+    pub granular_wall_forces: Vec<f64>,
+    /// Position of each granular wall.
+    pub granular_wall_positions: Vec<f64>,
+    /// `(wall, sphere)`: the first sphere found on or behind the plane of
+    /// a granular wall.
+    pub through_granular_wall: Option<(usize, usize)>,
     /// Summed force magnitude on the spherical wall.
     pub sphere_wall_force: f64,
     /// Energy of walls and tether.
@@ -95,6 +108,11 @@ pub struct System {
     pub wraps: u64,
     /// Simulated time at the start of the current stage (tau).
     stage_start_time: f64,
+    /// The current stage's Lees-Edwards boundaries, if it shears with them.
+    lees_edwards: Option<LeesEdwards>,
+    /// Per granular wall of the current stage, one contact history per
+    /// particle (a stage's walls start untouched).
+    wall_histories: Vec<Vec<ContactHistory>>,
 }
 
 impl System {
@@ -124,6 +142,8 @@ impl System {
             report: StepReport::default(),
             wraps: 0,
             stage_start_time: 0.0,
+            lees_edwards: None,
+            wall_histories: Vec::new(),
         }
     }
 
@@ -143,12 +163,28 @@ impl System {
     }
 
     /// Pressure tensor `[xx, yy, zz, xy, xz, yz]` from kinetic and virial
-    /// parts, positive in compression (LAMMPS `compute pressure`).
+    /// parts, positive in compression (LAMMPS `compute pressure`). Under
+    /// Lees-Edwards boundaries the kinetic part counts peculiar velocities,
+    /// relative to the streaming profile (LAMMPS `compute temp/deform`).
     pub fn pressure_tensor(&self) -> [f64; 6] {
         let mut p = self.interaction_tally().virial;
-        self.particles.add_kinetic_tensor(&mut p);
+        self.add_kinetic_tensor(&mut p);
         let inv = 1.0 / self.simbox.volume();
         p.map(|c| c * inv)
+    }
+
+    fn add_kinetic_tensor(&self, p: &mut [f64; 6]) {
+        match &self.lees_edwards {
+            Some(le) => self
+                .particles
+                .add_peculiar_kinetic_tensor(&self.simbox, le, p),
+            None => self.particles.add_kinetic_tensor(p),
+        }
+    }
+
+    /// The current stage's Lees-Edwards boundaries, if any.
+    pub fn lees_edwards(&self) -> Option<&LeesEdwards> {
+        self.lees_edwards.as_ref()
     }
 
     /// Scalar pressure, the mean of the diagonal of the pressure tensor.
@@ -165,11 +201,19 @@ impl System {
     pub fn scalar_pressure(&self) -> f64 {
         let p = &self.particles;
         let dof = (3 * p.len()) as f64 - 3.0;
-        let sum_mv2: f64 =
-            p.v.iter()
-                .zip(&p.mass)
-                .map(|(v, &m)| (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]) * m)
-                .sum();
+        let sum_mv2: f64 = match &self.lees_edwards {
+            Some(_) => {
+                let mut k = [0.0; 6];
+                self.add_kinetic_tensor(&mut k);
+                k[0] + k[1] + k[2]
+            }
+            None => {
+                p.v.iter()
+                    .zip(&p.mass)
+                    .map(|(v, &m)| (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]) * m)
+                    .sum()
+            }
+        };
         let temperature = if dof > 0.0 {
             sum_mv2 * (1.0 / dof)
         } else {
@@ -192,7 +236,8 @@ impl System {
                 .neighbours
                 .needs_rebuild(&self.simbox, &self.particles.x, self.skin)
         {
-            self.particles.wrap(&self.simbox);
+            self.particles
+                .wrap(&self.simbox, self.lees_edwards.as_ref());
             self.wraps += 1;
             self.neighbours.build(
                 &self.simbox,
@@ -237,6 +282,7 @@ impl System {
             wraps: self.wraps,
             threads: self.threads,
             tally,
+            lees_edwards: self.lees_edwards,
         };
         let mut output = ForceOutput {
             f: &mut p.f,
@@ -262,6 +308,21 @@ impl System {
                 report.through_wall = Some((w, particle));
             }
         }
+        for (w, (wall, history)) in drivers
+            .granular_walls
+            .iter()
+            .zip(&mut self.wall_histories)
+            .enumerate()
+        {
+            let contact = wall.apply(elapsed, p, history, step_dt);
+            report.granular_wall_forces.push(contact.force);
+            report
+                .granular_wall_positions
+                .push(wall.wall.position_at(elapsed));
+            if let (Some(particle), None) = (contact.through, report.through_granular_wall) {
+                report.through_granular_wall = Some((w, particle));
+            }
+        }
         if let Some(sphere) = &drivers.sphere_wall {
             let (force, energy) = sphere.apply(elapsed, &p.x, &mut p.f);
             report.sphere_wall_force = force;
@@ -279,6 +340,14 @@ impl System {
     /// Prepares a stage: forces the list build and evaluates forces once.
     pub fn setup(&mut self, drivers: &StageDrivers) {
         self.stage_start_time = self.time;
+        self.lees_edwards = drivers
+            .deformation
+            .as_ref()
+            .and_then(|d| d.lees_edwards(&self.simbox));
+        self.wall_histories = vec![
+            vec![ContactHistory::default(); self.particles.len()];
+            drivers.granular_walls.len()
+        ];
         self.update_neighbours(true);
         self.compute_forces(drivers, 0.0, true);
     }
@@ -311,7 +380,11 @@ impl System {
         self.time = self.stage_start_time + stage_step as f64 * dt;
         if let Some(deformation) = &drivers.deformation {
             let new_box = deformation.box_at(stage_box, elapsed);
-            self.remap_into(new_box);
+            if deformation.remaps_positions() {
+                self.remap_into(new_box);
+            } else {
+                self.simbox = new_box;
+            }
         }
         if let Some(barostat) = &drivers.barostat {
             let pressure = self.scalar_pressure();
@@ -371,14 +444,21 @@ impl System {
     /// The verdict of the last force evaluation's flat walls: an error if
     /// a particle was on or behind a wall's plane.
     pub fn check_walls(&self) -> Result<(), EngineError> {
-        match self.report.through_wall {
-            Some((wall, particle)) => Err(EngineError::ThroughWall {
+        if let Some((wall, particle)) = self.report.through_wall {
+            return Err(EngineError::ThroughWall {
                 step: self.step,
                 wall,
                 particle,
-            }),
-            None => Ok(()),
+            });
         }
+        if let Some((wall, particle)) = self.report.through_granular_wall {
+            return Err(EngineError::ThroughGranularWall {
+                step: self.step,
+                wall,
+                particle,
+            });
+        }
+        Ok(())
     }
 
     /// Changes the box and maps positions affinely into it.

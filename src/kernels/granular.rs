@@ -139,14 +139,17 @@ pub fn restitution_prefactor(e: f64) -> f64 {
     5f64.sqrt() * l.abs() / (l * l + std::f64::consts::PI * std::f64::consts::PI).sqrt()
 }
 
-/// The contact coefficients of two spheres of one material, derived once.
+/// The coefficients of one kind of contact (two spheres, or a sphere and
+/// a wall), derived once.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct GranularCoeffs {
-    /// `k_n = 4/3 E_eff`, `E_eff = E / (2 (1 - nu^2))`.
+    /// `k_n = 4/3 E_eff`, `1 / E_eff = (1 - nu_a^2)/E_a + (1 - nu_b^2)/E_b`
+    /// (`E / (2 (1 - nu^2))` for one material).
     pub normal_stiffness: f64,
     /// `c_e`: `eta_n = c_e sqrt(m_eff k_n a)`.
     pub normal_damping: f64,
-    /// `k_t = 8 G_eff`, `G_eff = G / (2 (2 - nu))`, `G = E / (2 (1 + nu))`.
+    /// `k_t = 8 G_eff`, `1 / G_eff = (2 - nu_a)/G_a + (2 - nu_b)/G_b`, `G =
+    /// E / (2 (1 + nu))` (`G / (2 (2 - nu))` for one material).
     pub tangential_stiffness: f64,
     /// `x_gt`: `eta_t = x_gt eta_n`.
     pub tangential_damping: f64,
@@ -161,18 +164,31 @@ pub struct GranularCoeffs {
 impl GranularCoeffs {
     /// The coefficients of `m` against itself.
     pub fn of(m: &GranularMaterial) -> Self {
-        let e_eff = mixed_youngs(m.youngs_modulus, m.poisson_ratio);
+        Self::between(m, m)
+    }
+
+    /// The coefficients of a contact between bodies of materials `a` and
+    /// `b`: the elastic moduli mix by Hertz's and Mindlin's rules; damping
+    /// and friction are `b`'s (the contact's own, e.g. a wall's against
+    /// the spheres).
+    pub fn between(a: &GranularMaterial, b: &GranularMaterial) -> Self {
+        let e_eff = 1.0
+            / (youngs_compliance(a.youngs_modulus, a.poisson_ratio)
+                + youngs_compliance(b.youngs_modulus, b.poisson_ratio));
+        let g_eff = 1.0
+            / (shear_compliance(a.youngs_modulus, a.poisson_ratio)
+                + shear_compliance(b.youngs_modulus, b.poisson_ratio));
         Self {
             normal_stiffness: 4.0 / 3.0 * e_eff,
-            normal_damping: match m.damping {
-                NormalDamping::Tsuji => tsuji_prefactor(m.restitution),
-                NormalDamping::CoeffRestitution => restitution_prefactor(m.restitution),
+            normal_damping: match b.damping {
+                NormalDamping::Tsuji => tsuji_prefactor(b.restitution),
+                NormalDamping::CoeffRestitution => restitution_prefactor(b.restitution),
             },
-            tangential_stiffness: 8.0 * mixed_shear(m.youngs_modulus, m.poisson_ratio),
-            tangential_damping: m.tangential_damping,
-            sliding_friction: m.sliding_friction,
-            rolling: m.rolling,
-            twisting: m.twisting,
+            tangential_stiffness: 8.0 * g_eff,
+            tangential_damping: b.tangential_damping,
+            sliding_friction: b.sliding_friction,
+            rolling: b.rolling,
+            twisting: b.twisting,
         }
     }
 
@@ -183,18 +199,17 @@ impl GranularCoeffs {
     }
 }
 
-/// `E_eff = 1 / ((1 - nu^2)/E + (1 - nu^2)/E)` for two spheres of one
-/// material.
-fn mixed_youngs(e: f64, nu: f64) -> f64 {
-    1.0 / ((1.0 - nu * nu) / e + (1.0 - nu * nu) / e)
+/// One body's share `(1 - nu^2) / E` of the Hertz contact compliance:
+/// `E_eff = 1 / (sum of both shares)`.
+fn youngs_compliance(e: f64, nu: f64) -> f64 {
+    (1.0 - nu * nu) / e
 }
 
-/// `G_eff = 1 / ((2 - nu)/G + (2 - nu)/G)`, `G = E / (2 (1 + nu))`, for
-/// two spheres of one material (each term formed as `2 (2 - nu) (1 + nu) /
-/// E`, as LAMMPS forms it).
-fn mixed_shear(e: f64, nu: f64) -> f64 {
-    let compliance = 2.0 * (2.0 - nu) * (1.0 + nu) / e;
-    1.0 / (compliance + compliance)
+/// One body's share `(2 - nu) / G = 2 (2 - nu) (1 + nu) / E` of Mindlin's
+/// tangential compliance (formed as LAMMPS forms it): `G_eff = 1 / (sum of
+/// both shares)`.
+fn shear_compliance(e: f64, nu: f64) -> f64 {
+    2.0 * (2.0 - nu) * (1.0 + nu) / e
 }
 
 /// What a contact remembers between steps.
@@ -290,6 +305,28 @@ fn slider(h: &mut [f64; 3], w: &[f64; 3], k: f64, eta: f64, limit: f64) -> [f64;
     f
 }
 
+/// What the contact law reads of one contact, whatever its two bodies
+/// are: two spheres, or a sphere and a flat wall.
+struct Contact {
+    /// Unit normal, towards `i`.
+    n: [f64; 3],
+    /// Overlap (d).
+    delta: f64,
+    /// Effective radius (d).
+    reff: f64,
+    /// Effective mass (m).
+    meff: f64,
+    /// Relative velocity of the centres, `v_i - v_j`.
+    vr: [f64; 3],
+    /// `R_i omega_i + R_j omega_j`: the surfaces' spin at the contact.
+    wr: [f64; 3],
+    /// Relative angular velocity, `omega_i - omega_j`.
+    relrot: [f64; 3],
+    /// Lever arms of the tangential force about each centre.
+    arm_i: f64,
+    arm_j: f64,
+}
+
 /// The contact force of touching spheres `i` and `j` at separation
 /// `del = x_i - x_j` (`|del| < R_i + R_j`), updating `history` over the
 /// step `dt` when `update` (a force evaluation that is not a step, such as
@@ -307,18 +344,113 @@ pub fn granular_contact(
     let rsq = del[0] * del[0] + del[1] * del[1] + del[2] * del[2];
     let r = rsq.sqrt();
     let rinv = 1.0 / r;
-    let n = [del[0] * rinv, del[1] * rinv, del[2] * rinv];
     let radsum = si.radius + sj.radius;
-    let reff = si.radius * sj.radius / radsum;
+    let delta = radsum - r;
+    let contact = Contact {
+        n: [del[0] * rinv, del[1] * rinv, del[2] * rinv],
+        delta,
+        reff: si.radius * sj.radius / radsum,
+        meff: si.mass * sj.mass / (si.mass + sj.mass),
+        vr: [si.v[0] - sj.v[0], si.v[1] - sj.v[1], si.v[2] - sj.v[2]],
+        wr: [
+            si.radius * si.omega[0] + sj.radius * sj.omega[0],
+            si.radius * si.omega[1] + sj.radius * sj.omega[1],
+            si.radius * si.omega[2] + sj.radius * sj.omega[2],
+        ],
+        relrot: [
+            si.omega[0] - sj.omega[0],
+            si.omega[1] - sj.omega[1],
+            si.omega[2] - sj.omega[2],
+        ],
+        // The tangential force acts at the contact point, R - delta/2 from
+        // either centre.
+        arm_i: si.radius - 0.5 * delta,
+        arm_j: sj.radius - 0.5 * delta,
+    };
+    contact_law(c, &contact, history, dt, update)
+}
 
-    // Relative translational velocity and its normal part.
-    let vr = [si.v[0] - sj.v[0], si.v[1] - sj.v[1], si.v[2] - sj.v[2]];
+/// Where a flat wall touches a sphere.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct WallTouch {
+    /// Distance of the sphere's centre from the wall's plane, `0 <
+    /// distance < R`.
+    pub distance: f64,
+    /// The wall's unit normal, pointing towards the sphere.
+    pub normal: [f64; 3],
+    /// The wall's velocity (d / tau).
+    pub velocity: [f64; 3],
+}
+
+/// The contact force on sphere `s` from a flat wall touching it at
+/// `wall`; `torque_j` of the result is 0.
+///
+/// The wall is a body of infinite radius and mass: `R_eff = R`, `m_eff =
+/// m`, and it does not spin. The tangential force acts at the full radius
+/// `R` (not at the contact point, `R - delta` from the centre), as the
+/// reference LAMMPS implementation has it; the two differ by `delta / R`.
+#[inline(always)]
+pub fn granular_wall_contact(
+    c: &GranularCoeffs,
+    wall: &WallTouch,
+    s: &Sphere,
+    history: &mut ContactHistory,
+    dt: f64,
+    update: bool,
+) -> ContactForce {
+    let WallTouch {
+        distance,
+        normal,
+        velocity: wall_velocity,
+    } = *wall;
+    // The normal as the reference forms it from the separation vector
+    // `distance * normal`, so both round alike.
+    let rinv = 1.0 / distance;
+    let contact = Contact {
+        n: normal.map(|c| distance * c * rinv),
+        delta: s.radius - distance,
+        reff: s.radius,
+        meff: s.mass,
+        vr: [
+            s.v[0] - wall_velocity[0],
+            s.v[1] - wall_velocity[1],
+            s.v[2] - wall_velocity[2],
+        ],
+        wr: s.omega.map(|w| s.radius * w),
+        relrot: s.omega,
+        arm_i: s.radius,
+        arm_j: 0.0,
+    };
+    let mut out = contact_law(c, &contact, history, dt, update);
+    out.torque_j = [0.0; 3];
+    out
+}
+
+/// Hertz normal force with damping, Mindlin tangential force, rolling and
+/// twisting resistance for one contact.
+#[inline(always)]
+fn contact_law(
+    c: &GranularCoeffs,
+    contact: &Contact,
+    history: &mut ContactHistory,
+    dt: f64,
+    update: bool,
+) -> ContactForce {
+    let Contact {
+        n,
+        delta,
+        reff,
+        meff,
+        vr,
+        wr,
+        relrot,
+        arm_i,
+        arm_j,
+    } = *contact;
     let vnnr = vr[0] * n[0] + vr[1] * n[1] + vr[2] * n[2];
     let vn = [n[0] * vnnr, n[1] * vnnr, n[2] * vnnr];
-    let meff = si.mass * sj.mass / (si.mass + sj.mass);
 
     // Hertz, with damping that scales as sqrt(k_n a).
-    let delta = radsum - r;
     let a = (delta * reff).sqrt();
     let fne = c.normal_stiffness * delta * a;
     let knfac = c.normal_stiffness * a;
@@ -328,11 +460,6 @@ pub fn granular_contact(
     let fncrit = fntot.abs();
 
     // Relative velocity of the surfaces at the contact.
-    let wr = [
-        si.radius * si.omega[0] + sj.radius * sj.omega[0],
-        si.radius * si.omega[1] + sj.radius * sj.omega[1],
-        si.radius * si.omega[2] + sj.radius * sj.omega[2],
-    ];
     let vt = [vr[0] - vn[0], vr[1] - vn[1], vr[2] - vn[2]];
     let vtr = [
         vt[0] - (n[2] * wr[1] - n[1] * wr[2]),
@@ -366,11 +493,7 @@ pub fn granular_contact(
         ],
         ..ContactForce::default()
     };
-    // The tangential force acts at the contact point, R - delta/2 from
-    // either centre.
     let tor = cross(&n, &fs);
-    let arm_i = si.radius - 0.5 * delta;
-    let arm_j = sj.radius - 0.5 * delta;
     for d in 0..3 {
         out.torque_i[d] = -arm_i * tor[d];
         out.torque_j[d] = -arm_j * tor[d];
@@ -379,11 +502,6 @@ pub fn granular_contact(
         return out;
     }
 
-    let relrot = [
-        si.omega[0] - sj.omega[0],
-        si.omega[1] - sj.omega[1],
-        si.omega[2] - sj.omega[2],
-    ];
     let mut roll_torque = None;
     if let Some(roll) = &c.rolling {
         // Rolling velocity R (relrot x n) (Wang et al. 2015, eq. 31).
@@ -894,5 +1012,171 @@ mod tests {
                 out.torque_i
             );
         }
+    }
+
+    #[test]
+    fn one_material_mixes_with_itself_and_a_rigid_wall_takes_the_limit() {
+        let m = material();
+        assert_eq!(GranularCoeffs::between(&m, &m), GranularCoeffs::of(&m));
+        let (e_eff, g_eff) = effective(&m);
+        let c = GranularCoeffs::of(&m);
+        assert!((c.normal_stiffness - 4.0 / 3.0 * e_eff).abs() < 1e-14 * e_eff);
+        assert!((c.tangential_stiffness - 8.0 * g_eff).abs() < 1e-14 * g_eff);
+        // A wall 1e12 times stiffer: E_eff -> E / (1 - nu^2), G_eff -> G /
+        // (2 - nu); damping and friction are the wall's.
+        let wall = GranularMaterial {
+            youngs_modulus: 1e12 * m.youngs_modulus,
+            restitution: 0.9,
+            sliding_friction: 0.05,
+            ..m
+        };
+        let c = GranularCoeffs::between(&m, &wall);
+        let nu = m.poisson_ratio;
+        let g = m.youngs_modulus / (2.0 * (1.0 + nu));
+        let rigid_e = m.youngs_modulus / (1.0 - nu * nu);
+        assert!((c.normal_stiffness / (4.0 / 3.0 * rigid_e) - 1.0).abs() < 1e-11);
+        assert!((c.tangential_stiffness / (8.0 * g / (2.0 - nu)) - 1.0).abs() < 1e-11);
+        assert_eq!(c.normal_damping, tsuji_prefactor(0.9));
+        assert_eq!(c.sliding_friction, 0.05);
+    }
+
+    /// A sphere of radius 1 against a wall of the same material, and
+    /// against a sphere so large and heavy that it is that wall.
+    fn wall_and_giant(
+        overlap: f64,
+        s: &Sphere,
+        wall_velocity: [f64; 3],
+        steps: usize,
+    ) -> (ContactForce, ContactForce) {
+        let mut m = material();
+        m.rolling = Some(SpringDashpotSlider {
+            stiffness: 10.0,
+            damping: 0.5,
+            friction: 0.1,
+        });
+        m.twisting = Twisting::Marshall;
+        let c = GranularCoeffs::of(&m);
+        let normal = [0.0, 0.6, 0.8];
+        let touch = WallTouch {
+            distance: s.radius - overlap,
+            normal,
+            velocity: wall_velocity,
+        };
+        let big = 1e7;
+        let giant = Sphere {
+            v: wall_velocity,
+            omega: [0.0; 3],
+            radius: big,
+            mass: 1e30,
+        };
+        let del = normal.map(|n| n * (big + s.radius - overlap));
+        let (mut hw, mut hg) = (ContactHistory::default(), ContactHistory::default());
+        let (mut fw, mut fg) = (ContactForce::default(), ContactForce::default());
+        for _ in 0..steps {
+            fw = granular_wall_contact(&c, &touch, s, &mut hw, 0.01, true);
+            fg = granular_contact(&c, &del, s, &giant, &mut hg, 0.01, true);
+        }
+        (fw, fg)
+    }
+
+    #[test]
+    fn a_wall_is_the_limit_of_an_infinitely_large_and_heavy_sphere() {
+        // Sliding, spinning and approaching a moving wall: every term acts.
+        let s = Sphere {
+            v: [0.02, -0.03, -0.01],
+            omega: [0.05, -0.02, 0.04],
+            radius: 1.0,
+            mass: 2.0,
+        };
+        for steps in [1, 50] {
+            let (wall, giant) = wall_and_giant(0.01, &s, [0.01, 0.0, 0.0], steps);
+            let scale = norm(&giant.force);
+            for d in 0..3 {
+                // The giant's R_eff is 1e-7 short of R, and its overlap,
+                // formed from distances of 1e7, rounds to about 1e-7 of
+                // itself.
+                assert!(
+                    (wall.force[d] - giant.force[d]).abs() < 1e-6 * scale,
+                    "{steps} steps: {:?} vs {:?}",
+                    wall.force,
+                    giant.force
+                );
+            }
+            assert_eq!(wall.torque_j, [0.0; 3]);
+        }
+    }
+
+    #[test]
+    fn a_wall_contact_depends_only_on_the_velocity_relative_to_the_wall() {
+        let s = Sphere {
+            v: [0.02, -0.03, -0.01],
+            omega: [0.05, -0.02, 0.04],
+            radius: 1.0,
+            mass: 2.0,
+        };
+        let u = [0.3, -0.1, 0.2];
+        let moved = Sphere {
+            v: [s.v[0] + u[0], s.v[1] + u[1], s.v[2] + u[2]],
+            ..s
+        };
+        let (still, _) = wall_and_giant(0.02, &s, [0.0; 3], 20);
+        let (moving, _) = wall_and_giant(0.02, &moved, u, 20);
+        for d in 0..3 {
+            assert!((still.force[d] - moving.force[d]).abs() < 1e-13);
+            assert!((still.torque_i[d] - moving.torque_i[d]).abs() < 1e-13);
+        }
+        // And it does depend on it: the wall's velocity is not ignored.
+        let (dragged, _) = wall_and_giant(0.02, &s, u, 20);
+        assert!((dragged.force[0] - still.force[0]).abs() > 1e-4);
+    }
+
+    #[test]
+    fn a_static_wall_contact_is_hertz_with_the_sphere_radius() {
+        let m = material();
+        let c = GranularCoeffs::of(&m);
+        let (e_eff, _) = effective(&m);
+        let radius = 0.7;
+        for overlap in [1e-4, 1e-2, 0.1] {
+            let touch = WallTouch {
+                distance: radius - overlap,
+                normal: [0.0, 0.0, -1.0],
+                velocity: [0.0; 3],
+            };
+            let mut h = ContactHistory::default();
+            let out = granular_wall_contact(&c, &touch, &at_rest(radius, 3.0), &mut h, 0.01, true);
+            let hertz = 4.0 / 3.0 * e_eff * radius.sqrt() * overlap.powf(1.5);
+            assert!((-out.force[2] - hertz).abs() < 1e-12 * hertz);
+            assert_eq!(out.force[0], 0.0);
+            assert_eq!(out.torque_i, [0.0; 3]);
+        }
+    }
+
+    #[test]
+    fn a_spinning_sphere_on_a_wall_feels_friction_at_its_full_radius() {
+        let m = material();
+        let c = GranularCoeffs::of(&m);
+        let (radius, overlap) = (1.0, 0.01);
+        let touch = WallTouch {
+            distance: radius - overlap,
+            normal: [0.0, 0.0, 1.0],
+            velocity: [0.0; 3],
+        };
+        // Spinning about y, the contact point (below the centre) moves
+        // along -x: friction pushes the sphere along +x.
+        let s = Sphere {
+            omega: [0.0, 0.1, 0.0],
+            ..at_rest(radius, 1.0)
+        };
+        let mut h = ContactHistory::default();
+        let mut out = ContactForce::default();
+        for _ in 0..10_000 {
+            out = granular_wall_contact(&c, &touch, &s, &mut h, 0.01, true);
+        }
+        let fn_ = out.force[2];
+        assert!(fn_ > 0.0);
+        assert!((out.force[0] - m.sliding_friction * fn_).abs() < 1e-12 * fn_);
+        // Torque -R n x F_t about y: opposes the spin.
+        assert!((out.torque_i[1] + radius * out.force[0]).abs() < 1e-14 * fn_);
+        assert!(out.torque_i[1] < 0.0);
     }
 }

@@ -29,8 +29,9 @@ pub use fault::{
 };
 pub use geometry::{Separation, Unwrapped};
 pub use granular::{
-    granular_contact, restitution_prefactor, tsuji_prefactor, ContactForce, ContactHistory,
-    GranularCoeffs, GranularMaterial, NormalDamping, Sphere, SpringDashpotSlider, Twisting,
+    granular_contact, granular_wall_contact, restitution_prefactor, tsuji_prefactor, ContactForce,
+    ContactHistory, GranularCoeffs, GranularMaterial, NormalDamping, Sphere, SpringDashpotSlider,
+    Twisting, WallTouch,
 };
 pub use isa::Isa;
 pub use pair::{pair_energy, pair_force_magnitude, pair_forces, PairCoeffs, PairInputs};

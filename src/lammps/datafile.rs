@@ -2,7 +2,7 @@
 //! `-var` values of the input templates in `lammps_inputs/` (embedded in
 //! the binary, written next to each run by [`super::templates`]).
 
-use crate::kernels::{GranularMaterial, NormalDamping, Twisting};
+use crate::kernels::{GranularCoeffs, GranularMaterial, NormalDamping, Twisting};
 pub use crate::scene::datafile::{type_masses, write_data_file};
 use crate::scene::load::reference_lengths;
 use crate::scene::Scene;
@@ -100,14 +100,48 @@ pub fn granular_pair_coeff(m: &GranularMaterial) -> String {
         NormalDamping::Tsuji => "tsuji",
         NormalDamping::CoeffRestitution => "coeff_restitution",
     };
-    let mut s = format!(
-        "hertz/material {} {} {} damping {damping} tangential mindlin NULL {} {}",
+    format!(
+        "hertz/material {} {} {} damping {damping} tangential mindlin NULL {} {}{}",
         g(m.youngs_modulus),
         g(m.restitution),
         g(m.poisson_ratio),
         g(m.tangential_damping),
-        g(m.sliding_friction)
-    );
+        g(m.sliding_friction),
+        rolling_twisting(m)
+    )
+}
+
+/// LAMMPS 2021's prefactor `4/3 E / (2 (1 - nu))` of a granular wall's
+/// Hertz force, with its literal for 4/3 (one unit in the last place
+/// below 4/3).
+const LAMMPS_WALL_FOUR_THIRDS: f64 = 1.333333333333333;
+
+/// The `granular` model of LAMMPS 2021's `fix wall/gran/region` for a
+/// wall of material `wall` whose contacts with the spheres have the
+/// coefficients `c` (native [`crate::engine::ActiveGranularWall::coeffs`]).
+///
+/// LAMMPS 2021's wall uses only its own E and nu, and forms the normal
+/// prefactor as `4/3 E / (2 (1 - nu))` and the default Mindlin stiffness
+/// as `E / 4 (2 - nu) (1 + nu)` (both unlike its pair style); so it gets
+/// `nu = 0` and the `E` whose prefactor is `k_n`, and `k_t` explicitly.
+pub fn granular_wall_model(c: &GranularCoeffs, wall: &GranularMaterial) -> String {
+    let g = |v: f64| format!("{v:.17e}");
+    let youngs = c.normal_stiffness / LAMMPS_WALL_FOUR_THIRDS * 2.0;
+    format!(
+        "hertz/material {} {} 0 damping tsuji tangential mindlin {} {} {}{}",
+        g(youngs),
+        g(wall.restitution),
+        g(c.tangential_stiffness),
+        g(c.tangential_damping),
+        g(c.sliding_friction),
+        rolling_twisting(wall)
+    )
+}
+
+/// The rolling and twisting keywords of a granular model.
+fn rolling_twisting(m: &GranularMaterial) -> String {
+    let g = |v: f64| format!("{v:.17e}");
+    let mut s = String::new();
     if let Some(r) = &m.rolling {
         s += &format!(
             " rolling sds {} {} {}",
@@ -140,4 +174,42 @@ pub fn write_reference_lengths(scene: &Scene) -> String {
         let _ = writeln!(s, "{} {} {:.17e}", i + 1, j + 1, r0);
     }
     s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// LAMMPS 2021's wall, given the model string, computes `k_n` as
+    /// `E / (2 (1 - nu)) * 1.333333333333333` and takes `k_t` as given:
+    /// both must come back as the native coefficients.
+    #[test]
+    fn the_wall_model_gives_lammps_the_native_coefficients() {
+        let spheres = crate::verify::dem_check_material(false);
+        let wall = GranularMaterial {
+            youngs_modulus: 1e4,
+            poisson_ratio: 0.35,
+            ..crate::verify::dem_check_material(true)
+        };
+        let c = GranularCoeffs::between(&spheres, &wall);
+        let model = granular_wall_model(&c, &wall);
+        let words: Vec<&str> = model.split_whitespace().collect();
+        assert_eq!(words[0], "hertz/material");
+        let e: f64 = words[1].parse().unwrap();
+        let nu: f64 = words[3].parse().unwrap();
+        let k_n = e / (2.0 * (1.0 - nu)) * LAMMPS_WALL_FOUR_THIRDS;
+        assert!((k_n - c.normal_stiffness).abs() <= 2.0 * f64::EPSILON * c.normal_stiffness);
+        let at = |key: &str| words.iter().position(|w| *w == key).unwrap();
+        let mindlin = at("mindlin");
+        assert_eq!(
+            words[mindlin + 1].parse::<f64>().unwrap(),
+            c.tangential_stiffness
+        );
+        assert_eq!(
+            words[mindlin + 3].parse::<f64>().unwrap(),
+            wall.sliding_friction
+        );
+        assert_eq!(words[2].parse::<f64>().unwrap(), wall.restitution);
+        assert!(model.contains("rolling sds") && model.ends_with("twisting marshall"));
+    }
 }

@@ -10,11 +10,12 @@
 //! checkpoints) and reads the recorded rows back after each.
 
 use super::datafile::{
-    granular_pair_coeff, type_masses, write_data_file, write_reference_lengths, ScriptVars,
+    granular_pair_coeff, granular_wall_model, type_masses, write_data_file,
+    write_reference_lengths, ScriptVars,
 };
 use super::templates::{write_templates, FOLDER as TEMPLATE_FOLDER};
-use crate::engine::{Deformation, TiltFactor, WallSide};
-use crate::kernels::NormalDamping;
+use crate::engine::{ActiveGranularWall, Deformation, ShearRemap, TiltFactor, WallSide};
+use crate::kernels::{GranularMaterial, NormalDamping};
 use crate::scene::observables::{
     energy_terms, lammps_energy_compute, rotates, stage_columns, Column,
 };
@@ -160,6 +161,10 @@ fn check_supported(index: usize, stage: &StageSpec, scene: &Scene) -> Result<(),
     };
     if restitution_form(&scene.force_field)
         || stage.force_field.as_ref().is_some_and(restitution_form)
+        || stage
+            .granular_walls
+            .iter()
+            .any(|w| w.material.damping == NormalDamping::CoeffRestitution)
     {
         return Err(unsupported(
             "the restitution form of the DEM damping (LAMMPS 29Sep2021 has only `damping tsuji`)",
@@ -256,7 +261,7 @@ struct ExternalCommands {
     end: Vec<String>,
 }
 
-fn external_commands(stage: &StageSpec) -> ExternalCommands {
+fn external_commands(stage: &StageSpec, spheres: Option<&GranularMaterial>) -> ExternalCommands {
     let mut begin = Vec::new();
     let mut end = Vec::new();
     let mut energies = vec!["0".to_string()];
@@ -280,6 +285,41 @@ fn external_commands(stage: &StageSpec) -> ExternalCommands {
         begin.push("include         ${inputs}/wall.in".into());
         end.push(format!("unfix           bpm_wall{w}"));
         energies.push(format!("v_bpm_wall{w}_energy"));
+    }
+    for (w, wall) in stage.granular_walls.iter().enumerate() {
+        let Some(spheres) = spheres else { break };
+        let c = ActiveGranularWall::new(wall, spheres);
+        let (sign, normal) = match wall.side {
+            WallSide::Lo => (1, 1.0),
+            WallSide::Hi => (-1, -1.0),
+        };
+        let axis = ["x", "y", "z"][wall.axis.min(2)];
+        let along = |value: String, other: &str| {
+            let mut v = [other.to_string(), other.to_string(), other.to_string()];
+            v[wall.axis.min(2)] = value;
+            v.join(" ")
+        };
+        for (name, value) in [
+            ("wall", w.to_string()),
+            ("axis", axis.to_string()),
+            ("axis_column", (wall.axis + 1).to_string()),
+            ("wall_start", g(wall.position)),
+            ("wall_velocity", g(wall.velocity)),
+            ("wall_sign", sign.to_string()),
+            ("point", along(g(wall.position), "0")),
+            ("normal", along(format!("{normal}"), "0")),
+            ("move", along(format!("v_bpm_gwall{w}_shift"), "NULL")),
+            (
+                "wall_model",
+                granular_wall_model(c.coeffs(), &wall.material),
+            ),
+        ] {
+            begin.push(format!("variable        {name} string \"{value}\""));
+        }
+        begin.push("include         ${inputs}/granular_wall.in".into());
+        end.push(format!("unfix           bpm_gwall{w}"));
+        end.push(format!("uncompute       bpm_gwall{w}_sum"));
+        end.push(format!("region          bpm_gwall{w} delete"));
     }
     if let Some(t) = &stage.tether {
         begin.push(match t.grain {
@@ -389,6 +429,9 @@ pub fn write_driver(
     let triclinic = needs_triclinic(scene);
     let n = scene.particles.positions.len();
     let mut stages = Vec::with_capacity(scene.stages.len());
+    // The spheres' material in force at each stage (granular walls mix
+    // theirs with it).
+    let mut spheres = scene.force_field.granular.as_ref();
     for (i, stage) in scene.stages.iter().enumerate() {
         cmd(
             &mut lines,
@@ -434,7 +477,14 @@ pub fn write_driver(
         ] {
             cmd(&mut lines, format!("variable        {name} string {value}"));
         }
-        let external = external_commands(stage);
+        if let Some(m) = stage
+            .force_field
+            .as_ref()
+            .and_then(|ff| ff.granular.as_ref())
+        {
+            spheres = Some(m);
+        }
+        let external = external_commands(stage, spheres);
         lines.extend(external.variables.into_iter().map(DriverLine::Command));
         let columns = stage_columns(energy_terms(scene.model), rotates(scene.model), stage);
         let template = match &stage.deformation {
@@ -460,17 +510,23 @@ pub fn write_driver(
                 );
                 "stage_compress.in"
             }
-            Some(Deformation::SimpleShear { tilt, rate }) => {
+            Some(Deformation::SimpleShear { tilt, rate, remap }) => {
                 let name = match tilt {
                     TiltFactor::Xy => "xy",
                     TiltFactor::Xz => "xz",
                     TiltFactor::Yz => "yz",
                 };
-                cmd(
-                    &mut lines,
-                    format!("variable        rate string {}", g(*rate)),
-                );
-                cmd(&mut lines, format!("variable        tilt string {name}"));
+                let remap = match remap {
+                    ShearRemap::X => "x",
+                    ShearRemap::V => "v",
+                };
+                for (var, value) in [
+                    ("rate", g(*rate)),
+                    ("tilt", name.into()),
+                    ("remap", remap.into()),
+                ] {
+                    cmd(&mut lines, format!("variable        {var} string {value}"));
+                }
                 "stage_shear.in"
             }
         };
@@ -490,8 +546,15 @@ pub fn write_driver(
         );
         lines.push(DriverLine::Run { stage: i });
         cmd(&mut lines, "include         ${inputs}/stage_end.in".into());
-        if stage.deformation.is_some() {
-            cmd(&mut lines, "unfix           bpm_deform".into());
+        match stage.deformation {
+            Some(Deformation::SimpleShear { .. }) => cmd(
+                &mut lines,
+                "include         ${inputs}/stage_shear_end.in".into(),
+            ),
+            Some(Deformation::Isotropic { .. }) => {
+                cmd(&mut lines, "unfix           bpm_deform".into())
+            }
+            None => {}
         }
         if stage.barostat.is_some() {
             cmd(&mut lines, "unfix           bpm_barostat".into());

@@ -3,7 +3,7 @@
 //! It names no engine: the native engine runs it directly and the LAMMPS
 //! harness turns it into a data file and an input script.
 
-use crate::engine::{Barostat, Deformation, FlatWall, SphereWall, Tether};
+use crate::engine::{Barostat, Deformation, FlatWall, GranularWall, SphereWall, Tether};
 use crate::kernels::{BondCoeffs, GranularMaterial, PairCoeffs};
 use serde::{Deserialize, Serialize};
 
@@ -236,6 +236,9 @@ pub struct StageSpec {
     /// A spherical harmonic wall.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub sphere_wall: Option<SphereWall>,
+    /// Flat granular walls (model dem): frictional Hertz-Mindlin contacts.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub granular_walls: Vec<GranularWall>,
     /// A centre-of-mass tether.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub tether: Option<Tether>,
@@ -289,6 +292,7 @@ impl StageSpec {
             viscous: 0.0,
             walls: Vec::new(),
             sphere_wall: None,
+            granular_walls: Vec::new(),
             tether: None,
             deformation: None,
             barostat: None,

@@ -41,6 +41,10 @@ pub enum Quantity {
     WallPosition(usize),
     /// Summed force magnitude on the spherical wall (k d).
     SphereWallForce,
+    /// Normal force on granular wall `w` (k d), positive when pushed.
+    GranularWallForce(usize),
+    /// Position of granular wall `w` (d).
+    GranularWallPosition(usize),
 }
 
 /// One recorded column.
@@ -68,7 +72,8 @@ pub fn lammps_energy_compute(column: &str) -> String {
 /// The columns of a stage of a model with energy terms `terms` whose
 /// particles rotate or not: step, time, box, stress, pressure, the model's
 /// energies, kinetic (and rotational) and external energy, then each flat
-/// wall's force and position and the sphere wall's force.
+/// wall's force and position, each granular wall's, and the sphere wall's
+/// force.
 pub fn stage_columns(terms: &[EnergyTerm], rotational: bool, stage: &StageSpec) -> Vec<Column> {
     let col = |name: &str, quantity, observable: &str, lammps: Option<String>| Column {
         name: name.to_string(),
@@ -133,6 +138,20 @@ pub fn stage_columns(terms: &[EnergyTerm], rotational: bool, stage: &StageSpec) 
             Some(format!("v_bpm_wall{w}_position")),
         ));
     }
+    for w in 0..stage.granular_walls.len() {
+        c.push(col(
+            &format!("granular_wall{w}_force"),
+            Quantity::GranularWallForce(w),
+            "wall forces",
+            Some(format!("v_bpm_gwall{w}_force")),
+        ));
+        c.push(col(
+            &format!("granular_wall{w}_position"),
+            Quantity::GranularWallPosition(w),
+            "wall positions",
+            Some(format!("v_bpm_gwall{w}_position")),
+        ));
+    }
     if stage.sphere_wall.is_some() {
         c.push(col(
             "sphere_wall_force",
@@ -177,6 +196,8 @@ impl Column {
             Quantity::WallForce(w) => r.wall_forces[w],
             Quantity::WallPosition(w) => r.wall_positions[w],
             Quantity::SphereWallForce => r.sphere_wall_force,
+            Quantity::GranularWallForce(w) => r.granular_wall_forces[w],
+            Quantity::GranularWallPosition(w) => r.granular_wall_positions[w],
         }
     }
 

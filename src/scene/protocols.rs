@@ -1,7 +1,7 @@
 //! Ready-made protocol stages (docs/protocols.md).
 
 use super::model::{Record, Scene, StageSpec};
-use crate::engine::{Deformation, FlatWall, Tether, TiltFactor, WallSide};
+use crate::engine::{Deformation, FlatWall, ShearRemap, Tether, TiltFactor, WallSide};
 use serde::{Deserialize, Serialize};
 
 /// Holds the configuration for `steps` steps, recording every `every`.
@@ -36,6 +36,7 @@ pub fn simple_shear(strain: f64, rate: f64, dt: f64, records: u64) -> StageSpec 
     let steps = steps_for_strain(strain, rate, dt);
     let mut s = StageSpec::hold("shear", steps, dt);
     s.deformation = Some(Deformation::SimpleShear {
+        remap: ShearRemap::X,
         tilt: TiltFactor::Xy,
         rate: rate.abs(),
     });

@@ -3,7 +3,9 @@
 use super::model::{Scene, StageSpec, VelocityInit};
 use super::observables::{column_names, native_row, stage_columns, Column};
 use super::trajectory::{DumpWriter, Frame, ThermoWriter, TrajectoryError};
-use crate::engine::{ActiveTether, BpmModel, DemModel, EngineError, Stage, StageDrivers, System};
+use crate::engine::{
+    ActiveGranularWall, ActiveTether, BpmModel, DemModel, EngineError, Stage, StageDrivers, System,
+};
 use indicatif::{ProgressBar, ProgressStyle};
 use rand::{Rng, SeedableRng};
 use serde::{Deserialize, Serialize};
@@ -303,10 +305,20 @@ pub fn run_stage(
         .tether
         .as_ref()
         .map(|t| ActiveTether::new(t, &p.grain, &sys.simbox, &p.x, &p.image));
+    // Validation admits granular walls only with DEM spheres.
+    let granular_walls = match sys.model_as::<DemModel>() {
+        Some(dem) => spec
+            .granular_walls
+            .iter()
+            .map(|w| ActiveGranularWall::new(w, dem.material()))
+            .collect(),
+        None => Vec::new(),
+    };
     let drivers = StageDrivers {
         dt: spec.dt,
         walls: spec.walls.clone(),
         sphere_wall: spec.sphere_wall.clone(),
+        granular_walls,
         tether,
         viscous: spec.viscous,
         deformation: spec.deformation.clone(),

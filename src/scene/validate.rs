@@ -260,6 +260,30 @@ fn check_stage(i: usize, stage: &StageSpec, scene: &Scene) -> Result<(), SceneEr
         non_negative(&format!("{q}.stiffness"), wall.stiffness)?;
         positive(&format!("{q}.cutoff"), wall.cutoff)?;
     }
+    for (w, wall) in stage.granular_walls.iter().enumerate() {
+        let q = format!("{p}.granular_walls[{w}]");
+        if model != ModelKind::Dem {
+            return Err(invalid(
+                q,
+                "granular walls touch DEM spheres (model dem); the bonded model's walls are the harmonic `walls`",
+            ));
+        }
+        if wall.axis > 2 {
+            return Err(invalid(
+                format!("{q}.axis"),
+                format!("must be 0, 1 or 2 (got {})", wall.axis),
+            ));
+        }
+        if simbox.periodic[wall.axis] {
+            return Err(invalid(
+                format!("{q}.axis"),
+                "a wall needs a non-periodic dimension",
+            ));
+        }
+        finite(&format!("{q}.position"), wall.position)?;
+        finite(&format!("{q}.velocity"), wall.velocity)?;
+        check_granular(&format!("{q}.material"), &wall.material)?;
+    }
     if let Some(s) = &stage.sphere_wall {
         let q = format!("{p}.sphere_wall");
         finite_rows(&format!("{q}.centre"), &[s.centre])?;
@@ -296,12 +320,20 @@ fn check_stage(i: usize, stage: &StageSpec, scene: &Scene) -> Result<(), SceneEr
                     *true_strain_rate,
                 )?;
             }
-            Deformation::SimpleShear { tilt, rate } => {
+            Deformation::SimpleShear { tilt, rate, remap } => {
                 finite(&format!("{p}.deformation.simple_shear.rate"), *rate)?;
                 if tilt.needs_periodic().iter().any(|&d| !simbox.periodic[d]) {
                     return Err(invalid(
                         format!("{p}.deformation.simple_shear.tilt"),
                         "shear by tilt needs both of its dimensions periodic",
+                    ));
+                }
+                // Bond and pair damping of the bonded model read relative
+                // velocities without the images' motion.
+                if *remap == crate::engine::ShearRemap::V && model != ModelKind::Dem {
+                    return Err(invalid(
+                        format!("{p}.deformation.simple_shear.remap"),
+                        "Lees-Edwards shear (remap \"v\") needs model dem: the bonded model's damping does not see the images' velocities; use remap \"x\"",
                     ));
                 }
             }

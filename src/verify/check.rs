@@ -338,20 +338,24 @@ pub fn run_check(opts: &CheckOptions) -> Result<CheckReport> {
         hertz_squeeze(&grain, &SqueezeParams::paper(opts.grain_radius, 0.1))
     };
     let hertz_name = format!("hertz squeeze smoother R={} a_B=0", opts.grain_radius);
-    // DEM spheres, 2,000 steps of 0.01 tau (1,000 sheared: sheared with
-    // sliding friction they are chaotic, and agree to round-off for about
-    // 2,000 steps, results/dem/divergence.txt); with rolling and twisting friction
+    // DEM spheres, 2,000 steps of 0.01 tau (held, compressed, or squeezed
+    // between granular walls; 1,000 sheared, affinely or by Lees-Edwards
+    // boundaries through a tilt flip: sheared with sliding
+    // friction they are chaotic, and agree to round-off for about 2,000
+    // steps, results/dem/divergence.txt); with rolling and twisting friction
     // LAMMPS 2021 flips those histories when a rebuild swaps a pair's
     // order, so only the held spheres are compared (docs/model.md).
     let dem: Vec<(Scene, String)> = [
         (false, DemLoading::Hold),
         (false, DemLoading::Compress),
         (false, DemLoading::Shear),
+        (false, DemLoading::LeesEdwards),
+        (false, DemLoading::Walls),
         (true, DemLoading::Hold),
     ]
     .into_iter()
     .map(|(rt, loading)| {
-        let steps = if loading == DemLoading::Shear {
+        let steps = if matches!(loading, DemLoading::Shear | DemLoading::LeesEdwards) {
             DEM_STEPS / 2
         } else {
             DEM_STEPS
@@ -376,7 +380,12 @@ pub fn run_check(opts: &CheckOptions) -> Result<CheckReport> {
         (&hertz, &hertz_name, 1, true),
     ];
     runs.extend(dem.iter().map(|(scene, name)| (scene, name, 1, true)));
+    // Sheared on 2 ranks: contacts and, for Lees-Edwards, image
+    // velocities across the ranks' boundary; between walls on 2 ranks:
+    // wall histories that move with their spheres from rank to rank.
     runs.push((&dem[2].0, &dem[2].1, 2, false));
+    runs.push((&dem[3].0, &dem[3].1, 2, false));
+    runs.push((&dem[4].0, &dem[4].1, 2, false));
     for (scene, name, ranks, newton) in runs {
         let series = trajectory(
             scene,

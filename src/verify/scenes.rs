@@ -1,6 +1,6 @@
 //! Built-in cross-check scenes.
 
-use crate::engine::{Deformation, TiltFactor};
+use crate::engine::{Deformation, GranularWall, ShearRemap, TiltFactor, WallSide};
 use crate::kernels::{
     GranularMaterial, NormalDamping, Separation, SpringDashpotSlider, Twisting, Unwrapped,
 };
@@ -355,6 +355,15 @@ pub enum DemLoading {
     Compress,
     /// Simple shear (xy) at 1e-2 / tau.
     Shear,
+    /// Lees-Edwards simple shear (xy, remap v) at 6e-2 / tau: the tilt
+    /// passes half a box length and flips once in 1,000 steps.
+    LeesEdwards,
+    /// Between two granular walls normal to z (the box closed in z): the
+    /// lower one fixed, pressing on the bottom layer from the start, with
+    /// rolling and twisting friction (mu_s = 0.5); the upper one rigid
+    /// (E = 1e4), starting clear of the spheres and closing at 0.02
+    /// d/tau.
+    Walls,
 }
 
 impl DemLoading {
@@ -364,6 +373,8 @@ impl DemLoading {
             DemLoading::Hold => "hold",
             DemLoading::Compress => "compress",
             DemLoading::Shear => "shear",
+            DemLoading::LeesEdwards => "lees-edwards",
+            DemLoading::Walls => "walls",
         }
     }
 }
@@ -374,17 +385,60 @@ pub fn dem_trajectory(seed: u64, rolling_twisting: bool, loading: DemLoading, st
     let mut scene = dem_lattice(seed, rolling_twisting);
     let mut stage = StageSpec::hold(loading.name(), steps, 0.01);
     stage.deformation = match loading {
-        DemLoading::Hold => None,
+        DemLoading::Hold | DemLoading::Walls => None,
         DemLoading::Compress => Some(Deformation::Isotropic {
             true_strain_rate: -1e-3,
         }),
         DemLoading::Shear => Some(Deformation::SimpleShear {
+            remap: ShearRemap::X,
             tilt: TiltFactor::Xy,
             rate: 1e-2,
         }),
+        DemLoading::LeesEdwards => Some(Deformation::SimpleShear {
+            remap: ShearRemap::V,
+            tilt: TiltFactor::Xy,
+            rate: 6e-2,
+        }),
     };
+    if loading == DemLoading::Walls {
+        between_walls(&mut scene, &mut stage);
+    }
     stage.record.every = 50;
     stage.record.positions_every = (steps / 5).max(1);
     scene.stages = vec![stage];
     scene
+}
+
+/// Closes the lattice's box in z, with room beyond its faces, and puts
+/// the spheres between the two granular walls of [`DemLoading::Walls`].
+fn between_walls(scene: &mut Scene, stage: &mut StageSpec) {
+    let top = scene.simbox.lengths[2];
+    scene.simbox.periodic[2] = false;
+    scene.simbox.lo[2] = -0.5;
+    scene.simbox.lengths[2] = top + 1.0;
+    let spheres = dem_check_material(false);
+    let lower = GranularMaterial {
+        sliding_friction: 0.5,
+        ..dem_check_material(true)
+    };
+    let upper = GranularMaterial {
+        youngs_modulus: 1e4,
+        ..spheres
+    };
+    stage.granular_walls = vec![
+        GranularWall {
+            axis: 2,
+            side: WallSide::Lo,
+            position: 0.0,
+            velocity: 0.0,
+            material: lower,
+        },
+        GranularWall {
+            axis: 2,
+            side: WallSide::Hi,
+            position: top + 0.3,
+            velocity: -0.02,
+            material: upper,
+        },
+    ];
 }

@@ -8,14 +8,17 @@
 //! (the virial of the contact forces) and the kinetic energies.
 
 mod contacts;
+mod wall;
 
 pub use contacts::ContactStore;
+pub use wall::{ActiveGranularWall, GranularWall};
 
 use super::model::{EnergyTerm, ForceInput, ForceOutput, ModelTally, ParticleModel};
 use super::neighbor::Exclusions;
+use super::simbox::MinimumImage;
 use super::timers::Stage;
 use crate::kernels::{
-    granular_contact, ContactForce, GranularCoeffs, GranularMaterial, Separation, Sphere, Tally,
+    granular_contact, ContactForce, GranularCoeffs, GranularMaterial, Sphere, Tally,
 };
 
 /// DEM spheres of one material.
@@ -56,9 +59,9 @@ impl DemModel {
         &self.contacts
     }
 
-    fn forces<S: Separation>(
+    fn forces(
         &mut self,
-        sep: &S,
+        sep: &MinimumImage,
         input: &ForceInput<'_>,
         f: &mut [[f64; 3]],
         mut torque: Option<&mut [[f64; 3]]>,
@@ -84,7 +87,7 @@ impl DemModel {
             let (si, xi) = (sphere(i), x[i]);
             for k in list.offsets[i]..list.offsets[i + 1] {
                 let j = list.neighbours[k] as usize;
-                let del = sep.delta(&xi, &x[j]);
+                let (del, image) = sep.delta_image(&xi, &x[j]);
                 let rsq = del[0] * del[0] + del[1] * del[1] + del[2] * del[2];
                 let radsum = si.radius + radius[j];
                 let history = &mut self.contacts.history[k];
@@ -92,11 +95,19 @@ impl DemModel {
                     *history = Default::default();
                     continue;
                 }
+                let mut sj = sphere(j);
+                // A partner across a Lees-Edwards face is an image moving
+                // with the boundary.
+                if let (Some(le), true) = (&input.lees_edwards, image != [0.0; 3]) {
+                    for (v, w) in sj.v.iter_mut().zip(le.image_velocity(&image)) {
+                        *v += w;
+                    }
+                }
                 let ContactForce {
                     force,
                     torque_i,
                     torque_j,
-                } = granular_contact(&self.coeffs, &del, &si, &sphere(j), history, dt, update);
+                } = granular_contact(&self.coeffs, &del, &si, &sj, history, dt, update);
                 for d in 0..3 {
                     f[i][d] += force[d];
                     f[j][d] -= force[d];

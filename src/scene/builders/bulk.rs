@@ -286,7 +286,7 @@ pub fn build_bulk(
     scene.provenance =
         serde_json::json!({ "builder": "bulk", "version": crate::VERSION, "parameters": params });
     let mut sys = super::run_build_stages(&scene, "bulk builder", threads, progress)?;
-    sys.particles.wrap(&sys.simbox);
+    sys.particles.wrap(&sys.simbox, None);
     sort_spatially(&mut sys.particles.x, &sys.simbox, 2.0 * pair.d);
     let max_overlap = max_overlap(&sys, pair.d);
     let bonds = bond_within(&sys, params.bond_cutoff);

@@ -1,0 +1,142 @@
+//! Flat frictional walls for DEM spheres: a plane normal to one axis,
+//! moving along it at constant speed, touching spheres with the same
+//! contact law as sphere pairs (`kernels::granular_wall_contact`), with
+//! one contact history per sphere.
+
+use super::super::external::{WallContact, WallSide};
+use super::super::particles::Particles;
+use crate::kernels::{
+    granular_wall_contact, ContactHistory, GranularCoeffs, GranularMaterial, Sphere, WallTouch,
+};
+use serde::{Deserialize, Serialize};
+
+/// A flat wall of a granular material: Hertz-Mindlin contacts with the
+/// spheres, with damping, sliding (and optionally rolling and twisting)
+/// friction. A scene's `stages[i].granular_walls`.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct GranularWall {
+    /// Axis normal to the wall: 0, 1 or 2.
+    pub axis: usize,
+    /// Which side the spheres are on.
+    pub side: WallSide,
+    /// Position along the axis at the start of the stage (d units).
+    pub position: f64,
+    /// Speed along the axis (d / tau); negative moves towards -axis.
+    #[serde(default)]
+    pub velocity: f64,
+    /// The wall's material and the contact's friction: its Young's
+    /// modulus and Poisson's ratio mix with the spheres' by Hertz's and
+    /// Mindlin's rules (a modulus far above the spheres' makes it rigid);
+    /// restitution, damping and friction are those of the sphere-wall
+    /// contact.
+    pub material: GranularMaterial,
+}
+
+impl GranularWall {
+    /// Wall position after `elapsed` time.
+    pub fn position_at(&self, elapsed: f64) -> f64 {
+        self.position + self.velocity * elapsed
+    }
+
+    /// +1 when the spheres are on the +axis side (a `lo` wall), else -1.
+    fn sign(&self) -> f64 {
+        match self.side {
+            WallSide::Lo => 1.0,
+            WallSide::Hi => -1.0,
+        }
+    }
+}
+
+/// A granular wall resolved for one stage against the spheres' material.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ActiveGranularWall {
+    /// The wall.
+    pub wall: GranularWall,
+    coeffs: GranularCoeffs,
+}
+
+impl ActiveGranularWall {
+    /// `wall` against spheres of material `spheres`.
+    pub fn new(wall: &GranularWall, spheres: &GranularMaterial) -> Self {
+        Self {
+            wall: wall.clone(),
+            coeffs: GranularCoeffs::between(spheres, &wall.material),
+        }
+    }
+
+    /// The contact coefficients of a sphere against this wall.
+    pub fn coeffs(&self) -> &GranularCoeffs {
+        &self.coeffs
+    }
+
+    /// Adds the wall's forces and torques to the spheres touching it;
+    /// `history` holds one contact per sphere and advances over the step
+    /// `dt`, if this evaluation completes one. Returns the normal force on
+    /// the wall (positive when pushed) and the first sphere whose centre
+    /// is on or behind the plane (which the engine reports as an error:
+    /// the contact law has no meaning there).
+    pub fn apply(
+        &self,
+        elapsed: f64,
+        p: &mut Particles,
+        history: &mut [ContactHistory],
+        dt: Option<f64>,
+    ) -> WallContact {
+        let w = &self.wall;
+        let (plane, sign) = (w.position_at(elapsed), w.sign());
+        let mut normal = [0.0; 3];
+        normal[w.axis] = sign;
+        let mut velocity = [0.0; 3];
+        velocity[w.axis] = w.velocity;
+        let (step, update) = (dt.unwrap_or(0.0), dt.is_some());
+        let mut contact = WallContact::default();
+        let Particles {
+            x,
+            v,
+            f,
+            radius,
+            mass,
+            rotation,
+            ..
+        } = p;
+        let (omega, mut torque) = match rotation {
+            Some(r) => (Some(&r.omega[..]), Some(&mut r.torque[..])),
+            None => (None, None),
+        };
+        for i in 0..x.len() {
+            let distance = sign * (x[i][w.axis] - plane);
+            if distance >= radius[i] {
+                history[i] = ContactHistory::default();
+                continue;
+            }
+            if distance <= 0.0 {
+                contact.through.get_or_insert(i);
+                continue;
+            }
+            let sphere = Sphere {
+                v: v[i],
+                omega: omega.map_or([0.0; 3], |o| o[i]),
+                radius: radius[i],
+                mass: mass[i],
+            };
+            let touch = WallTouch {
+                distance,
+                normal,
+                velocity,
+            };
+            let out =
+                granular_wall_contact(&self.coeffs, &touch, &sphere, &mut history[i], step, update);
+            for (fd, force) in f[i].iter_mut().zip(out.force) {
+                *fd += force;
+            }
+            if let Some(t) = torque.as_deref_mut() {
+                for (td, moment) in t[i].iter_mut().zip(out.torque_i) {
+                    *td += moment;
+                }
+            }
+            contact.force += sign * out.force[w.axis];
+        }
+        contact
+    }
+}
