@@ -273,9 +273,15 @@ fn granular_walls_need_dem_spheres_a_closed_axis_and_a_valid_material() {
         "stages[0].granular_walls[0].axis",
     );
     rejects_in(
-        doc,
+        doc.clone(),
         |d| d["stages"][0]["granular_walls"][0]["material"]["restitution"] = json!(0),
         "stages[0].granular_walls[0].material.restitution",
+    );
+    // Spheres at z = 1 behind a wall at z = 2 that faces up.
+    rejects_in(
+        doc,
+        |d| d["stages"][0]["granular_walls"][0]["position"] = json!(2.0),
+        "stages[0].granular_walls[0].position",
     );
     // The bonded model's walls are the harmonic ones.
     rejects(

@@ -144,11 +144,17 @@ impl Deformation {
                 let mut tilts = start.tilt;
                 tilts[k] += rate * elapsed * start.lengths[tilt.perpendicular()];
                 if remap == ShearRemap::V {
-                    // Flip by whole box lengths along the tilt's direction:
-                    // the same lattice, so the same periodic system, with
-                    // the tilt back within half a length.
+                    // Flip by whole box vectors: the same lattice, so the
+                    // same periodic system, with the tilt back within half
+                    // a length. A yz flip replaces c by c - m b, which also
+                    // moves xz by m xy (then xz is brought back in turn).
                     let base = start.lengths[tilt.direction()];
-                    tilts[k] -= (tilts[k] / base).round() * base;
+                    let m = (tilts[k] / base).round();
+                    tilts[k] -= m * base;
+                    if tilt == TiltFactor::Yz {
+                        tilts[1] -= m * tilts[0];
+                        tilts[1] -= (tilts[1] / start.lengths[0]).round() * start.lengths[0];
+                    }
                 }
                 // A tilt moves no corner of the box's lower face: the lower
                 // corner stays, as in LAMMPS's `fix deform`.
@@ -264,6 +270,26 @@ mod tests {
             let affine = shear(ShearRemap::X).box_at(&start, t);
             assert!((affine.tilt[0] - 0.5 * t).abs() < 1e-12);
         }
+        // A yz flip in a box tilted in xy moves xz with it: the lattice
+        // vectors before and after span the same lattice.
+        let mut tilted = start.clone();
+        tilted.tilt = [1.0, 0.0, 0.0];
+        let yz = Deformation::SimpleShear {
+            tilt: TiltFactor::Yz,
+            rate: 0.1,
+            remap: ShearRemap::V,
+        };
+        let flipped = yz.box_at(&tilted, 4.5); // yz = 0.1 * 4.5 * 6 = 2.7 > 2.5
+        assert!(
+            (flipped.tilt[2] - (2.7 - 5.0)).abs() < 1e-12,
+            "{:?}",
+            flipped.tilt
+        );
+        assert!(
+            (flipped.tilt[1] - (-1.0)).abs() < 1e-12,
+            "{:?}",
+            flipped.tilt
+        );
         let le = shear(ShearRemap::V).lees_edwards(&start).unwrap();
         assert_eq!(le.tilt_rate, [0.5, 0.0, 0.0]);
         assert!(shear(ShearRemap::X).lees_edwards(&start).is_none());

@@ -85,7 +85,7 @@ pub enum EngineError {
     },
     /// A sphere's centre reached the plane of a granular wall: the
     /// sphere overlapped the wall by its whole radius.
-    #[error("sphere {particle} reached the plane of granular wall {wall} at step {step}: it overlapped the wall by its whole radius (the wall moved too fast, pressed too hard for its stiffness, or the time step is too long)")]
+    #[error("sphere {particle} reached the plane of granular wall {wall} at step {step}: it overlapped the wall by its whole radius (the wall moved too fast, pressed too hard for its stiffness, or the time step is too long; or the sphere started on the wrong side: check the wall's position and side)")]
     ThroughGranularWall {
         /// Step of the force evaluation that found it.
         step: u64,

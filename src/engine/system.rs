@@ -383,6 +383,7 @@ impl System {
             if deformation.remaps_positions() {
                 self.remap_into(new_box);
             } else {
+                self.keep_unwrapped_through_flips(&new_box);
                 self.simbox = new_box;
             }
         }
@@ -459,6 +460,29 @@ impl System {
             });
         }
         Ok(())
+    }
+
+    /// Before a Lees-Edwards box change that may flip the tilt: rewrites
+    /// the image counters so that unwrapped positions `x + h n` stay where
+    /// they are in the new box (a flip changes `h`, not the lattice).
+    fn keep_unwrapped_through_flips(&mut self, new_box: &SimBox) {
+        if new_box.tilt == self.simbox.tilt {
+            return;
+        }
+        let old = &self.simbox;
+        for n in &mut self.particles.image {
+            if n[1] == 0 && n[2] == 0 {
+                continue;
+            }
+            let w = old.image_vector(n);
+            let at = [
+                new_box.lo[0] + w[0],
+                new_box.lo[1] + w[1],
+                new_box.lo[2] + w[2],
+            ];
+            let s = new_box.to_fractional(&at);
+            *n = s.map(|c| c.round() as i32);
+        }
     }
 
     /// Changes the box and maps positions affinely into it.

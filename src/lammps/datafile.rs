@@ -121,9 +121,10 @@ const LAMMPS_WALL_FOUR_THIRDS: f64 = 1.333333333333333;
 /// coefficients `c` (native [`crate::engine::ActiveGranularWall::coeffs`]).
 ///
 /// LAMMPS 2021's wall uses only its own E and nu, and forms the normal
-/// prefactor as `4/3 E / (2 (1 - nu))` and the default Mindlin stiffness
-/// as `E / 4 (2 - nu) (1 + nu)` (both unlike its pair style); so it gets
-/// `nu = 0` and the `E` whose prefactor is `k_n`, and `k_t` explicitly.
+/// prefactor as `4/3 E / (2 (1 - nu))` and its default Mindlin stiffness
+/// from a compliance formula (both unlike its pair style); so it gets `nu
+/// = 0` and the `E` whose prefactor is `k_n` (`2 k_n / 1.333333333333333`),
+/// and `k_t` explicitly.
 pub fn granular_wall_model(c: &GranularCoeffs, wall: &GranularMaterial) -> String {
     let g = |v: f64| format!("{v:.17e}");
     let youngs = c.normal_stiffness / LAMMPS_WALL_FOUR_THIRDS * 2.0;

@@ -283,6 +283,29 @@ fn check_stage(i: usize, stage: &StageSpec, scene: &Scene) -> Result<(), SceneEr
         finite(&format!("{q}.position"), wall.position)?;
         finite(&format!("{q}.velocity"), wall.velocity)?;
         check_granular(&format!("{q}.material"), &wall.material)?;
+        // The first stage's walls meet the scene's own positions: a sphere
+        // on the wrong side would stop the native run at once, and LAMMPS
+        // would let it through without a word.
+        if i == 0 {
+            let sign = match wall.side {
+                crate::engine::WallSide::Lo => 1.0,
+                crate::engine::WallSide::Hi => -1.0,
+            };
+            if let Some(k) = scene
+                .particles
+                .positions
+                .iter()
+                .position(|x| sign * (x[wall.axis] - wall.position) <= 0.0)
+            {
+                return Err(invalid(
+                    format!("{q}.position"),
+                    format!(
+                        "sphere {k} starts on or behind the wall's plane (side {:?}): spheres must start on the side the wall faces",
+                        wall.side
+                    ),
+                ));
+            }
+        }
     }
     if let Some(s) = &stage.sphere_wall {
         let q = format!("{p}.sphere_wall");
