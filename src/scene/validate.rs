@@ -195,6 +195,31 @@ fn max_list_cutoff(scene: &Scene) -> (f64, &'static str) {
     (cut, "force_field.pair.d + skin")
 }
 
+/// The placement of a flat wall (harmonic or granular) named `q`.
+fn check_flat_wall(
+    q: &str,
+    axis: usize,
+    position: f64,
+    velocity: f64,
+    periodic: [bool; 3],
+) -> Result<(), SceneError> {
+    if axis > 2 {
+        return Err(invalid(
+            format!("{q}.axis"),
+            format!("must be 0, 1 or 2 (got {axis})"),
+        ));
+    }
+    if periodic[axis] {
+        return Err(invalid(
+            format!("{q}.axis"),
+            "a wall needs a non-periodic dimension",
+        ));
+    }
+    finite(&format!("{q}.position"), position)?;
+    finite(&format!("{q}.velocity"), velocity)?;
+    Ok(())
+}
+
 fn check_stage(i: usize, stage: &StageSpec, scene: &Scene) -> Result<(), SceneError> {
     let (simbox, n, model) = (
         &simbox_of(scene),
@@ -243,20 +268,7 @@ fn check_stage(i: usize, stage: &StageSpec, scene: &Scene) -> Result<(), SceneEr
     }
     for (w, wall) in stage.walls.iter().enumerate() {
         let q = format!("{p}.walls[{w}]");
-        if wall.axis > 2 {
-            return Err(invalid(
-                format!("{q}.axis"),
-                format!("must be 0, 1 or 2 (got {})", wall.axis),
-            ));
-        }
-        if simbox.periodic[wall.axis] {
-            return Err(invalid(
-                format!("{q}.axis"),
-                "a wall needs a non-periodic dimension",
-            ));
-        }
-        finite(&format!("{q}.position"), wall.position)?;
-        finite(&format!("{q}.velocity"), wall.velocity)?;
+        check_flat_wall(&q, wall.axis, wall.position, wall.velocity, simbox.periodic)?;
         non_negative(&format!("{q}.stiffness"), wall.stiffness)?;
         positive(&format!("{q}.cutoff"), wall.cutoff)?;
     }
@@ -268,20 +280,7 @@ fn check_stage(i: usize, stage: &StageSpec, scene: &Scene) -> Result<(), SceneEr
                 "granular walls touch DEM spheres (model dem); the bonded model's walls are the harmonic `walls`",
             ));
         }
-        if wall.axis > 2 {
-            return Err(invalid(
-                format!("{q}.axis"),
-                format!("must be 0, 1 or 2 (got {})", wall.axis),
-            ));
-        }
-        if simbox.periodic[wall.axis] {
-            return Err(invalid(
-                format!("{q}.axis"),
-                "a wall needs a non-periodic dimension",
-            ));
-        }
-        finite(&format!("{q}.position"), wall.position)?;
-        finite(&format!("{q}.velocity"), wall.velocity)?;
+        check_flat_wall(&q, wall.axis, wall.position, wall.velocity, simbox.periodic)?;
         check_granular(&format!("{q}.material"), &wall.material)?;
         // The first stage's walls meet the scene's own positions: a sphere
         // on the wrong side would stop the native run at once, and LAMMPS
