@@ -113,14 +113,8 @@ impl Particles {
     /// Adds the kinetic part of the pressure-tensor numerator,
     /// `sum m v_a v_b` in the order `[xx, yy, zz, xy, xz, yz]`, to `p`.
     pub fn add_kinetic_tensor(&self, p: &mut [f64; 6]) {
-        for (v, &m) in self.v.iter().zip(&self.mass) {
-            p[0] += m * v[0] * v[0];
-            p[1] += m * v[1] * v[1];
-            p[2] += m * v[2] * v[2];
-            p[3] += m * v[0] * v[1];
-            p[4] += m * v[0] * v[2];
-            p[5] += m * v[1] * v[2];
-        }
+        // v - 0 is v exactly: the same sums as without the offset.
+        self.add_relative_kinetic_tensor(p, |_| [0.0; 3]);
     }
 
     /// Wraps every position into the box, updating the image counters.
@@ -151,8 +145,13 @@ impl Particles {
         lees_edwards: &LeesEdwards,
         p: &mut [f64; 6],
     ) {
+        self.add_relative_kinetic_tensor(p, |x| lees_edwards.streaming_velocity(simbox, x));
+    }
+
+    /// Adds `sum m c_a c_b` with `c = v - u(x)` to `p`.
+    fn add_relative_kinetic_tensor(&self, p: &mut [f64; 6], u: impl Fn(&[f64; 3]) -> [f64; 3]) {
         for ((v, x), &m) in self.v.iter().zip(&self.x).zip(&self.mass) {
-            let u = lees_edwards.streaming_velocity(simbox, x);
+            let u = u(x);
             let c = [v[0] - u[0], v[1] - u[1], v[2] - u[2]];
             p[0] += m * c[0] * c[0];
             p[1] += m * c[1] * c[1];

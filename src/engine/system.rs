@@ -182,11 +182,6 @@ impl System {
         }
     }
 
-    /// The current stage's Lees-Edwards boundaries, if any.
-    pub fn lees_edwards(&self) -> Option<&LeesEdwards> {
-        self.lees_edwards.as_ref()
-    }
-
     /// Scalar pressure, the mean of the diagonal of the pressure tensor.
     pub fn pressure(&self) -> f64 {
         let p = self.pressure_tensor();
