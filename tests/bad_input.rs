@@ -268,6 +268,7 @@ const SUBCOMMANDS: &[&[&str]] = &[
         "{out}",
     ],
     &["compare-compaction", "{data}", "-o", "{out}"],
+    &["mc-box", "-o", "{out}"],
 ];
 
 /// Value names of options that take paths or words, not numbers.

@@ -15,6 +15,7 @@ use bpm::studies::hertz::{
     run_hertz, EngineAgreement, GrainSource, HertzOptions, Moduli, SqueezeEngine,
 };
 use bpm::studies::hertz_sweep::{run_hertz_sweep, SweepOptions};
+use bpm::studies::mcdem::rigid_box;
 use bpm::studies::{accuracy, calibration, compaction, large_strain, stability, upstream};
 use clap::{Parser, Subcommand, ValueEnum};
 use std::io::IsTerminal;
@@ -653,6 +654,44 @@ enum Command {
         /// (docs/model.md) instead of the paper's model.
         #[arg(long)]
         zero_net: bool,
+    },
+    /// Multi-contact closures in a rigid box (docs/protocols.md "Spheres
+    /// squeezed in a rigid box"): one hydrogel sphere, and nine in a
+    /// body-centred cubic cell, squeezed by a lid at constant speed with
+    /// plain Hertz, the standard and the advanced closure; lid and
+    /// side-wall stress against the lid's displacement. Writes
+    /// DIR/rigid_box.json and DIR/rigid_box.svg.
+    McBox {
+        /// Output folder.
+        #[arg(short, long, default_value = "results/mcdem/rigid-box")]
+        output: PathBuf,
+        /// Sphere diameter (m).
+        #[arg(long, default_value_t = 2e-3)]
+        diameter: f64,
+        /// Lid speed (m/s).
+        #[arg(long, default_value_t = 0.01)]
+        lid_speed: f64,
+        /// Young's modulus of the box's walls (Pa).
+        #[arg(long, default_value_t = 5e7)]
+        wall_modulus: f64,
+        /// Lid travel over the sphere radius.
+        #[arg(long, default_value_t = 0.5)]
+        max_displacement: f64,
+        /// Time step (tau = sqrt(m / (E d))).
+        #[arg(long, default_value_t = 0.05)]
+        dt: f64,
+        /// Recorded states per run.
+        #[arg(long, default_value_t = 100)]
+        records: u64,
+        /// Prefactor of the standard closure.
+        #[arg(long, default_value_t = 0.82)]
+        gamma: f64,
+        /// Prefactor of the advanced closure.
+        #[arg(long, default_value_t = 0.81)]
+        gamma_advanced: f64,
+        /// Maximum penetration ratio of the advanced closure.
+        #[arg(long, default_value_t = 0.11)]
+        mpr: f64,
     },
 }
 
@@ -1572,6 +1611,37 @@ fn real_main() -> Result<()> {
             println!(
                 "{complete} of {} compressions reached volumetric strain {strain} with nothing lost; wrote {}/large_strain.json and large_strain.svg",
                 report.compressions.len(),
+                output.display()
+            );
+        }
+        Command::McBox {
+            output,
+            diameter,
+            lid_speed,
+            wall_modulus,
+            max_displacement,
+            dt,
+            records,
+            gamma,
+            gamma_advanced,
+            mpr,
+        } => {
+            let opts = rigid_box::BoxOptions {
+                diameter,
+                lid_speed,
+                wall_modulus,
+                max_displacement,
+                dt,
+                records,
+                gamma,
+                gamma_advanced,
+                mpr,
+            };
+            let report = rigid_box::run_box(&opts, &command())?;
+            rigid_box::write_report(&report, &output)?;
+            println!("{}", rigid_box::table(&report));
+            println!(
+                "wrote {}/rigid_box.json and rigid_box.svg",
                 output.display()
             );
         }

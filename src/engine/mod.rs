@@ -27,7 +27,10 @@ pub mod timers;
 
 pub use bpm::{BondTopology, BpmModel, BpmTerms};
 pub use deform::{Barostat, Deformation, LeesEdwards, ShearRemap, TiltFactor};
-pub use dem::{ActiveGranularWall, ContactStore, DemModel, GranularWall};
+pub use dem::{
+    ActiveGranularWall, BeyondReach, ClosurePass, ClosureReport, ContactStore, DemModel,
+    GranularWall, MultiContact,
+};
 pub use external::{ActiveTether, FlatWall, SphereWall, Tether, WallSide};
 pub use integrator::Integrator;
 pub use model::{EnergyTerm, ForceInput, ForceOutput, ModelTally, ParticleModel, MAX_ENERGY_TERMS};
@@ -93,6 +96,21 @@ pub enum EngineError {
         wall: usize,
         /// Particle index.
         particle: usize,
+    },
+    /// The multi-contact closure moved surfaces further than its reach:
+    /// pairs (or walls) beyond the reach could then touch unseen.
+    #[error("the multi-contact corrections of sphere {sphere} at {partner} add up to {ratio:.3} of the radii at step {step}, beyond the closure's reach {reach}: raise `force_field.multicontact.reach` (or lower the prefactor, or use the advanced closure, whose ratio bounds each term)")]
+    ClosureBeyondReach {
+        /// Step of the force evaluation that found it.
+        step: u64,
+        /// The sphere.
+        sphere: usize,
+        /// Its partner, in words (`sphere 12`, `granular wall 0`).
+        partner: String,
+        /// The corrections over the radii.
+        ratio: f64,
+        /// The closure's reach.
+        reach: f64,
     },
     /// The stage asks the model for something it does not have.
     #[error("the particle model does not support {what}")]

@@ -9,6 +9,8 @@
 //! loops stay monomorphic inside the model.
 
 use super::deform::LeesEdwards;
+use super::dem::{ActiveGranularWall, ClosureReport};
+use super::external::WallContact;
 use super::neighbor::{Exclusions, NeighbourList};
 use super::simbox::SimBox;
 use super::timers::Timers;
@@ -81,6 +83,11 @@ pub struct ForceInput<'a> {
     /// [`LeesEdwards::image_velocity`]. Only models with velocity-dependent
     /// pair forces read it (the scene refuses it for the others).
     pub lees_edwards: Option<LeesEdwards>,
+    /// Time into the stage (tau): where moving walls are.
+    pub elapsed: f64,
+    /// The stage's flat granular walls (DEM spheres touch them; other
+    /// models have none).
+    pub granular_walls: &'a [ActiveGranularWall],
 }
 
 /// Where a model adds its forces (and torques).
@@ -94,6 +101,11 @@ pub struct ForceOutput<'a> {
     pub timers: &'a mut Timers,
     /// The first interaction outside the model's range, set by the model.
     pub fault: Option<Fault>,
+    /// What each of [`ForceInput::granular_walls`] felt, in order, set by
+    /// the model that touches them.
+    pub granular_walls: Vec<WallContact>,
+    /// The multi-contact closure's pass, if the model has one.
+    pub closure: Option<ClosureReport>,
 }
 
 /// A particle model: its state, its forces, its observables.
@@ -118,6 +130,11 @@ pub trait ParticleModel: std::fmt::Debug + Send + Any {
     /// The energy terms of [`ModelTally::terms`], in order; these are the
     /// model's recorded columns.
     fn energy_terms(&self) -> &'static [EnergyTerm];
+
+    /// Called when a stage starts: per-stage state (such as the contact
+    /// histories of a stage's walls, which LAMMPS re-creates each stage)
+    /// starts afresh.
+    fn begin_stage(&mut self) {}
 
     /// Adds the model's forces for the state in `input` to `out`.
     fn compute(&mut self, input: &ForceInput<'_>, out: &mut ForceOutput<'_>) -> ModelTally;

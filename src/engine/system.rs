@@ -6,7 +6,7 @@
 //! (or, for Lees-Edwards shear, none: the images move instead).
 
 use super::deform::{Barostat, Deformation, LeesEdwards};
-use super::dem::ActiveGranularWall;
+use super::dem::{ActiveGranularWall, ClosureReport, DemModel};
 use super::external::{apply_viscous, ActiveTether, FlatWall, SphereWall};
 use super::integrator::Integrator;
 use super::model::{ForceInput, ForceOutput, ModelTally, ParticleModel};
@@ -15,7 +15,7 @@ use super::particles::Particles;
 use super::simbox::SimBox;
 use super::timers::{Stage, Timers};
 use super::EngineError;
-use crate::kernels::{ContactHistory, Fault, Separation, Tally};
+use crate::kernels::{Fault, Separation, Tally};
 
 /// Everything a stage adds on top of the interaction model.
 #[derive(Debug, Default)]
@@ -77,6 +77,8 @@ pub struct StepReport {
     pub through_wall: Option<(usize, usize)>,
     /// The first interaction outside the model's range.
     pub fault: Option<Fault>,
+    /// The multi-contact closure's corrections, if the model has one.
+    pub closure: Option<ClosureReport>,
 }
 
 /// Particles, box and model, with the state of a run.
@@ -110,9 +112,6 @@ pub struct System {
     stage_start_time: f64,
     /// The current stage's Lees-Edwards boundaries, if it shears with them.
     lees_edwards: Option<LeesEdwards>,
-    /// Per granular wall of the current stage, one contact history per
-    /// particle (a stage's walls start untouched).
-    wall_histories: Vec<Vec<ContactHistory>>,
 }
 
 impl System {
@@ -143,7 +142,6 @@ impl System {
             wraps: 0,
             stage_start_time: 0.0,
             lees_edwards: None,
-            wall_histories: Vec::new(),
         }
     }
 
@@ -278,20 +276,30 @@ impl System {
             threads: self.threads,
             tally,
             lees_edwards: self.lees_edwards,
+            elapsed,
+            granular_walls: &drivers.granular_walls,
         };
         let mut output = ForceOutput {
             f: &mut p.f,
             torque,
             timers: &mut self.timers,
             fault: None,
+            granular_walls: Vec::new(),
+            closure: None,
         };
         let interactions = self.model.compute(&input, &mut output);
-        let fault = output.fault;
+        let ForceOutput {
+            fault,
+            granular_walls,
+            closure,
+            ..
+        } = output;
         let _t = self.timers.start(Stage::External);
         let mut report = StepReport {
             interactions,
             tallied: tally,
             fault,
+            closure,
             ..StepReport::default()
         };
         for (w, wall) in drivers.walls.iter().enumerate() {
@@ -303,13 +311,12 @@ impl System {
                 report.through_wall = Some((w, particle));
             }
         }
-        for (w, (wall, history)) in drivers
+        for (w, (wall, contact)) in drivers
             .granular_walls
             .iter()
-            .zip(&mut self.wall_histories)
+            .zip(granular_walls)
             .enumerate()
         {
-            let contact = wall.apply(elapsed, p, history, step_dt);
             report.granular_wall_forces.push(contact.force);
             report
                 .granular_wall_positions
@@ -339,10 +346,7 @@ impl System {
             .deformation
             .as_ref()
             .and_then(|d| d.lees_edwards(&self.simbox));
-        self.wall_histories = vec![
-            vec![ContactHistory::default(); self.particles.len()];
-            drivers.granular_walls.len()
-        ];
+        self.model.begin_stage();
         self.update_neighbours(true);
         self.compute_forces(drivers, 0.0, true);
     }
@@ -437,8 +441,9 @@ impl System {
             .fold(f64::INFINITY, f64::min)
     }
 
-    /// The verdict of the last force evaluation's flat walls: an error if
-    /// a particle was on or behind a wall's plane.
+    /// The verdict of the last force evaluation's walls and contact
+    /// closure: an error if a particle was on or behind a wall's plane, or
+    /// the multi-contact corrections went beyond their reach.
     pub fn check_walls(&self) -> Result<(), EngineError> {
         if let Some((wall, particle)) = self.report.through_wall {
             return Err(EngineError::ThroughWall {
@@ -452,6 +457,23 @@ impl System {
                 step: self.step,
                 wall,
                 particle,
+            });
+        }
+        if let Some(beyond) = self.report.closure.and_then(|c| c.beyond_reach) {
+            let reach = self
+                .model_as::<DemModel>()
+                .and_then(|m| m.multicontact())
+                .map_or(f64::NAN, |m| m.reach);
+            return Err(EngineError::ClosureBeyondReach {
+                step: self.step,
+                sphere: beyond.sphere,
+                partner: if beyond.wall {
+                    format!("granular wall {}", beyond.partner)
+                } else {
+                    format!("sphere {}", beyond.partner)
+                },
+                ratio: beyond.ratio,
+                reach,
             });
         }
         Ok(())

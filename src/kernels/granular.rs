@@ -221,6 +221,10 @@ pub struct ContactHistory {
     pub rolling: [f64; 3],
     /// Accumulated twist angle (rad).
     pub twist: f64,
+    /// Magnitude of the total normal force (damping included) at the
+    /// contact's last evaluation (k d): what the multi-contact closure
+    /// takes as the contact's load on the sphere in the next one.
+    pub normal_force: f64,
 }
 
 /// One sphere of a contact: what the force reads.
@@ -341,11 +345,35 @@ pub fn granular_contact(
     dt: f64,
     update: bool,
 ) -> ContactForce {
+    corrected_granular_contact(c, del, si, sj, [0.0; 2], history, dt, update)
+}
+
+/// [`granular_contact`] with each sphere's surface at this contact moved
+/// out by `corrections` (the multi-contact closure's `Delta`, negative
+/// inwards): the overlap is `R_i + Delta_i + R_j + Delta_j - |del|` (which
+/// must be positive) and the contact point and lever arms follow the
+/// moved surfaces, while the effective radius of the Hertz and Mindlin
+/// stiffnesses stays that of the spheres (the spheres do not change size;
+/// only where their surfaces meet does). Zero corrections give
+/// [`granular_contact`] exactly.
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+pub fn corrected_granular_contact(
+    c: &GranularCoeffs,
+    del: &[f64; 3],
+    si: &Sphere,
+    sj: &Sphere,
+    corrections: [f64; 2],
+    history: &mut ContactHistory,
+    dt: f64,
+    update: bool,
+) -> ContactForce {
     let rsq = del[0] * del[0] + del[1] * del[1] + del[2] * del[2];
     let r = rsq.sqrt();
     let rinv = 1.0 / r;
     let radsum = si.radius + sj.radius;
-    let delta = radsum - r;
+    let (surface_i, surface_j) = (si.radius + corrections[0], sj.radius + corrections[1]);
+    let delta = (surface_i + surface_j) - r;
     let contact = Contact {
         n: [del[0] * rinv, del[1] * rinv, del[2] * rinv],
         delta,
@@ -353,9 +381,9 @@ pub fn granular_contact(
         meff: si.mass * sj.mass / (si.mass + sj.mass),
         vr: [si.v[0] - sj.v[0], si.v[1] - sj.v[1], si.v[2] - sj.v[2]],
         wr: [
-            si.radius * si.omega[0] + sj.radius * sj.omega[0],
-            si.radius * si.omega[1] + sj.radius * sj.omega[1],
-            si.radius * si.omega[2] + sj.radius * sj.omega[2],
+            surface_i * si.omega[0] + surface_j * sj.omega[0],
+            surface_i * si.omega[1] + surface_j * sj.omega[1],
+            surface_i * si.omega[2] + surface_j * sj.omega[2],
         ],
         relrot: [
             si.omega[0] - sj.omega[0],
@@ -364,8 +392,8 @@ pub fn granular_contact(
         ],
         // The tangential force acts at the contact point, R - delta/2 from
         // either centre.
-        arm_i: si.radius - 0.5 * delta,
-        arm_j: sj.radius - 0.5 * delta,
+        arm_i: surface_i - 0.5 * delta,
+        arm_j: surface_j - 0.5 * delta,
     };
     contact_law(c, &contact, history, dt, update)
 }
@@ -374,12 +402,16 @@ pub fn granular_contact(
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct WallTouch {
     /// Distance of the sphere's centre from the wall's plane, `0 <
-    /// distance < R`.
+    /// distance < R + correction`.
     pub distance: f64,
     /// The wall's unit normal, pointing towards the sphere.
     pub normal: [f64; 3],
     /// The wall's velocity (d / tau).
     pub velocity: [f64; 3],
+    /// The sphere's surface at this contact moved out by this much (the
+    /// multi-contact closure's `Delta`; 0 for plain Hertz): the overlap is
+    /// `R + correction - distance`, and the effective radius stays `R`.
+    pub correction: f64,
 }
 
 /// The contact force on sphere `s` from a flat wall touching it at
@@ -402,13 +434,15 @@ pub fn granular_wall_contact(
         distance,
         normal,
         velocity: wall_velocity,
+        correction,
     } = *wall;
+    let surface = s.radius + correction;
     // The normal as the reference forms it from the separation vector
     // `distance * normal`, so both round alike.
     let rinv = 1.0 / distance;
     let contact = Contact {
         n: normal.map(|c| distance * c * rinv),
-        delta: s.radius - distance,
+        delta: surface - distance,
         reff: s.radius,
         meff: s.mass,
         vr: [
@@ -416,9 +450,9 @@ pub fn granular_wall_contact(
             s.v[1] - wall_velocity[1],
             s.v[2] - wall_velocity[2],
         ],
-        wr: s.omega.map(|w| s.radius * w),
+        wr: s.omega.map(|w| surface * w),
         relrot: s.omega,
-        arm_i: s.radius,
+        arm_i: surface,
         arm_j: 0.0,
     };
     let mut out = contact_law(c, &contact, history, dt, update);
@@ -458,6 +492,7 @@ fn contact_law(
     let fntot = fne - damp_normal * vnnr;
     // Friction limits follow the total normal force, damping included.
     let fncrit = fntot.abs();
+    history.normal_force = fncrit;
 
     // Relative velocity of the surfaces at the contact.
     let vt = [vr[0] - vn[0], vr[1] - vn[1], vr[2] - vn[2]];
@@ -638,12 +673,69 @@ mod tests {
             let fd = -(energy(r + step) - energy(r - step)) / (2.0 * step);
             assert!((along - fd).abs() < 1e-6 * hertz, "{along} vs {fd}");
             assert_eq!(out.torque_i, [0.0; 3]);
+            assert!((h.normal_force - hertz).abs() < 1e-13 * hertz);
             assert_eq!(
                 h,
-                ContactHistory::default(),
-                "no tangential motion, no history"
+                ContactHistory {
+                    normal_force: h.normal_force,
+                    ..ContactHistory::default()
+                },
+                "no tangential motion, no history but the normal force"
             );
         }
+    }
+
+    #[test]
+    fn moved_surfaces_change_the_overlap_and_arms_but_not_the_effective_radius() {
+        let m = material();
+        let c = GranularCoeffs::of(&m);
+        let (ri, rj) = (0.5, 0.8);
+        let reff = ri * rj / (ri + rj);
+        let (e_eff, _) = effective(&m);
+        let del = [1.27, 0.0, 0.0];
+        let (di, dj) = (0.02, -0.01);
+        let delta = ri + di + rj + dj - del[0];
+        let spin = Sphere {
+            omega: [0.0, 0.0, 0.3],
+            ..at_rest(ri, 1.0)
+        };
+        let mut h = ContactHistory::default();
+        let out = corrected_granular_contact(
+            &c,
+            &del,
+            &spin,
+            &at_rest(rj, 2.0),
+            [di, dj],
+            &mut h,
+            0.01,
+            true,
+        );
+        let hertz = 4.0 / 3.0 * e_eff * (reff * delta).sqrt() * delta;
+        assert!((out.force[0] - hertz).abs() < 1e-13 * hertz);
+        assert!((h.normal_force - hertz).abs() < 1e-13 * hertz);
+        // The spin drags the contact point, (R_i + Delta_i) from the
+        // centre; the tangential force's moments balance about the contact
+        // point: arm_i + arm_j = |del|.
+        let ft = out.force[1];
+        assert!(ft != 0.0);
+        let arm_i = -out.torque_i[2] / ft;
+        let arm_j = -out.torque_j[2] / ft;
+        assert!((arm_i - (ri + di - 0.5 * delta)).abs() < 1e-14);
+        assert!((arm_i + arm_j - del[0]).abs() < 1e-14);
+        // Zero corrections are the plain contact, bit for bit.
+        let (mut a, mut b) = (ContactHistory::default(), ContactHistory::default());
+        let plain = granular_contact(&c, &del, &spin, &at_rest(rj, 2.0), &mut a, 0.01, true);
+        let zero = corrected_granular_contact(
+            &c,
+            &del,
+            &spin,
+            &at_rest(rj, 2.0),
+            [0.0; 2],
+            &mut b,
+            0.01,
+            true,
+        );
+        assert_eq!((plain, a), (zero, b));
     }
 
     /// A head-on collision of two equal spheres, integrated with velocity
@@ -960,7 +1052,11 @@ mod tests {
         let mut fresh = ContactHistory::default();
         let out = granular_contact(&c, &del, &si, &sj, &mut fresh, 0.01, false);
         assert_eq!((out.force[1], out.force[2]), (0.0, 0.0));
-        assert_eq!(fresh, ContactHistory::default());
+        assert_eq!(fresh.tangential, [0.0; 3]);
+        assert!(
+            (fresh.normal_force - out.force[0]).abs() < 1e-15,
+            "the load is recorded"
+        );
         let mut loaded = ContactHistory {
             tangential: [0.0, 0.2, 0.0],
             ..Default::default()
@@ -1057,6 +1153,7 @@ mod tests {
         let c = GranularCoeffs::of(&m);
         let normal = [0.0, 0.6, 0.8];
         let touch = WallTouch {
+            correction: 0.0,
             distance: s.radius - overlap,
             normal,
             velocity: wall_velocity,
@@ -1137,6 +1234,7 @@ mod tests {
         let radius = 0.7;
         for overlap in [1e-4, 1e-2, 0.1] {
             let touch = WallTouch {
+                correction: 0.0,
                 distance: radius - overlap,
                 normal: [0.0, 0.0, -1.0],
                 velocity: [0.0; 3],
@@ -1156,6 +1254,7 @@ mod tests {
         let c = GranularCoeffs::of(&m);
         let (radius, overlap) = (1.0, 0.01);
         let touch = WallTouch {
+            correction: 0.0,
             distance: radius - overlap,
             normal: [0.0, 0.0, 1.0],
             velocity: [0.0; 3],

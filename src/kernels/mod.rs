@@ -14,6 +14,7 @@ mod fault;
 mod geometry;
 mod granular;
 mod isa;
+mod multicontact;
 mod pair;
 mod tally;
 mod volume;
@@ -29,11 +30,15 @@ pub use fault::{
 };
 pub use geometry::{Separation, Unwrapped};
 pub use granular::{
-    granular_contact, granular_wall_contact, restitution_prefactor, tsuji_prefactor, ContactForce,
-    ContactHistory, GranularCoeffs, GranularMaterial, NormalDamping, Sphere, SpringDashpotSlider,
-    Twisting, WallTouch,
+    corrected_granular_contact, granular_contact, granular_wall_contact, restitution_prefactor,
+    tsuji_prefactor, ContactForce, ContactHistory, GranularCoeffs, GranularMaterial, NormalDamping,
+    Sphere, SpringDashpotSlider, Twisting, WallTouch,
 };
 pub use isa::Isa;
+pub use multicontact::{
+    surface_corrections, Closure, ContactPoint, HalfSpace, MprSwitch, MprTest, COINCIDENT_POINTS,
+    NEGLIGIBLE, POINT_FLOOR,
+};
 pub use pair::{pair_energy, pair_force_magnitude, pair_forces, PairCoeffs, PairInputs};
 pub use tally::{Ownership, Tally};
 pub use volume::{accumulate_reference_volumes, accumulate_volumes, accumulate_volumes_on};

@@ -170,6 +170,16 @@ fn check_supported(index: usize, stage: &StageSpec, scene: &Scene) -> Result<(),
             "the restitution form of the DEM damping (LAMMPS 29Sep2021 has only `damping tsuji`)",
         ));
     }
+    if scene.force_field.multicontact.is_some()
+        || stage
+            .force_field
+            .as_ref()
+            .is_some_and(|ff| ff.multicontact.is_some())
+    {
+        return Err(unsupported(
+            "the multi-contact closure (it has no LAMMPS pair style yet: run it with the native engine)",
+        ));
+    }
     if !dem && type_masses(scene).is_none() {
         return Err(unsupported(
             "masses that differ within a particle type (LAMMPS's atom_style bond has one mass per type)",

@@ -85,7 +85,11 @@ pub fn model_of(scene: &Scene) -> Box<dyn ParticleModel> {
                 .force_field
                 .granular
                 .expect("a validated dem scene has force_field.granular");
-            Box::new(DemModel::new(material, max_radius))
+            Box::new(DemModel::new(
+                material,
+                max_radius,
+                scene.force_field.multicontact,
+            ))
         }
     }
 }

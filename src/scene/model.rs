@@ -3,7 +3,9 @@
 //! It names no engine: the native engine runs it directly and the LAMMPS
 //! harness turns it into a data file and an input script.
 
-use crate::engine::{Barostat, Deformation, FlatWall, GranularWall, SphereWall, Tether};
+use crate::engine::{
+    Barostat, Deformation, FlatWall, GranularWall, MultiContact, SphereWall, Tether,
+};
 use crate::kernels::{BondCoeffs, GranularMaterial, PairCoeffs};
 use serde::{Deserialize, Serialize};
 
@@ -164,6 +166,11 @@ pub struct ForceField {
     /// The sphere material and friction of model `dem`; absent for `bpm`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub granular: Option<GranularMaterial>,
+    /// The multi-contact closure of model `dem` (each contact's overlap
+    /// corrected by the sphere's other contact forces); absent for plain
+    /// Hertz.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub multicontact: Option<MultiContact>,
 }
 
 fn default_skin() -> f64 {
@@ -188,6 +195,7 @@ impl ForceField {
             skin: default_skin(),
             zero_net_multibody: false,
             granular: None,
+            multicontact: None,
         }
     }
 
@@ -199,6 +207,7 @@ impl ForceField {
             skin: default_skin(),
             zero_net_multibody: false,
             granular: Some(material),
+            multicontact: None,
         }
     }
 }

@@ -274,7 +274,7 @@ pub fn run_stage(
         if let Some(bpm) = sys.model_as_mut::<BpmModel>() {
             bpm.set_coefficients(ff.bond, ff.pair, ff.zero_net_multibody, n);
         } else if let (Some(dem), Some(material)) = (sys.model_as_mut::<DemModel>(), ff.granular) {
-            dem.set_material(material);
+            dem.set_force_field(material, ff.multicontact);
         } else {
             return Err(EngineError::Unsupported {
                 what: "this force-field change (validation checks the model's fields)",

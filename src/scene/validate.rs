@@ -1,7 +1,7 @@
 //! Checks a scene once, at load, with errors that name the field.
 
 use super::model::{ForceField, Mass, ModelKind, Scene, StageSpec, SCENE_VERSION};
-use crate::engine::SimBox;
+use crate::engine::{MultiContact, SimBox};
 use crate::kernels::{GranularMaterial, Separation, SpringDashpotSlider, Twisting};
 
 /// Why a scene could not be used.
@@ -116,6 +116,15 @@ fn check_granular(prefix: &str, m: &GranularMaterial) -> Result<(), SceneError> 
     Ok(())
 }
 
+fn check_multicontact(prefix: &str, m: &MultiContact) -> Result<(), SceneError> {
+    non_negative(&format!("{prefix}.prefactor"), m.prefactor)?;
+    if let Some(mpr) = m.max_penetration_ratio {
+        non_negative(&format!("{prefix}.max_penetration_ratio"), mpr)?;
+    }
+    positive(&format!("{prefix}.reach"), m.reach)?;
+    Ok(())
+}
+
 /// Checks a force field of a scene of `model`; `bonded` says whether the
 /// scene has bonds (then the bonded particle model needs bond
 /// coefficients: a missing `bond` defaults to zero, which would switch the
@@ -156,6 +165,16 @@ fn check_force_field(
         }
         (ModelKind::Bpm, None) => {}
     }
+    match (model, &ff.multicontact) {
+        (ModelKind::Dem, Some(m)) => check_multicontact(&format!("{prefix}.multicontact"), m)?,
+        (ModelKind::Bpm, Some(_)) => {
+            return Err(invalid(
+                format!("{prefix}.multicontact"),
+                "is a closure of DEM sphere contacts (model dem); the bonded model's grains deform by themselves",
+            ))
+        }
+        (_, None) => {}
+    }
     non_negative(&format!("{prefix}.bond.k"), ff.bond.k)?;
     finite(&format!("{prefix}.bond.a"), ff.bond.a)?;
     non_negative(&format!("{prefix}.bond.gamma"), ff.bond.gamma)?;
@@ -178,11 +197,21 @@ fn max_list_cutoff(scene: &Scene) -> (f64, &'static str) {
             .as_deref()
             .unwrap_or(&[crate::engine::particles::DEFAULT_RADIUS]);
         let diameter = 2.0 * radius.iter().copied().fold(0.0, f64::max);
-        let skin = scene
-            .stages
-            .iter()
-            .filter_map(|s| s.force_field.as_ref().map(|ff| ff.skin))
-            .fold(scene.force_field.skin, f64::max);
+        let fields = || {
+            std::iter::once(&scene.force_field)
+                .chain(scene.stages.iter().filter_map(|s| s.force_field.as_ref()))
+        };
+        let skin = fields().map(|ff| ff.skin).fold(0.0, f64::max);
+        // The multi-contact closure reaches beyond touching.
+        let reach = fields()
+            .filter_map(|ff| ff.multicontact.map(|m| m.reach))
+            .fold(0.0, f64::max);
+        if reach > 0.0 {
+            return (
+                diameter * (1.0 + reach) + skin,
+                "the largest sphere diameter x (1 + multicontact.reach) + skin",
+            );
+        }
         return (diameter + skin, "the largest sphere diameter + skin");
     }
     let of = |ff: &ForceField| ff.pair.map_or(0.0, |p| p.d + ff.skin);

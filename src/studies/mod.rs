@@ -12,6 +12,8 @@
 //!   throughput per part of the step against size and threads, against
 //!   upstream LAMMPS and Debian's `bond_style harmonic`, the plugin's
 //!   times, and the speed goals with their verdicts;
+//! - [`mcdem`] (`bpm mc-box`): the multi-contact closures against plain
+//!   Hertz on the multi-contact study's hydrogel spheres;
 //! - [`stability`] (`bpm stability`): the largest stable timestep against
 //!   a_B and damping, by bisection, beside the stiffest-mode prediction and
 //!   the moduli near the incompressible limit.
@@ -23,5 +25,6 @@ pub mod compaction;
 pub mod hertz;
 pub mod hertz_sweep;
 pub mod large_strain;
+pub mod mcdem;
 pub mod stability;
 pub mod upstream;

@@ -8,9 +8,11 @@
 //! (the virial of the contact forces) and the kinetic energies.
 
 mod contacts;
+mod multicontact;
 mod wall;
 
 pub use contacts::ContactStore;
+pub use multicontact::{BeyondReach, ClosurePass, ClosureReport, MultiContact};
 pub use wall::{ActiveGranularWall, GranularWall};
 
 use super::model::{EnergyTerm, ForceInput, ForceOutput, ModelTally, ParticleModel};
@@ -18,7 +20,8 @@ use super::neighbor::Exclusions;
 use super::simbox::MinimumImage;
 use super::timers::Stage;
 use crate::kernels::{
-    granular_contact, ContactForce, GranularCoeffs, GranularMaterial, Sphere, Tally,
+    corrected_granular_contact, ContactForce, ContactHistory, GranularCoeffs, GranularMaterial,
+    Sphere, Tally,
 };
 
 /// DEM spheres of one material.
@@ -29,16 +32,27 @@ pub struct DemModel {
     /// Largest sphere radius: contacts reach `2 max_radius`.
     max_radius: f64,
     contacts: ContactStore,
+    /// Per granular wall of the stage, one contact history per sphere.
+    wall_histories: Vec<Vec<ContactHistory>>,
+    /// The multi-contact closure, if on.
+    closure: Option<ClosurePass>,
 }
 
 impl DemModel {
-    /// Spheres of `material` whose largest radius is `max_radius`.
-    pub fn new(material: GranularMaterial, max_radius: f64) -> Self {
+    /// Spheres of `material` whose largest radius is `max_radius`, with
+    /// the multi-contact closure `multicontact` (`None` for plain Hertz).
+    pub fn new(
+        material: GranularMaterial,
+        max_radius: f64,
+        multicontact: Option<MultiContact>,
+    ) -> Self {
         Self {
             material,
             coeffs: GranularCoeffs::of(&material),
             max_radius,
             contacts: ContactStore::default(),
+            wall_histories: Vec::new(),
+            closure: multicontact.map(|m| ClosurePass::new(m, &material)),
         }
     }
 
@@ -47,11 +61,22 @@ impl DemModel {
         &self.material
     }
 
-    /// Replaces the material (a stage's force-field change); contact
-    /// histories are kept, as LAMMPS keeps them across `pair_coeff`.
-    pub fn set_material(&mut self, material: GranularMaterial) {
+    /// The multi-contact closure's settings, if it is on.
+    pub fn multicontact(&self) -> Option<&MultiContact> {
+        self.closure.as_ref().map(|c| c.settings())
+    }
+
+    /// Replaces the material and the closure (a stage's force-field
+    /// change); contact histories are kept, as LAMMPS keeps them across
+    /// `pair_coeff`.
+    pub fn set_force_field(
+        &mut self,
+        material: GranularMaterial,
+        multicontact: Option<MultiContact>,
+    ) {
         self.material = material;
         self.coeffs = GranularCoeffs::of(&material);
+        self.closure = multicontact.map(|m| ClosurePass::new(m, &material));
     }
 
     /// The per-contact histories.
@@ -71,7 +96,7 @@ impl DemModel {
         let omega = input.omega.unwrap_or(&[]);
         let (x, v, radius, mass) = (input.x, input.v, input.radius, input.mass);
         let list = input.neighbours;
-        self.contacts.align(list);
+        let corrections = self.closure.as_ref().map(|c| &c.pair[..]);
         let (dt, update) = match input.step_dt {
             Some(dt) => (dt, true),
             None => (0.0, false),
@@ -89,7 +114,8 @@ impl DemModel {
                 let j = list.neighbours[k] as usize;
                 let (del, image) = sep.delta_image(&xi, &x[j]);
                 let rsq = del[0] * del[0] + del[1] * del[1] + del[2] * del[2];
-                let radsum = si.radius + radius[j];
+                let moved = corrections.map_or([0.0; 2], |c| c[k]);
+                let radsum = (si.radius + moved[0]) + (radius[j] + moved[1]);
                 let history = &mut self.contacts.history[k];
                 if rsq >= radsum * radsum {
                     *history = Default::default();
@@ -107,7 +133,16 @@ impl DemModel {
                     force,
                     torque_i,
                     torque_j,
-                } = granular_contact(&self.coeffs, &del, &si, &sj, history, dt, update);
+                } = corrected_granular_contact(
+                    &self.coeffs,
+                    &del,
+                    &si,
+                    &sj,
+                    moved,
+                    history,
+                    dt,
+                    update,
+                );
                 for d in 0..3 {
                     f[i][d] += force[d];
                     f[j][d] -= force[d];
@@ -133,7 +168,10 @@ impl ParticleModel for DemModel {
     }
 
     fn pair_cutoff(&self) -> Option<f64> {
-        Some(2.0 * self.max_radius)
+        // The closure's corrections may bring pairs within its reach into
+        // contact.
+        let reach = self.closure.as_ref().map_or(0.0, |c| c.settings().reach);
+        Some(2.0 * self.max_radius * (1.0 + reach))
     }
 
     fn exclusions(&self) -> Option<&Exclusions> {
@@ -148,11 +186,43 @@ impl ParticleModel for DemModel {
         &[]
     }
 
+    fn begin_stage(&mut self) {
+        self.wall_histories.clear();
+    }
+
     fn compute(&mut self, input: &ForceInput<'_>, out: &mut ForceOutput<'_>) -> ModelTally {
         let _t = out.timers.start(Stage::Pairs);
         let sep = input.simbox.minimum_image();
+        let walls = input.granular_walls;
+        let n = input.x.len();
+        if self.wall_histories.len() != walls.len()
+            || self.wall_histories.iter().any(|h| h.len() != n)
+        {
+            self.wall_histories = vec![vec![ContactHistory::default(); n]; walls.len()];
+        }
+        self.contacts.align(input.neighbours);
+        if let Some(closure) = &mut self.closure {
+            closure.update(
+                &sep,
+                input,
+                &self.contacts.history,
+                walls,
+                &self.wall_histories,
+            );
+            out.closure = Some(closure.report);
+        }
         let mut tally = ModelTally::default();
         tally.terms[0] = self.forces(&sep, input, out.f, out.torque.as_deref_mut());
+        let corrections = self.closure.as_ref().map(|c| &c.wall[..]);
+        for (w, (wall, history)) in walls.iter().zip(&mut self.wall_histories).enumerate() {
+            out.granular_walls.push(wall.apply(
+                input,
+                out.f,
+                out.torque.as_deref_mut(),
+                history,
+                corrections.map(|c| &c[w][..]),
+            ));
+        }
         tally
     }
 

@@ -4,7 +4,7 @@
 //! one contact history per sphere.
 
 use super::super::external::{WallContact, WallSide};
-use super::super::particles::Particles;
+use super::super::model::ForceInput;
 use crate::kernels::{
     granular_wall_contact, ContactHistory, GranularCoeffs, GranularMaterial, Sphere, WallTouch,
 };
@@ -70,43 +70,41 @@ impl ActiveGranularWall {
         &self.coeffs
     }
 
-    /// Adds the wall's forces and torques to the spheres touching it;
-    /// `history` holds one contact per sphere and advances over the step
-    /// `dt`, if this evaluation completes one. Returns the normal force on
-    /// the wall (positive when pushed) and the first sphere whose centre
-    /// is on or behind the plane (which the engine reports as an error:
-    /// the contact law has no meaning there).
+    /// The wall's normal axis, the side its spheres are on (+1 for `lo`,
+    /// -1 for `hi`) and its position after `elapsed` time.
+    pub fn plane(&self, elapsed: f64) -> (usize, f64, f64) {
+        let w = &self.wall;
+        (w.axis, w.sign(), w.position_at(elapsed))
+    }
+
+    /// Adds the wall's forces and torques on the spheres of `input`
+    /// touching it to `f` and `torque`; `history` holds one contact per
+    /// sphere and advances over the step `input.step_dt`, if this
+    /// evaluation completes one, and `corrections` (if any) moves each
+    /// sphere's surface at the wall (the multi-contact closure). Returns
+    /// the normal force on the wall (positive when pushed) and the first
+    /// sphere whose centre is on or behind the plane (which the engine
+    /// reports as an error: the contact law has no meaning there).
     pub fn apply(
         &self,
-        elapsed: f64,
-        p: &mut Particles,
+        input: &ForceInput<'_>,
+        f: &mut [[f64; 3]],
+        mut torque: Option<&mut [[f64; 3]]>,
         history: &mut [ContactHistory],
-        dt: Option<f64>,
+        corrections: Option<&[f64]>,
     ) -> WallContact {
-        let w = &self.wall;
-        let (plane, sign) = (w.position_at(elapsed), w.sign());
+        let (axis, sign, plane) = self.plane(input.elapsed);
         let mut normal = [0.0; 3];
-        normal[w.axis] = sign;
+        normal[axis] = sign;
         let mut velocity = [0.0; 3];
-        velocity[w.axis] = w.velocity;
-        let (step, update) = (dt.unwrap_or(0.0), dt.is_some());
+        velocity[axis] = self.wall.velocity;
+        let (step, update) = (input.step_dt.unwrap_or(0.0), input.step_dt.is_some());
         let mut contact = WallContact::default();
-        let Particles {
-            x,
-            v,
-            f,
-            radius,
-            mass,
-            rotation,
-            ..
-        } = p;
-        let (omega, mut torque) = match rotation {
-            Some(r) => (Some(&r.omega[..]), Some(&mut r.torque[..])),
-            None => (None, None),
-        };
+        let (x, radius) = (input.x, input.radius);
         for i in 0..x.len() {
-            let distance = sign * (x[i][w.axis] - plane);
-            if distance >= radius[i] {
+            let distance = sign * (x[i][axis] - plane);
+            let correction = corrections.map_or(0.0, |c| c[i]);
+            if distance >= radius[i] + correction {
                 history[i] = ContactHistory::default();
                 continue;
             }
@@ -115,15 +113,16 @@ impl ActiveGranularWall {
                 continue;
             }
             let sphere = Sphere {
-                v: v[i],
-                omega: omega.map_or([0.0; 3], |o| o[i]),
+                v: input.v[i],
+                omega: input.omega.map_or([0.0; 3], |o| o[i]),
                 radius: radius[i],
-                mass: mass[i],
+                mass: input.mass[i],
             };
             let touch = WallTouch {
                 distance,
                 normal,
                 velocity,
+                correction,
             };
             let out =
                 granular_wall_contact(&self.coeffs, &touch, &sphere, &mut history[i], step, update);
@@ -135,7 +134,7 @@ impl ActiveGranularWall {
                     *td += moment;
                 }
             }
-            contact.force += sign * out.force[w.axis];
+            contact.force += sign * out.force[axis];
         }
         contact
     }

@@ -1,0 +1,359 @@
+//! The multi-contact closure as a pass before the contact forces: from
+//! every sphere's contacts and their normal forces at the last evaluation,
+//! the radius correction of each side of each pair and of each sphere at
+//! each wall (`kernels::surface_corrections`).
+//!
+//! Each sphere's contacts are its listed pairs within reach and the walls
+//! within reach. A contact point is where the two surfaces meet, halfway
+//! through the overlap (or, apart, the sphere's own surface point facing
+//! the partner); at a wall, the point on the wall's plane. Pairs and walls
+//! that do not touch yet are receivers only: their correction may bring
+//! them into contact, which is why the pair list reaches further than the
+//! spheres' diameters by the closure's `reach`.
+
+// Sphere and list-entry indices address several arrays at once.
+#![allow(clippy::needless_range_loop)]
+
+use super::super::model::ForceInput;
+use super::super::neighbor::NeighbourList;
+use super::super::simbox::MinimumImage;
+use super::wall::ActiveGranularWall;
+use crate::kernels::{
+    surface_corrections, Closure, ContactHistory, ContactPoint, GranularMaterial, HalfSpace,
+    MprSwitch, MprTest,
+};
+use serde::{Deserialize, Serialize};
+
+/// The multi-contact closure of a DEM scene: `force_field.multicontact`.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MultiContact {
+    /// Geometric prefactor `gamma` of the half-space displacements, >= 0
+    /// (0 is plain Hertz).
+    pub prefactor: f64,
+    /// The advanced closure's maximum penetration ratio `MPR` (a term
+    /// beyond `MPR R` switches the correction off); absent for the
+    /// standard closure.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub max_penetration_ratio: Option<f64>,
+    /// What a term beyond `MPR R` switches off (advanced closure only).
+    #[serde(default)]
+    pub switch: MprSwitch,
+    /// How a term is compared with `MPR R` (advanced closure only).
+    #[serde(default)]
+    pub test: MprTest,
+    /// How far beyond touching, as a fraction of the two radii, a pair or
+    /// wall still receives a correction (and so may come into contact);
+    /// positive, default 0.25. A run whose corrections exceed it stops
+    /// with an error naming the contact.
+    #[serde(default = "default_reach")]
+    pub reach: f64,
+}
+
+fn default_reach() -> f64 {
+    0.25
+}
+
+impl MultiContact {
+    /// The standard closure with prefactor `gamma`.
+    pub fn standard(gamma: f64) -> Self {
+        Self {
+            prefactor: gamma,
+            max_penetration_ratio: None,
+            switch: MprSwitch::default(),
+            test: MprTest::default(),
+            reach: default_reach(),
+        }
+    }
+
+    /// The advanced closure with prefactor `gamma` and maximum penetration
+    /// ratio `mpr`, switching whole contacts on the signed test.
+    pub fn advanced(gamma: f64, mpr: f64) -> Self {
+        Self {
+            max_penetration_ratio: Some(mpr),
+            ..Self::standard(gamma)
+        }
+    }
+
+    /// How the kernel combines the terms.
+    pub fn closure(&self) -> Closure {
+        match self.max_penetration_ratio {
+            None => Closure::Standard,
+            Some(max_penetration_ratio) => Closure::Advanced {
+                max_penetration_ratio,
+                switch: self.switch,
+                test: self.test,
+            },
+        }
+    }
+}
+
+/// Where a contact's correction goes.
+#[derive(Clone, Copy, Debug)]
+enum Side {
+    /// Pair-list entry, side 0 (the row's sphere) or 1 (its neighbour).
+    Pair(u32, u8),
+    /// Wall, sphere.
+    Wall(u32, u32),
+}
+
+/// A contact of one sphere, before grouping by sphere.
+#[derive(Clone, Copy, Debug)]
+struct Entry {
+    sphere: u32,
+    side: Side,
+    point: ContactPoint,
+}
+
+/// The largest corrections of one pass, and the first contact beyond the
+/// closure's reach.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct ClosureReport {
+    /// Largest correction over its sphere's radius (0 if none is positive).
+    pub largest: f64,
+    /// Most negative correction over its sphere's radius (0 if none is).
+    pub smallest: f64,
+    /// The first contact whose corrections reach beyond `reach` of
+    /// touching: a pair further apart might then touch too, unseen.
+    pub beyond_reach: Option<BeyondReach>,
+}
+
+/// A contact whose corrections exceed the closure's reach.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BeyondReach {
+    /// The sphere.
+    pub sphere: usize,
+    /// The partner sphere, or the wall.
+    pub partner: usize,
+    /// Whether the partner is a wall.
+    pub wall: bool,
+    /// The corrections over the radii they may add to.
+    pub ratio: f64,
+}
+
+/// The closure's state: its settings and reusable buffers, and the
+/// corrections of the last pass.
+#[derive(Clone, Debug)]
+pub struct ClosurePass {
+    settings: MultiContact,
+    closure: Closure,
+    half_space: HalfSpace,
+    entries: Vec<Entry>,
+    offsets: Vec<usize>,
+    grouped: Vec<Entry>,
+    points: Vec<ContactPoint>,
+    deltas: Vec<f64>,
+    /// Per pair-list entry, the corrections of its two sides.
+    pub pair: Vec<[f64; 2]>,
+    /// Per wall, per sphere, the sphere's correction at the wall.
+    pub wall: Vec<Vec<f64>>,
+    /// What the last pass found.
+    pub report: ClosureReport,
+}
+
+impl ClosurePass {
+    /// The closure `settings` for spheres of `material`.
+    pub fn new(settings: MultiContact, material: &GranularMaterial) -> Self {
+        Self {
+            settings,
+            closure: settings.closure(),
+            half_space: HalfSpace::new(
+                settings.prefactor,
+                material.youngs_modulus,
+                material.poisson_ratio,
+            ),
+            entries: Vec::new(),
+            offsets: Vec::new(),
+            grouped: Vec::new(),
+            points: Vec::new(),
+            deltas: Vec::new(),
+            pair: Vec::new(),
+            wall: Vec::new(),
+            report: ClosureReport::default(),
+        }
+    }
+
+    /// The settings.
+    pub fn settings(&self) -> &MultiContact {
+        &self.settings
+    }
+
+    /// Computes every correction for the state in `input` from the normal
+    /// forces stored in the pair and wall histories.
+    pub fn update(
+        &mut self,
+        sep: &MinimumImage,
+        input: &ForceInput<'_>,
+        pair_history: &[ContactHistory],
+        walls: &[ActiveGranularWall],
+        wall_history: &[Vec<ContactHistory>],
+    ) {
+        let (x, radius) = (input.x, input.radius);
+        let n = x.len();
+        let reach = 1.0 + self.settings.reach;
+        self.collect(sep, input.neighbours, x, radius, pair_history, reach);
+        for (w, (wall, history)) in walls.iter().zip(wall_history).enumerate() {
+            let (axis, sign, plane) = wall.plane(input.elapsed);
+            for i in 0..n {
+                let distance = sign * (x[i][axis] - plane);
+                if distance <= 0.0 || distance >= reach * radius[i] {
+                    continue;
+                }
+                let mut point = [0.0; 3];
+                point[axis] = -sign * distance;
+                self.entries.push(Entry {
+                    sphere: i as u32,
+                    side: Side::Wall(w as u32, i as u32),
+                    point: ContactPoint::new(point, history[i].normal_force, radius[i]),
+                });
+            }
+        }
+        self.group(n);
+        self.pair.clear();
+        self.pair
+            .resize(input.neighbours.neighbours.len(), [0.0; 2]);
+        self.wall.resize(walls.len(), Vec::new());
+        for w in &mut self.wall {
+            w.clear();
+            w.resize(n, 0.0);
+        }
+        for i in 0..n {
+            let range = self.offsets[i]..self.offsets[i + 1];
+            if range.is_empty() {
+                continue;
+            }
+            surface_corrections(
+                &self.half_space,
+                &self.closure,
+                radius[i],
+                &self.points[range.clone()],
+                &mut self.deltas[range.clone()],
+            );
+            for (e, &delta) in self.grouped[range.clone()].iter().zip(&self.deltas[range]) {
+                match e.side {
+                    Side::Pair(k, s) => self.pair[k as usize][s as usize] = delta,
+                    Side::Wall(w, i) => self.wall[w as usize][i as usize] = delta,
+                }
+            }
+        }
+        self.report = self.survey(input.neighbours, radius);
+    }
+
+    /// Every listed pair within reach, as two contact entries.
+    fn collect(
+        &mut self,
+        sep: &MinimumImage,
+        list: &NeighbourList,
+        x: &[[f64; 3]],
+        radius: &[f64],
+        history: &[ContactHistory],
+        reach: f64,
+    ) {
+        self.entries.clear();
+        for i in 0..x.len() {
+            for k in list.offsets[i]..list.offsets[i + 1] {
+                let j = list.neighbours[k] as usize;
+                let (del, _) = sep.delta_image(&x[i], &x[j]);
+                let r = (del[0] * del[0] + del[1] * del[1] + del[2] * del[2]).sqrt();
+                let radsum = radius[i] + radius[j];
+                if r >= reach * radsum {
+                    continue;
+                }
+                // Halfway through the overlap, or each sphere's own
+                // surface while they are apart.
+                let inset = 0.5 * (radsum - r).max(0.0);
+                let towards_j = del.map(|c| -c / r);
+                let force = history[k].normal_force;
+                let (si, sj) = (radius[i] - inset, radius[j] - inset);
+                self.entries.push(Entry {
+                    sphere: i as u32,
+                    side: Side::Pair(k as u32, 0),
+                    point: ContactPoint::new(towards_j.map(|c| si * c), force, radius[i]),
+                });
+                self.entries.push(Entry {
+                    sphere: j as u32,
+                    side: Side::Pair(k as u32, 1),
+                    point: ContactPoint::new(towards_j.map(|c| -sj * c), force, radius[j]),
+                });
+            }
+        }
+    }
+
+    /// Groups the entries by sphere (a counting sort, stable).
+    fn group(&mut self, n: usize) {
+        self.offsets.clear();
+        self.offsets.resize(n + 1, 0);
+        for e in &self.entries {
+            self.offsets[e.sphere as usize + 1] += 1;
+        }
+        for i in 0..n {
+            self.offsets[i + 1] += self.offsets[i];
+        }
+        // Placeholders, each overwritten below.
+        self.grouped.clear();
+        self.grouped.extend_from_slice(&self.entries);
+        self.points.clear();
+        self.points.extend(self.entries.iter().map(|e| e.point));
+        self.deltas.resize(self.entries.len(), 0.0);
+        // `offsets[i]` serves as sphere i's cursor, then is restored.
+        for e in &self.entries {
+            let slot = &mut self.offsets[e.sphere as usize];
+            self.grouped[*slot] = *e;
+            self.points[*slot] = e.point;
+            *slot += 1;
+        }
+        for i in (1..=n).rev() {
+            self.offsets[i] = self.offsets[i - 1];
+        }
+        self.offsets[0] = 0;
+    }
+
+    /// The extremes of the corrections and the first contact beyond reach.
+    fn survey(&self, list: &NeighbourList, radius: &[f64]) -> ClosureReport {
+        let mut report = ClosureReport::default();
+        let reach = self.settings.reach;
+        for e in &self.grouped {
+            let delta = match e.side {
+                Side::Pair(k, s) => self.pair[k as usize][s as usize],
+                Side::Wall(w, i) => self.wall[w as usize][i as usize],
+            };
+            let ratio = delta / radius[e.sphere as usize];
+            report.largest = report.largest.max(ratio);
+            report.smallest = report.smallest.min(ratio);
+        }
+        if report.largest <= 0.5 * reach {
+            // No pair's two corrections can together exceed the reach.
+            return report;
+        }
+        'pairs: for i in 0..radius.len() {
+            for k in list.offsets[i]..list.offsets[i + 1] {
+                let j = list.neighbours[k] as usize;
+                let [a, b] = self.pair[k];
+                let ratio = (a + b) / (radius[i] + radius[j]);
+                if ratio > reach {
+                    report.beyond_reach = Some(BeyondReach {
+                        sphere: i,
+                        partner: j,
+                        wall: false,
+                        ratio,
+                    });
+                    break 'pairs;
+                }
+            }
+        }
+        if report.beyond_reach.is_none() {
+            for (w, deltas) in self.wall.iter().enumerate() {
+                if let Some(i) = (0..deltas.len()).find(|&i| deltas[i] > reach * radius[i]) {
+                    report.beyond_reach = Some(BeyondReach {
+                        sphere: i,
+                        partner: w,
+                        wall: true,
+                        ratio: deltas[i] / radius[i],
+                    });
+                    break;
+                }
+            }
+        }
+        report
+    }
+}

@@ -1,0 +1,429 @@
+//! Spheres squeezed in a rigid box (the multi-contact study's Appendix B):
+//! one sphere, and nine in a body-centred cubic cell (eight corners and the
+//! centre), in a box whose walls touch them; the lid closes at constant
+//! speed. The stress on the lid and on the side walls against the lid's
+//! displacement over the radius shows how far each closure lets a sphere
+//! spread sideways: plain Hertz gives a single sphere no side stress at
+//! all.
+//!
+//! The study gives the box only as "rigid", so its walls here touch the
+//! spheres at the start: edge `d` for one sphere, `(1 + 2 / sqrt 3) d` for
+//! the cell, whose centre touches all eight corners. Its walls are of
+//! modulus 5e7 Pa (the study's Fig. B.1), with the spheres' Poisson's
+//! ratio, restitution and friction.
+
+use super::{Hydrogel, Variant};
+use crate::analysis::plot::{write_svg, Mark, Panel, PlotError, Series};
+use crate::engine::{GranularWall, WallSide};
+use crate::file_error::FileError;
+use crate::kernels::GranularMaterial;
+use crate::scene::{
+    build_system, run_scene, validate, BoxSpec, ForceField, Mass, ModelKind, Particles, RunOptions,
+    Scene, StageSpec,
+};
+use serde::Serialize;
+use std::path::Path;
+
+/// Options of `bpm mc-box`.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct BoxOptions {
+    /// Sphere diameter (m); 2 mm in the study.
+    pub diameter: f64,
+    /// Lid speed (m/s); 0.01 in the study.
+    pub lid_speed: f64,
+    /// Modulus of the box's walls (Pa).
+    pub wall_modulus: f64,
+    /// How far the lid goes, over the sphere radius.
+    pub max_displacement: f64,
+    /// Time step (tau).
+    pub dt: f64,
+    /// Recorded states per run.
+    pub records: u64,
+    /// Standard closure's prefactor; the study's calibrated 0.82.
+    pub gamma: f64,
+    /// Advanced closure's prefactor; the study's calibrated 0.81.
+    pub gamma_advanced: f64,
+    /// Advanced closure's maximum penetration ratio; the study's 0.11.
+    pub mpr: f64,
+}
+
+impl Default for BoxOptions {
+    fn default() -> Self {
+        Self {
+            diameter: 2e-3,
+            lid_speed: 0.01,
+            wall_modulus: 5e7,
+            max_displacement: 0.5,
+            dt: 0.05,
+            records: 100,
+            gamma: 0.82,
+            gamma_advanced: 0.81,
+            mpr: 0.11,
+        }
+    }
+}
+
+/// What can go wrong.
+#[derive(Debug, thiserror::Error)]
+pub enum BoxError {
+    /// Bad options.
+    #[error("{0}")]
+    Options(String),
+    /// A run stopped.
+    #[error("{arrangement} with {variant}: {message}")]
+    Run {
+        /// The arrangement.
+        arrangement: &'static str,
+        /// The closure.
+        variant: String,
+        /// What stopped it.
+        message: String,
+    },
+    /// A plot could not be written.
+    #[error(transparent)]
+    Plot(#[from] PlotError),
+    /// A file could not be written.
+    #[error(transparent)]
+    File(#[from] FileError),
+}
+
+impl BoxOptions {
+    /// Checks the options; the error names the one at fault.
+    pub fn validate(&self) -> Result<(), BoxError> {
+        let positive = [
+            ("--diameter", self.diameter),
+            ("--lid-speed", self.lid_speed),
+            ("--wall-modulus", self.wall_modulus),
+            ("--max-displacement", self.max_displacement),
+            ("--dt", self.dt),
+        ];
+        for (name, v) in positive {
+            if !(v.is_finite() && v > 0.0) {
+                return Err(BoxError::Options(format!("{name} must be > 0 (got {v})")));
+            }
+        }
+        if self.max_displacement >= 1.0 {
+            return Err(BoxError::Options(format!(
+                "--max-displacement must be below 1 radius (got {}): the lid would reach the sphere's centre",
+                self.max_displacement
+            )));
+        }
+        if self.records == 0 {
+            return Err(BoxError::Options("--records must be at least 1".into()));
+        }
+        for (name, v) in [
+            ("--gamma", self.gamma),
+            ("--gamma-advanced", self.gamma_advanced),
+            ("--mpr", self.mpr),
+        ] {
+            if !(v.is_finite() && v >= 0.0) {
+                return Err(BoxError::Options(format!("{name} must be >= 0 (got {v})")));
+            }
+        }
+        Ok(())
+    }
+}
+
+/// The two arrangements.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Arrangement {
+    /// One sphere in a cube of edge `d`.
+    Single,
+    /// Eight corner spheres and a centre one in a cube of edge `(1 + 2 /
+    /// sqrt 3) d`.
+    Bcc,
+}
+
+impl Arrangement {
+    /// Its name.
+    pub fn name(self) -> &'static str {
+        match self {
+            Arrangement::Single => "single sphere",
+            Arrangement::Bcc => "bcc cell",
+        }
+    }
+
+    /// Sphere centres (d units) and the box edge.
+    fn spheres(self) -> (Vec<[f64; 3]>, f64) {
+        let r = 0.5;
+        match self {
+            Arrangement::Single => (vec![[r; 3]], 1.0),
+            Arrangement::Bcc => {
+                // Corner to centre is half the cube diagonal: one diameter.
+                let a = 2.0 / 3f64.sqrt();
+                let mut x = Vec::with_capacity(9);
+                for k in 0..8 {
+                    let at = |bit: usize| r + a * ((k >> bit) & 1) as f64;
+                    x.push([at(0), at(1), at(2)]);
+                }
+                x.push([r + 0.5 * a; 3]);
+                (x, 1.0 + a)
+            }
+        }
+    }
+}
+
+/// One squeeze: stresses against the lid's displacement.
+#[derive(Clone, Debug, Serialize)]
+pub struct Curve {
+    /// The arrangement.
+    pub arrangement: Arrangement,
+    /// The closure's name.
+    pub variant: String,
+    /// Lid displacement over the sphere radius.
+    pub displacement: Vec<f64>,
+    /// Force on the lid over the box's cross-section (Pa).
+    pub lid_stress: Vec<f64>,
+    /// Mean force on the four side walls over their area below the lid
+    /// (Pa).
+    pub side_stress: Vec<f64>,
+    /// The largest multi-contact correction at the end, the most
+    /// compressed state, over the radius (0 for Hertz).
+    pub final_largest_correction: f64,
+}
+
+/// The study's result.
+#[derive(Clone, Debug, Serialize)]
+pub struct BoxReport {
+    /// The command that wrote it.
+    pub command: String,
+    /// The options.
+    pub options: BoxOptions,
+    /// The spheres, in physical units.
+    pub hydrogel: Hydrogel,
+    /// The time unit (s).
+    pub time_unit: f64,
+    /// The lid speed (d / tau).
+    pub reduced_lid_speed: f64,
+    /// Steps per run.
+    pub steps: u64,
+    /// The closures compared.
+    pub variants: Vec<Variant>,
+    /// One curve per arrangement and closure.
+    pub curves: Vec<Curve>,
+}
+
+/// The squeeze of `arrangement` with `variant`, as a scene (reduced units:
+/// d, E and the sphere mass); the lid is wall 1, the side walls 2 to 5.
+pub fn scene(
+    arrangement: Arrangement,
+    variant: &Variant,
+    opts: &BoxOptions,
+    hydrogel: &Hydrogel,
+) -> Scene {
+    let (positions, edge) = arrangement.spheres();
+    let n = positions.len();
+    let material = hydrogel.material();
+    let wall_material = GranularMaterial {
+        youngs_modulus: opts.wall_modulus / hydrogel.youngs_modulus,
+        ..material
+    };
+    let speed = hydrogel.reduced_speed(opts.lid_speed);
+    let travel = opts.max_displacement * 0.5;
+    // A whole number of recording intervals, so the last row is at the
+    // full travel.
+    let every = (travel / speed / opts.dt / opts.records as f64).ceil() as u64;
+    let steps = every * opts.records;
+    let wall = |axis, side, position, velocity| GranularWall {
+        axis,
+        side,
+        position,
+        velocity,
+        material: wall_material,
+    };
+    let mut walls = vec![
+        wall(2, WallSide::Lo, 0.0, 0.0),
+        wall(2, WallSide::Hi, edge, -speed),
+    ];
+    for axis in 0..2 {
+        walls.push(wall(axis, WallSide::Lo, 0.0, 0.0));
+        walls.push(wall(axis, WallSide::Hi, edge, 0.0));
+    }
+    let mut stage = StageSpec::hold("squeeze", steps, opts.dt);
+    stage.granular_walls = walls;
+    stage.record.every = every;
+    let mut force_field = ForceField::dem(material);
+    force_field.multicontact = variant.multicontact;
+    // The skin is in d: a tenth of a diameter suits spheres this slow.
+    force_field.skin = 0.1;
+    Scene {
+        version: crate::scene::SCENE_VERSION,
+        model: ModelKind::Dem,
+        description: format!(
+            "{} squeezed in a rigid box, {} (bpm mc-box)",
+            arrangement.name(),
+            variant.name
+        ),
+        seed: 1,
+        simbox: BoxSpec {
+            lo: [-0.5; 3],
+            lengths: [edge + 1.0; 3],
+            tilt: [0.0; 3],
+            periodic: [false; 3],
+        },
+        particles: Particles {
+            positions,
+            velocities: None,
+            angular_velocities: None,
+            grain: None,
+            mass: Mass::Uniform(1.0),
+            radius: Some(vec![0.5; n]),
+            kind: None,
+        },
+        bonds: Default::default(),
+        force_field,
+        stages: vec![stage],
+        provenance: serde_json::Value::Null,
+    }
+}
+
+fn column(stage: &crate::scene::StageOutput, name: &str) -> Vec<f64> {
+    let c = stage
+        .columns
+        .iter()
+        .position(|c| c.name == name)
+        .expect("a granular-wall stage records its walls");
+    stage.rows.iter().map(|r| r[c]).collect()
+}
+
+/// Runs every arrangement with every closure; `command` is recorded.
+pub fn run_box(opts: &BoxOptions, command: &str) -> Result<BoxReport, BoxError> {
+    opts.validate()?;
+    let hydrogel = Hydrogel::table_1(opts.diameter);
+    let variants = Variant::trio(opts.gamma, opts.gamma_advanced, opts.mpr);
+    let mut curves = Vec::new();
+    let mut steps = 0;
+    for arrangement in [Arrangement::Single, Arrangement::Bcc] {
+        for variant in &variants {
+            let scene = scene(arrangement, variant, opts, &hydrogel);
+            let fail = |message: String| BoxError::Run {
+                arrangement: arrangement.name(),
+                variant: variant.name.clone(),
+                message,
+            };
+            validate(&scene).map_err(|e| fail(e.to_string()))?;
+            steps = scene.stages[0].steps;
+            let mut sys = build_system(&scene, 1);
+            let (outputs, err) = run_scene(&mut sys, &scene, &RunOptions::quiet(1));
+            if let Some(err) = err {
+                return Err(fail(err.to_string()));
+            }
+            let stage = &outputs[0];
+            let edge = scene.simbox.lengths[0] - 1.0;
+            let lid = column(stage, "granular_wall1_position");
+            let lid_force = column(stage, "granular_wall1_force");
+            let sides: Vec<Vec<f64>> = (2..6)
+                .map(|w| column(stage, &format!("granular_wall{w}_force")))
+                .collect();
+            let in_pa = hydrogel.youngs_modulus;
+            curves.push(Curve {
+                arrangement,
+                variant: variant.name.clone(),
+                displacement: lid.iter().map(|z| (edge - z) / 0.5).collect(),
+                lid_stress: lid_force
+                    .iter()
+                    .map(|f| f / (edge * edge) * in_pa)
+                    .collect(),
+                side_stress: (0..lid.len())
+                    .map(|k| {
+                        let mean = sides.iter().map(|s| s[k]).sum::<f64>() / 4.0;
+                        mean / (edge * lid[k]) * in_pa
+                    })
+                    .collect(),
+                final_largest_correction: sys.report.closure.map_or(0.0, |c| c.largest),
+            });
+        }
+    }
+    Ok(BoxReport {
+        command: command.to_string(),
+        options: opts.clone(),
+        hydrogel,
+        time_unit: hydrogel.time_unit(),
+        reduced_lid_speed: hydrogel.reduced_speed(opts.lid_speed),
+        steps,
+        variants,
+        curves,
+    })
+}
+
+/// Linear interpolation of `y(x)` at `at` (x increasing), `None` outside.
+pub fn at_displacement(x: &[f64], y: &[f64], at: f64) -> Option<f64> {
+    let k = x.windows(2).position(|w| w[0] <= at && at <= w[1])?;
+    let t = (at - x[k]) / (x[k + 1] - x[k]);
+    Some(y[k] + t * (y[k + 1] - y[k]))
+}
+
+/// The lid and side stresses (Pa) of every curve at lid displacements
+/// 0.1 to 0.5 R (as far as the curves reach), with the ratio of each
+/// closure's lid stress to plain Hertz's.
+pub fn table(report: &BoxReport) -> String {
+    let marks = [0.1, 0.2, 0.3, 0.4, 0.5];
+    let mut out = format!("{:<14} {:<34} {:>6}", "arrangement", "closure", "u/R");
+    out += &format!(
+        " {:>11} {:>11} {:>9}\n",
+        "lid (Pa)", "sides (Pa)", "lid/Hertz"
+    );
+    for c in &report.curves {
+        let hertz = report
+            .curves
+            .iter()
+            .find(|h| h.arrangement == c.arrangement && h.variant == report.variants[0].name);
+        for &u in &marks {
+            let (Some(lid), Some(side)) = (
+                at_displacement(&c.displacement, &c.lid_stress, u),
+                at_displacement(&c.displacement, &c.side_stress, u),
+            ) else {
+                continue;
+            };
+            let ratio = hertz
+                .and_then(|h| at_displacement(&h.displacement, &h.lid_stress, u))
+                .map_or(f64::NAN, |h| lid / h);
+            out += &format!(
+                "{:<14} {:<34} {u:>6.2} {lid:>11.4e} {side:>11.4e} {ratio:>9.3}\n",
+                c.arrangement.name(),
+                c.variant
+            );
+        }
+    }
+    out
+}
+
+/// Writes `rigid_box.json` and `rigid_box.svg` into `dir`.
+pub fn write_report(report: &BoxReport, dir: &Path) -> Result<(), BoxError> {
+    std::fs::create_dir_all(dir).map_err(FileError::on("creating", dir))?;
+    let json = dir.join("rigid_box.json");
+    crate::verify::write_json(&json, report).map_err(FileError::on("writing", &json))?;
+    let mut panels = Vec::new();
+    for arrangement in [Arrangement::Single, Arrangement::Bcc] {
+        let curves = || {
+            report
+                .curves
+                .iter()
+                .filter(move |c| c.arrangement == arrangement)
+        };
+        let pts = |c: &Curve, y: &[f64]| {
+            c.displacement
+                .iter()
+                .copied()
+                .zip(y.iter().copied())
+                .collect()
+        };
+        for (what, lid) in [("lid", true), ("side walls", false)] {
+            panels.push(Panel {
+                title: format!("{}: {what}", arrangement.name()),
+                x_label: "lid displacement / R".into(),
+                y_label: format!("{what} stress (Pa)"),
+                series: curves()
+                    .map(|c| {
+                        let y = if lid { &c.lid_stress } else { &c.side_stress };
+                        Series::new(c.variant.clone(), pts(c, y), Mark::Line)
+                    })
+                    .collect(),
+                ..Panel::default()
+            });
+        }
+    }
+    write_svg(&dir.join("rigid_box.svg"), &panels)?;
+    Ok(())
+}

@@ -1,0 +1,267 @@
+//! The multi-contact closure in the native engine: against its closed form
+//! for a sphere squeezed between two plates, the lateral reach it gives a
+//! squeezed sphere, plain Hertz at zero prefactor, and its errors.
+
+use bpm::scene::{build_system, run_scene, validate, RunOptions, Scene, StageOutput};
+use serde_json::{json, Value};
+use std::f64::consts::PI;
+
+const RADIUS: f64 = 0.5;
+const E: f64 = 100.0;
+const NU: f64 = 0.3;
+const E_WALL: f64 = 1e6;
+
+fn material(e: f64) -> Value {
+    json!({"youngs_modulus": e, "poisson_ratio": NU, "restitution": 0.5,
+           "tangential_damping": 1.0, "sliding_friction": 0.0})
+}
+
+/// One sphere between a fixed floor (wall 0) and a plate (wall 1) closing
+/// at 2.5e-4 d/tau (slow enough for the contacts' damping force to stay
+/// below 0.1% of the elastic one), optionally touched at its sides by two fixed walls
+/// (walls 2 and 3) from the start.
+fn squeeze(multicontact: Option<Value>, side_walls: bool) -> StageOutput {
+    let wall = |axis: usize, side: &str, position: f64, velocity: f64| {
+        json!({"axis": axis, "side": side, "position": position, "velocity": velocity,
+               "material": material(E_WALL)})
+    };
+    let mut walls = vec![wall(2, "lo", 0.0, 0.0), wall(2, "hi", 1.0, -2.5e-4)];
+    if side_walls {
+        walls.push(wall(0, "lo", -RADIUS, 0.0));
+        walls.push(wall(0, "hi", RADIUS, 0.0));
+    }
+    let mut ff = json!({"granular": material(E)});
+    if let Some(m) = multicontact {
+        ff["multicontact"] = m;
+    }
+    let scene: Scene = serde_json::from_value(json!({
+        "model": "dem", "seed": 1,
+        "box": {"lo": [-1.0, -2.0, -0.5], "lengths": [2.0, 4.0, 2.0],
+                "periodic": [false, true, false]},
+        "particles": {"positions": [[0.0, 0.0, RADIUS]], "radius": [RADIUS]},
+        "force_field": ff,
+        "stages": [{"name": "squeeze", "steps": 40000, "dt": 0.01,
+                    "granular_walls": walls, "record": {"every": 1000}}]
+    }))
+    .unwrap();
+    validate(&scene).unwrap();
+    let mut sys = build_system(&scene, 1);
+    let (mut out, err) = run_scene(&mut sys, &scene, &RunOptions::quiet(1));
+    assert!(err.is_none(), "{err:?}");
+    out.remove(0)
+}
+
+fn column(stage: &StageOutput, name: &str) -> Vec<f64> {
+    let c = stage
+        .columns
+        .iter()
+        .position(|c| c.name == name)
+        .unwrap_or_else(|| panic!("no column {name}"));
+    stage.rows.iter().map(|r| r[c]).collect()
+}
+
+/// The quasi-static plate force at overlap `delta` per plate: with the
+/// closure, each plate's overlap grows by the other plate's displacement
+/// `c F`. The contact points, on the plates, are `d = 2 (R - delta)` apart
+/// on opposite sides, so `c = gamma (1 + nu) (3 - 2 nu) / (2 pi E d)` and
+/// `F = k (delta + c F)^(3/2)`. Iterated from the Hertz force, this climbs
+/// to the smaller of its two roots, the stable one (the larger is where the
+/// feedback's slope `3/2 k c (delta + c F)^(1/2)` exceeds 1).
+fn closed_form(delta: f64, gamma: f64) -> f64 {
+    let e_eff = 1.0 / ((1.0 - NU * NU) / E + (1.0 - NU * NU) / E_WALL);
+    let k = 4.0 / 3.0 * e_eff * RADIUS.sqrt();
+    let d = 2.0 * (RADIUS - delta);
+    let c = gamma * (1.0 + NU) * (3.0 - 2.0 * NU) / (2.0 * PI * E * d);
+    let mut f = 0.0;
+    for _ in 0..10_000 {
+        let next = k * (delta + c * f).powf(1.5);
+        if (next - f).abs() <= 1e-15 * next {
+            return next;
+        }
+        f = next;
+    }
+    panic!("no stable plate force at overlap {delta} with gamma {gamma}");
+}
+
+/// Recorded plate force (mean of floor and plate) against the closed form,
+/// at every row with overlap above 0.01 d; returns the largest relative
+/// deviation.
+fn worst_deviation(stage: &StageOutput, gamma: f64) -> f64 {
+    let floor = column(stage, "granular_wall0_force");
+    let plate = column(stage, "granular_wall1_force");
+    let top = column(stage, "granular_wall1_position");
+    let mut worst: f64 = 0.0;
+    for ((f0, f1), z) in floor.iter().zip(&plate).zip(&top) {
+        let delta = RADIUS - 0.5 * z;
+        if delta < 0.01 {
+            continue;
+        }
+        let expected = closed_form(delta, gamma);
+        worst = worst.max((0.5 * (f0 + f1) - expected).abs() / expected);
+    }
+    worst
+}
+
+#[test]
+fn a_sphere_between_plates_follows_the_closed_form_of_the_closure() {
+    for gamma in [0.82, 2.0] {
+        let stage = squeeze(Some(json!({"prefactor": gamma})), false);
+        let deviation = worst_deviation(&stage, gamma);
+        let from_hertz = worst_deviation(&stage, 0.0);
+        eprintln!(
+            "gamma {gamma}: {deviation:.2e} from the closed form, {from_hertz:.2e} from Hertz"
+        );
+        assert!(deviation < 2e-3, "{deviation}");
+        assert!(from_hertz > 0.05, "the closure must stiffen: {from_hertz}");
+    }
+    let hertz = squeeze(None, false);
+    let deviation = worst_deviation(&hertz, 0.0);
+    eprintln!("plain Hertz: {deviation:.2e} from Hertz");
+    assert!(deviation < 2e-3, "{deviation}");
+}
+
+#[test]
+fn a_squeezed_sphere_reaches_out_to_its_side_walls_only_with_the_closure() {
+    let hertz = squeeze(None, true);
+    for w in [2, 3] {
+        let side = column(&hertz, &format!("granular_wall{w}_force"));
+        assert!(side.iter().all(|&f| f == 0.0), "Hertz: {side:?}");
+    }
+    for mc in [
+        json!({"prefactor": 0.82}),
+        json!({"prefactor": 0.82, "max_penetration_ratio": 0.11}),
+    ] {
+        let stage = squeeze(Some(mc.clone()), true);
+        let plate = column(&stage, "granular_wall1_force");
+        let (left, right) = (
+            column(&stage, "granular_wall2_force"),
+            column(&stage, "granular_wall3_force"),
+        );
+        let last = plate.len() - 1;
+        eprintln!(
+            "{mc}: plate {:.4}, sides {:.4e} {:.4e}",
+            plate[last], left[last], right[last]
+        );
+        assert!(left[last] > 1e-3 * plate[last], "{mc}: {left:?}");
+        assert!(
+            (left[last] - right[last]).abs() < 1e-6 * left[last],
+            "{left:?} {right:?}"
+        );
+    }
+}
+
+#[test]
+fn a_zero_prefactor_is_plain_hertz() {
+    let mut scene = bpm::verify::dem_lattice(7, true);
+    scene.stages[0].steps = 400;
+    let mut with = scene.clone();
+    with.force_field.multicontact = Some(bpm::engine::MultiContact::standard(0.0));
+    let run = |s: &Scene| {
+        validate(s).unwrap();
+        let mut sys = build_system(s, 1);
+        let (_, err) = run_scene(&mut sys, s, &RunOptions::quiet(1));
+        assert!(err.is_none(), "{err:?}");
+        sys.particles.x
+    };
+    let (a, b) = (run(&scene), run(&with));
+    let worst = a
+        .iter()
+        .zip(&b)
+        .flat_map(|(p, q)| p.iter().zip(q).map(|(u, v)| (u - v).abs()))
+        .fold(0.0, f64::max);
+    // Only the summation order may differ (the closure's longer pair list).
+    assert!(worst < 1e-12, "{worst}");
+    // And a positive prefactor moves the spheres.
+    with.force_field.multicontact = Some(bpm::engine::MultiContact::standard(1.0));
+    let c = run(&with);
+    let moved = a
+        .iter()
+        .zip(&c)
+        .flat_map(|(p, q)| p.iter().zip(q).map(|(u, v)| (u - v).abs()))
+        .fold(0.0, f64::max);
+    assert!(moved > 1e-6, "{moved}");
+}
+
+#[test]
+fn corrections_beyond_the_reach_stop_the_run() {
+    let stage_err = {
+        let mut scene = bpm::verify::dem_lattice(7, false);
+        scene.stages[0].steps = 50;
+        scene.force_field.multicontact = Some(bpm::engine::MultiContact {
+            reach: 1e-3,
+            ..bpm::engine::MultiContact::standard(50.0)
+        });
+        validate(&scene).unwrap();
+        let mut sys = build_system(&scene, 1);
+        let (_, err) = run_scene(&mut sys, &scene, &RunOptions::quiet(1));
+        err.expect("the run must stop").to_string()
+    };
+    assert!(
+        stage_err.contains("beyond the closure's reach 0.001"),
+        "{stage_err}"
+    );
+}
+
+#[test]
+fn the_closure_is_refused_where_it_means_nothing() {
+    let mut scene = bpm::verify::dem_lattice(7, false);
+    scene.force_field.multicontact = Some(bpm::engine::MultiContact::standard(-1.0));
+    let err = validate(&scene).unwrap_err().to_string();
+    assert!(err.contains("multicontact.prefactor"), "{err}");
+    scene.force_field.multicontact = Some(bpm::engine::MultiContact {
+        reach: 0.0,
+        ..bpm::engine::MultiContact::standard(1.0)
+    });
+    let err = validate(&scene).unwrap_err().to_string();
+    assert!(err.contains("multicontact.reach"), "{err}");
+    let mut bonded = bpm::verify::dem_lattice(7, false);
+    bonded.model = bpm::scene::ModelKind::Bpm;
+    bonded.force_field = bpm::scene::ForceField::paper(0.0);
+    bonded.particles.angular_velocities = None;
+    bonded.force_field.multicontact = Some(bpm::engine::MultiContact::standard(1.0));
+    let err = validate(&bonded).unwrap_err().to_string();
+    assert!(err.contains("multicontact"), "{err}");
+}
+
+/// `bpm mc-box`'s single sphere under plain Hertz: the lid stress is
+/// Hertz's force at half the lid's travel per side over the box's face
+/// (d^2), and nothing reaches the side walls; the closures push on them.
+#[test]
+fn the_rigid_box_study_squeezes_a_single_sphere_as_hertz_says() {
+    use bpm::studies::mcdem::rigid_box::{run_box, Arrangement, BoxOptions};
+    let opts = BoxOptions {
+        max_displacement: 0.3,
+        records: 30,
+        ..BoxOptions::default()
+    };
+    let report = run_box(&opts, "test").unwrap();
+    let e = report.hydrogel.youngs_modulus;
+    let (nu, wall) = (report.hydrogel.poisson_ratio, opts.wall_modulus);
+    let e_eff = 1.0 / ((1.0 - nu * nu) / e + (1.0 - nu * nu) / wall);
+    let d = report.hydrogel.diameter;
+    let r = d / 2.0;
+    let single: Vec<_> = report
+        .curves
+        .iter()
+        .filter(|c| c.arrangement == Arrangement::Single)
+        .collect();
+    let hertz = single[0];
+    assert_eq!(hertz.variant, "Hertz");
+    let mut worst: f64 = 0.0;
+    for (u, s) in hertz.displacement.iter().zip(&hertz.lid_stress) {
+        if *u < 0.1 {
+            continue;
+        }
+        let delta = 0.5 * u * r;
+        let expected = 4.0 / 3.0 * e_eff * r.sqrt() * delta.powf(1.5) / (d * d);
+        worst = worst.max((s - expected).abs() / expected);
+    }
+    eprintln!("single sphere, Hertz: lid stress within {worst:.2e} of Hertz");
+    assert!(worst < 5e-3, "{worst}");
+    assert!(hertz.side_stress.iter().all(|&s| s == 0.0));
+    for closure in &single[1..] {
+        let last = closure.side_stress.len() - 1;
+        assert!(closure.side_stress[last] > 0.0, "{}", closure.variant);
+        assert!(closure.lid_stress[last] > 1.1 * hertz.lid_stress[last]);
+    }
+}
