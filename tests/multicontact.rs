@@ -248,7 +248,7 @@ fn the_rigid_box_study_squeezes_a_single_sphere_as_hertz_says() {
     let hertz = single[0];
     assert_eq!(hertz.variant, "Hertz");
     let mut worst: f64 = 0.0;
-    for (u, s) in hertz.displacement.iter().zip(&hertz.lid_stress) {
+    for (u, s) in hertz.displacement.iter().zip(&hertz.walls.lid_stress) {
         if *u < 0.1 {
             continue;
         }
@@ -258,10 +258,214 @@ fn the_rigid_box_study_squeezes_a_single_sphere_as_hertz_says() {
     }
     eprintln!("single sphere, Hertz: lid stress within {worst:.2e} of Hertz");
     assert!(worst < 5e-3, "{worst}");
-    assert!(hertz.side_stress.iter().all(|&s| s == 0.0));
+    assert!(hertz.walls.side_stress.iter().all(|&s| s == 0.0));
     for closure in &single[1..] {
-        let last = closure.side_stress.len() - 1;
-        assert!(closure.side_stress[last] > 0.0, "{}", closure.variant);
-        assert!(closure.lid_stress[last] > 1.1 * hertz.lid_stress[last]);
+        let last = closure.walls.side_stress.len() - 1;
+        assert!(closure.walls.side_stress[last] > 0.0, "{}", closure.variant);
+        assert!(closure.walls.lid_stress[last] > 1.1 * hertz.walls.lid_stress[last]);
     }
+}
+
+/// Two spheres stacked between a floor and a closing lid: each sphere is
+/// squeezed between two opposite contacts, a wall's and the pair's, whose
+/// points are `d_s = (R - delta_w) + (R - delta_p / 2)` apart. Each
+/// contact's overlap grows by `c F` per sphere, `c = gamma (1 + nu) (3 -
+/// 2 nu) / (2 pi E d_s)`, so `F = k_w (delta_w + c F)^(3/2)` and `F = k_p
+/// (delta_p + 2 c F)^(3/2)` with the lid at `4 R - 2 delta_w - delta_p`.
+/// A pair or wall contact point on the wrong side of its sphere breaks
+/// this.
+#[test]
+fn a_stack_of_two_spheres_follows_the_closed_form_of_the_closure() {
+    let gamma = 1.5;
+    let wall = |side: &str, position: f64, velocity: f64| {
+        json!({"axis": 2, "side": side, "position": position, "velocity": velocity,
+               "material": material(E_WALL)})
+    };
+    let scene: Scene = serde_json::from_value(json!({
+        "model": "dem", "seed": 1,
+        "box": {"lo": [-2.0, -2.0, -0.5], "lengths": [4.0, 4.0, 3.0],
+                "periodic": [true, true, false]},
+        "particles": {"positions": [[0.0, 0.0, RADIUS], [0.0, 0.0, 3.0 * RADIUS]],
+                      "radius": [RADIUS, RADIUS]},
+        "force_field": {"granular": material(E), "multicontact": {"prefactor": gamma}},
+        "stages": [{"name": "squeeze", "steps": 60000, "dt": 0.01,
+                    "granular_walls": [wall("lo", 0.0, 0.0), wall("hi", 4.0 * RADIUS, -2.5e-4)],
+                    "record": {"every": 2000}}]
+    }))
+    .unwrap();
+    validate(&scene).unwrap();
+    let mut sys = build_system(&scene, 1);
+    let (mut out, err) = run_scene(&mut sys, &scene, &RunOptions::quiet(1));
+    assert!(err.is_none(), "{err:?}");
+    let stage = out.remove(0);
+    let e_wall = 1.0 / ((1.0 - NU * NU) / E + (1.0 - NU * NU) / E_WALL);
+    let e_pair = 1.0 / (2.0 * (1.0 - NU * NU) / E);
+    let k_wall = 4.0 / 3.0 * e_wall * RADIUS.sqrt();
+    let k_pair = 4.0 / 3.0 * e_pair * (0.5 * RADIUS).sqrt();
+    let prefactor = gamma * (1.0 + NU) * (3.0 - 2.0 * NU) / (2.0 * PI * E);
+    // The gap at force F: the overlaps follow from F by a fixed point in
+    // the points' distance.
+    let gap = |f: f64| {
+        let (mut dw, mut dp) = (0.0, 0.0);
+        for _ in 0..100 {
+            let c = prefactor / ((RADIUS - dw) + (RADIUS - 0.5 * dp));
+            dw = (f / k_wall).powf(2.0 / 3.0) - c * f;
+            dp = (f / k_pair).powf(2.0 / 3.0) - 2.0 * c * f;
+        }
+        4.0 * RADIUS - 2.0 * dw - dp
+    };
+    let (floor, lid) = (
+        column(&stage, "granular_wall0_force"),
+        column(&stage, "granular_wall1_force"),
+    );
+    let top = column(&stage, "granular_wall1_position");
+    let mut worst: f64 = 0.0;
+    for ((f0, f1), z) in floor.iter().zip(&lid).zip(&top) {
+        if 4.0 * RADIUS - z < 0.04 {
+            continue;
+        }
+        // Bisection for the force that gives this gap (it falls with F).
+        let (mut lo, mut hi) = (0.0, 50.0);
+        for _ in 0..100 {
+            let mid = 0.5 * (lo + hi);
+            if gap(mid) > *z {
+                lo = mid;
+            } else {
+                hi = mid;
+            }
+        }
+        let expected = 0.5 * (lo + hi);
+        worst = worst.max((0.5 * (f0 + f1) - expected).abs() / expected);
+    }
+    let last = lid.len() - 1;
+    let hertz_gap =
+        |f: f64| 4.0 * RADIUS - 2.0 * (f / k_wall).powf(2.0 / 3.0) - (f / k_pair).powf(2.0 / 3.0);
+    eprintln!(
+        "stack: {worst:.2e} from the closed form; lid force {:.4} where Hertz gives the gap {:.5} (lid at {:.5})",
+        lid[last],
+        hertz_gap(lid[last]),
+        top[last]
+    );
+    assert!(worst < 3e-3, "{worst}");
+    // Hertz needs a narrower gap for the same force.
+    assert!(
+        top[last] - hertz_gap(lid[last]) > 0.01,
+        "the closure must stiffen the stack"
+    );
+}
+
+/// The advanced closure with a zero ratio and the magnitude test switches
+/// every term off, either way: plain Hertz.
+#[test]
+fn a_zero_ratio_on_magnitudes_is_plain_hertz() {
+    let base = squeeze(None, true);
+    for switch in ["whole_contact", "per_term"] {
+        let mc = json!({"prefactor": 1.0, "max_penetration_ratio": 0.0,
+                        "switch": switch, "test": "magnitude"});
+        let stage = squeeze(Some(mc), true);
+        for w in 0..4 {
+            let name = format!("granular_wall{w}_force");
+            let (a, b) = (column(&base, &name), column(&stage, &name));
+            let worst = a
+                .iter()
+                .zip(&b)
+                .map(|(x, y)| (x - y).abs())
+                .fold(0.0, f64::max);
+            assert!(worst < 1e-12, "{switch}, wall {w}: {worst}");
+        }
+    }
+}
+
+/// Between plates, the plate term `c F` is the only one each plate
+/// receives: while it stays below `MPR R` the advanced closure is the
+/// standard one, and where even plain Hertz's force gives a term beyond it,
+/// the plates fall back to Hertz.
+#[test]
+fn the_advanced_closure_falls_back_to_hertz_beyond_its_ratio() {
+    let (gamma, mpr) = (2.0, 0.004);
+    let stage = squeeze(
+        Some(json!({"prefactor": gamma, "max_penetration_ratio": mpr})),
+        false,
+    );
+    let c = |delta: f64| {
+        gamma * (1.0 + NU) * (3.0 - 2.0 * NU) / (2.0 * PI * E * 2.0 * (RADIUS - delta))
+    };
+    let floor = column(&stage, "granular_wall0_force");
+    let plate = column(&stage, "granular_wall1_force");
+    let top = column(&stage, "granular_wall1_position");
+    let (mut standard_rows, mut hertz_rows) = (0, 0);
+    for ((f0, f1), z) in floor.iter().zip(&plate).zip(&top) {
+        let delta = RADIUS - 0.5 * z;
+        if delta < 0.01 {
+            continue;
+        }
+        let f = 0.5 * (f0 + f1);
+        let (standard, hertz) = (closed_form(delta, gamma), closed_form(delta, 0.0));
+        if c(delta) * standard < mpr * RADIUS {
+            standard_rows += 1;
+            assert!(
+                (f - standard).abs() < 2e-3 * standard,
+                "{delta}: {f} vs {standard}"
+            );
+        } else if c(delta) * hertz > mpr * RADIUS {
+            hertz_rows += 1;
+            assert!((f - hertz).abs() < 2e-3 * hertz, "{delta}: {f} vs {hertz}");
+        }
+    }
+    eprintln!("{standard_rows} rows as the standard closure, {hertz_rows} as Hertz");
+    assert!(standard_rows >= 3 && hertz_rows >= 3);
+}
+
+/// `bpm mc-compress` at a small scale: the bed is built without overlaps
+/// and repeatably, and the closures stiffen the bed at the top of the
+/// compression.
+#[test]
+fn a_small_bed_compresses_and_the_closures_stiffen_it() {
+    use bpm::studies::mcdem::compression::{build_bed, run_compression, CompressionOptions};
+    let opts = CompressionOptions {
+        spheres: 60,
+        box_size: [0.09, 0.09, 0.09],
+        lid_speed: 0.5,
+        max_fraction: 0.75,
+        cycles: 1,
+        records: 20,
+        ..CompressionOptions::default()
+    };
+    let bed = build_bed(&opts).unwrap();
+    let n = bed.radii.len();
+    let mut worst: f64 = 0.0;
+    for i in 0..n {
+        for j in i + 1..n {
+            let r = (0..3)
+                .map(|k| (bed.centres[i][k] - bed.centres[j][k]).powi(2))
+                .sum::<f64>()
+                .sqrt();
+            worst = worst.max(bed.radii[i] + bed.radii[j] - r);
+        }
+        for k in 0..3 {
+            let top = if k == 2 {
+                bed.start_height
+            } else {
+                bed.edges[k]
+            };
+            assert!(bed.centres[i][k] >= bed.radii[i] - 1e-12);
+            assert!(bed.centres[i][k] <= top - bed.radii[i] + 1e-12);
+        }
+    }
+    assert!(worst <= 1e-6, "overlap {worst}");
+    let again = build_bed(&opts).unwrap();
+    assert_eq!(bed.centres, again.centres, "the seed fixes the bed");
+    let (report, _) = run_compression(&opts, "test", false).unwrap();
+    let at_top = |run: usize| {
+        let pass = &report.runs[run].passes[0];
+        let last = pass.fraction.len() - 1;
+        assert!((pass.fraction[last] - 0.75).abs() < 1e-9);
+        pass.walls.lid_stress[last]
+    };
+    let (hertz, standard, advanced) = (at_top(0), at_top(1), at_top(2));
+    eprintln!(
+        "lid stress at 0.75: Hertz {hertz:.1} Pa, standard {standard:.1}, advanced {advanced:.1}"
+    );
+    assert!(hertz > 0.0);
+    assert!(standard > 1.1 * hertz && advanced > 1.1 * hertz);
 }

@@ -15,7 +15,7 @@ use bpm::studies::hertz::{
     run_hertz, EngineAgreement, GrainSource, HertzOptions, Moduli, SqueezeEngine,
 };
 use bpm::studies::hertz_sweep::{run_hertz_sweep, SweepOptions};
-use bpm::studies::mcdem::rigid_box;
+use bpm::studies::mcdem::{compression, rigid_box};
 use bpm::studies::{accuracy, calibration, compaction, large_strain, stability, upstream};
 use clap::{Parser, Subcommand, ValueEnum};
 use std::io::IsTerminal;
@@ -683,16 +683,83 @@ enum Command {
         /// Recorded states per run.
         #[arg(long, default_value_t = 100)]
         records: u64,
-        /// Prefactor of the standard closure.
-        #[arg(long, default_value_t = 0.82)]
-        gamma: f64,
-        /// Prefactor of the advanced closure.
-        #[arg(long, default_value_t = 0.81)]
-        gamma_advanced: f64,
-        /// Maximum penetration ratio of the advanced closure.
-        #[arg(long, default_value_t = 0.11)]
-        mpr: f64,
+        #[command(flatten)]
+        closures: ClosureArgs,
     },
+    /// Multi-contact closures in a uniaxial compression (docs/protocols.md
+    /// "Compression of a bed"): 514 hydrogel spheres in a box, the lid
+    /// closing at constant speed to volume fraction 0.85 and opening
+    /// again, twice, with plain Hertz, the standard and the advanced
+    /// closure; lid stress against volume fraction. Writes
+    /// DIR/compression.json, DIR/compression.svg and DIR/scene.json.
+    McCompress {
+        /// Output folder.
+        #[arg(short, long, default_value = "results/mcdem/compression")]
+        output: PathBuf,
+        /// Number of spheres.
+        #[arg(long, default_value_t = 514)]
+        spheres: usize,
+        /// Mean sphere diameter (m).
+        #[arg(long, default_value_t = 2.149e-2)]
+        mean_diameter: f64,
+        /// Standard deviation of the diameters (m).
+        #[arg(long, default_value_t = 0.12e-2)]
+        diameter_sd: f64,
+        /// Box edges x,y,z (m).
+        #[arg(
+            long = "box",
+            value_delimiter = ',',
+            default_value = "0.165,0.166,0.168"
+        )]
+        box_size: Vec<f64>,
+        /// Lid speed (m/s).
+        #[arg(long, default_value_t = 0.1)]
+        lid_speed: f64,
+        /// Volume fraction at which the lid turns back.
+        #[arg(long, default_value_t = 0.85)]
+        max_fraction: f64,
+        /// Compression and decompression cycles.
+        #[arg(long, default_value_t = 2)]
+        cycles: usize,
+        /// Young's modulus of the box's walls (Pa).
+        #[arg(long, default_value_t = 5e7)]
+        wall_modulus: f64,
+        /// Time step (tau = sqrt(m / (E d)), d the mean diameter).
+        #[arg(long, default_value_t = 0.05)]
+        dt: f64,
+        /// Recorded states per pass of the lid.
+        #[arg(long, default_value_t = 200)]
+        records: u64,
+        /// Seed of the bed.
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+        #[command(flatten)]
+        closures: ClosureArgs,
+    },
+}
+
+/// The closures a multi-contact study compares with plain Hertz.
+#[derive(Clone, Copy, Debug, clap::Args)]
+struct ClosureArgs {
+    /// Prefactor of the standard closure.
+    #[arg(long, default_value_t = 0.82)]
+    gamma: f64,
+    /// Prefactor of the advanced closure.
+    #[arg(long, default_value_t = 0.81)]
+    gamma_advanced: f64,
+    /// Maximum penetration ratio of the advanced closure.
+    #[arg(long, default_value_t = 0.11)]
+    mpr: f64,
+}
+
+impl From<ClosureArgs> for bpm::studies::mcdem::Closures {
+    fn from(a: ClosureArgs) -> Self {
+        Self {
+            gamma: a.gamma,
+            gamma_advanced: a.gamma_advanced,
+            mpr: a.mpr,
+        }
+    }
 }
 
 #[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
@@ -1622,9 +1689,7 @@ fn real_main() -> Result<()> {
             max_displacement,
             dt,
             records,
-            gamma,
-            gamma_advanced,
-            mpr,
+            closures,
         } => {
             let opts = rigid_box::BoxOptions {
                 diameter,
@@ -1633,15 +1698,55 @@ fn real_main() -> Result<()> {
                 max_displacement,
                 dt,
                 records,
-                gamma,
-                gamma_advanced,
-                mpr,
+                closures: closures.into(),
             };
             let report = rigid_box::run_box(&opts, &command())?;
             rigid_box::write_report(&report, &output)?;
             println!("{}", rigid_box::table(&report));
             println!(
                 "wrote {}/rigid_box.json and rigid_box.svg",
+                output.display()
+            );
+        }
+        Command::McCompress {
+            output,
+            spheres,
+            mean_diameter,
+            diameter_sd,
+            box_size,
+            lid_speed,
+            max_fraction,
+            cycles,
+            wall_modulus,
+            dt,
+            records,
+            seed,
+            closures,
+        } => {
+            let [bx, by, bz] = box_size[..] else {
+                bail!("--box takes three lengths x,y,z (got {})", box_size.len());
+            };
+            let opts = compression::CompressionOptions {
+                spheres,
+                mean_diameter,
+                diameter_sd,
+                box_size: [bx, by, bz],
+                lid_speed,
+                max_fraction,
+                cycles,
+                wall_modulus,
+                dt,
+                records,
+                seed,
+                closures: closures.into(),
+            };
+            opts.validate()?;
+            let progress = std::io::stderr().is_terminal();
+            let (report, scene) = compression::run_compression(&opts, &command(), progress)?;
+            compression::write_report(&report, &scene, &output)?;
+            println!("{}", compression::table(&report));
+            println!(
+                "wrote {}/compression.json, compression.svg and scene.json",
                 output.display()
             );
         }

@@ -112,6 +112,17 @@ pub enum EngineError {
         /// The closure's reach.
         reach: f64,
     },
+    /// The multi-contact closure moved a sphere's surface onto or past its
+    /// centre: the half-space estimate means nothing there.
+    #[error("the multi-contact correction of sphere {sphere} is {ratio:.3} of its radius at step {step}: its surface moved onto or past its centre (the standard closure's feedback runs away at large overlaps: use the advanced closure, a smaller prefactor or less compression)")]
+    ClosureCollapsed {
+        /// Step of the force evaluation that found it.
+        step: u64,
+        /// The sphere.
+        sphere: usize,
+        /// The correction over the radius.
+        ratio: f64,
+    },
     /// The stage asks the model for something it does not have.
     #[error("the particle model does not support {what}")]
     Unsupported {

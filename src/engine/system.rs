@@ -294,6 +294,11 @@ impl System {
             closure,
             ..
         } = output;
+        debug_assert_eq!(
+            granular_walls.len(),
+            drivers.granular_walls.len(),
+            "the model touches the stage's granular walls"
+        );
         let _t = self.timers.start(Stage::External);
         let mut report = StepReport {
             interactions,
@@ -457,6 +462,13 @@ impl System {
                 step: self.step,
                 wall,
                 particle,
+            });
+        }
+        if let Some((sphere, ratio)) = self.report.closure.and_then(|c| c.collapsed) {
+            return Err(EngineError::ClosureCollapsed {
+                step: self.step,
+                sphere,
+                ratio,
             });
         }
         if let Some(beyond) = self.report.closure.and_then(|c| c.beyond_reach) {

@@ -322,7 +322,8 @@ struct Contact {
     meff: f64,
     /// Relative velocity of the centres, `v_i - v_j`.
     vr: [f64; 3],
-    /// `R_i omega_i + R_j omega_j`: the surfaces' spin at the contact.
+    /// `R_i omega_i + R_j omega_j` (with each surface's moved radius):
+    /// the surfaces' spin at the contact.
     wr: [f64; 3],
     /// Relative angular velocity, `omega_i - omega_j`.
     relrot: [f64; 3],
@@ -332,9 +333,10 @@ struct Contact {
 }
 
 /// The contact force of touching spheres `i` and `j` at separation
-/// `del = x_i - x_j` (`|del| < R_i + R_j`), updating `history` over the
+/// `del = x_i - x_j` (`|del| < R_i + R_j`), advancing `history` over the
 /// step `dt` when `update` (a force evaluation that is not a step, such as
-/// a stage's set-up, leaves it alone).
+/// a stage's set-up, does not advance it, though a slider at its cap still
+/// rewrites it). Either way the history records the normal force.
 #[inline(always)]
 pub fn granular_contact(
     c: &GranularCoeffs,
@@ -390,8 +392,8 @@ pub fn corrected_granular_contact(
             si.omega[1] - sj.omega[1],
             si.omega[2] - sj.omega[2],
         ],
-        // The tangential force acts at the contact point, R - delta/2 from
-        // either centre.
+        // The tangential force acts at the contact point, R + Delta -
+        // delta/2 from either centre.
         arm_i: surface_i - 0.5 * delta,
         arm_j: surface_j - 0.5 * delta,
     };
@@ -419,8 +421,9 @@ pub struct WallTouch {
 ///
 /// The wall is a body of infinite radius and mass: `R_eff = R`, `m_eff =
 /// m`, and it does not spin. The tangential force acts at the full radius
-/// `R` (not at the contact point, `R - delta` from the centre), as the
-/// reference LAMMPS implementation has it; the two differ by `delta / R`.
+/// `R + correction` (not at the contact point, `R + correction - delta`
+/// from the centre), as the reference LAMMPS implementation has it; the
+/// two differ by `delta / R`.
 #[inline(always)]
 pub fn granular_wall_contact(
     c: &GranularCoeffs,

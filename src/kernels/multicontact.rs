@@ -175,15 +175,17 @@ impl ContactPoint {
 /// The radius correction `Delta_c` of each of one sphere's `contacts`
 /// (radius `radius`), written to `corrections` (same length): the
 /// displacements from every other contact that carried a force, combined
-/// by `closure`.
+/// by `closure`. Returns how many the advanced closure switched off:
+/// contacts (whole-contact switch) or terms (per-term switch).
 pub fn surface_corrections(
     half_space: &HalfSpace,
     closure: &Closure,
     radius: f64,
     contacts: &[ContactPoint],
     corrections: &mut [f64],
-) {
+) -> usize {
     assert_eq!(contacts.len(), corrections.len());
+    let mut switched_off = 0;
     for (c, out) in contacts.iter().zip(corrections.iter_mut()) {
         let terms = contacts
             .iter()
@@ -202,21 +204,29 @@ pub fn surface_corrections(
                     MprTest::Magnitude => t.abs() > limit,
                 };
                 let mut sum = 0.0;
-                let mut switched = false;
+                let mut dropped = 0;
                 for t in terms {
                     if beyond(t) {
-                        switched = true;
+                        dropped += 1;
                     } else {
                         sum += t;
                     }
                 }
-                match (switch, switched) {
-                    (MprSwitch::WholeContact, true) => 0.0,
-                    _ => sum,
+                match switch {
+                    MprSwitch::WholeContact if dropped > 0 => {
+                        switched_off += 1;
+                        0.0
+                    }
+                    MprSwitch::WholeContact => sum,
+                    MprSwitch::PerTerm => {
+                        switched_off += dropped;
+                        sum
+                    }
                 }
             }
         };
     }
+    switched_off
 }
 
 #[cfg(test)]
@@ -232,9 +242,18 @@ mod tests {
     }
 
     fn corrections(hs: &HalfSpace, closure: &Closure, radius: f64, c: &[ContactPoint]) -> Vec<f64> {
+        corrections_and_count(hs, closure, radius, c).0
+    }
+
+    fn corrections_and_count(
+        hs: &HalfSpace,
+        closure: &Closure,
+        radius: f64,
+        c: &[ContactPoint],
+    ) -> (Vec<f64>, usize) {
         let mut out = vec![f64::NAN; c.len()];
-        surface_corrections(hs, closure, radius, c, &mut out);
-        out
+        let count = surface_corrections(hs, closure, radius, c, &mut out);
+        (out, count)
     }
 
     #[test]
@@ -388,7 +407,7 @@ mod tests {
         assert!((standard[0] - sum).abs() < 1e-15);
         let mpr = 0.5 * large / r;
         let advanced = |switch, test| {
-            corrections(
+            corrections_and_count(
                 &hs,
                 &Closure::Advanced {
                     max_penetration_ratio: mpr,
@@ -400,9 +419,13 @@ mod tests {
             )
         };
         let whole = advanced(MprSwitch::WholeContact, MprTest::Signed);
-        assert_eq!(whole[0], 0.0, "the pole falls back to Hertz");
+        assert_eq!(whole.0[0], 0.0, "the pole falls back to Hertz");
+        assert_eq!(whole.0[1], 0.0, "and so does the other pole");
+        assert_eq!(whole.0[2], standard[2], "the equator keeps its terms");
+        assert_eq!(whole.1, 2, "two contacts switched off");
         let per_term = advanced(MprSwitch::PerTerm, MprTest::Signed);
-        assert!((per_term[0] - small.iter().sum::<f64>()).abs() < 1e-15);
+        assert!((per_term.0[0] - small.iter().sum::<f64>()).abs() < 1e-15);
+        assert_eq!(per_term.1, 2, "one term at each pole");
         // Below every term, the limit leaves the standard closure.
         let loose = corrections(
             &hs,

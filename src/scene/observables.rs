@@ -45,6 +45,11 @@ pub enum Quantity {
     GranularWallForce(usize),
     /// Position of granular wall `w` (d).
     GranularWallPosition(usize),
+    /// The multi-contact closure's largest correction over its sphere's
+    /// radius.
+    LargestCorrection,
+    /// Contacts (or terms) the advanced closure switched off.
+    SwitchedOff,
 }
 
 /// One recorded column.
@@ -163,6 +168,21 @@ pub fn stage_columns(terms: &[EnergyTerm], rotational: bool, stage: &StageSpec) 
     c
 }
 
+/// The columns a stage adds when its spheres have the multi-contact
+/// closure (native engine only).
+pub fn closure_columns() -> Vec<Column> {
+    let col = |name: &str, quantity| Column {
+        name: name.into(),
+        quantity,
+        observable: "multi-contact corrections".into(),
+        lammps: None,
+    };
+    vec![
+        col("mc_largest_correction", Quantity::LargestCorrection),
+        col("mc_switched_off", Quantity::SwitchedOff),
+    ]
+}
+
 /// The declaration of a column every bonded-particle stage records (box,
 /// stress, pressure, energies, step, time), by name.
 pub fn standard_column(name: &str) -> Option<Column> {
@@ -198,6 +218,8 @@ impl Column {
             Quantity::SphereWallForce => r.sphere_wall_force,
             Quantity::GranularWallForce(w) => r.granular_wall_forces[w],
             Quantity::GranularWallPosition(w) => r.granular_wall_positions[w],
+            Quantity::LargestCorrection => r.closure.map_or(0.0, |c| c.largest),
+            Quantity::SwitchedOff => r.closure.map_or(0.0, |c| c.switched_off as f64),
         }
     }
 

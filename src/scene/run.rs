@@ -1,7 +1,7 @@
 //! Runs a scene's stages on the native engine and records observables.
 
 use super::model::{Scene, StageSpec, VelocityInit};
-use super::observables::{column_names, native_row, stage_columns, Column};
+use super::observables::{closure_columns, column_names, native_row, stage_columns, Column};
 use super::trajectory::{DumpWriter, Frame, ThermoWriter, TrajectoryError};
 use crate::engine::{
     ActiveGranularWall, ActiveTether, BpmModel, DemModel, EngineError, Stage, StageDrivers, System,
@@ -327,7 +327,13 @@ pub fn run_stage(
     };
     let stage_box = sys.simbox.clone();
     sys.setup(&drivers);
-    let columns = stage_columns(sys.model.energy_terms(), sys.model.rotational(), spec);
+    let mut columns = stage_columns(sys.model.energy_terms(), sys.model.rotational(), spec);
+    if sys
+        .model_as::<DemModel>()
+        .is_some_and(|m| m.multicontact().is_some())
+    {
+        columns.extend(closure_columns());
+    }
     if let Some(t) = out_files.thermo() {
         t.begin_stage(index, &spec.name, &column_names(&columns))?;
     }

@@ -2,7 +2,9 @@
 
 use super::model::{ForceField, Mass, ModelKind, Scene, StageSpec, SCENE_VERSION};
 use crate::engine::{MultiContact, SimBox};
-use crate::kernels::{GranularMaterial, Separation, SpringDashpotSlider, Twisting};
+use crate::kernels::{
+    GranularMaterial, MprSwitch, MprTest, Separation, SpringDashpotSlider, Twisting,
+};
 
 /// Why a scene could not be used.
 #[derive(Debug, thiserror::Error)]
@@ -118,8 +120,17 @@ fn check_granular(prefix: &str, m: &GranularMaterial) -> Result<(), SceneError> 
 
 fn check_multicontact(prefix: &str, m: &MultiContact) -> Result<(), SceneError> {
     non_negative(&format!("{prefix}.prefactor"), m.prefactor)?;
-    if let Some(mpr) = m.max_penetration_ratio {
-        non_negative(&format!("{prefix}.max_penetration_ratio"), mpr)?;
+    match m.max_penetration_ratio {
+        Some(mpr) => {
+            non_negative(&format!("{prefix}.max_penetration_ratio"), mpr)?;
+        }
+        None if m.switch != MprSwitch::default() || m.test != MprTest::default() => {
+            return Err(invalid(
+                prefix,
+                "`switch` and `test` belong to the advanced closure: give `max_penetration_ratio` too",
+            ))
+        }
+        None => {}
     }
     positive(&format!("{prefix}.reach"), m.reach)?;
     Ok(())

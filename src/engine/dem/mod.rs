@@ -2,10 +2,13 @@
 //! grain, Hertz-Mindlin contacts with sliding, rolling and twisting
 //! friction (`kernels::granular_contact`), integrated with rotation.
 //!
-//! The model owns the contact coefficients and the per-contact history
-//! ([`ContactStore`]). LAMMPS's `pair_style granular` computes no energy,
-//! so neither does this model: its recorded observables are the stress
-//! (the virial of the contact forces) and the kinetic energies.
+//! The model owns the contact coefficients, the per-contact history of
+//! pairs ([`ContactStore`]) and of the stage's flat granular walls, which it
+//! applies too, and the optional multi-contact closure, a pass before the
+//! contact forces that corrects every contact's overlap ([`ClosurePass`]).
+//! LAMMPS's `pair_style granular` computes no energy, so neither does this
+//! model: its recorded observables are the stress (the virial of the
+//! contact forces) and the kinetic energies.
 
 mod contacts;
 mod multicontact;
@@ -29,7 +32,8 @@ use crate::kernels::{
 pub struct DemModel {
     material: GranularMaterial,
     coeffs: GranularCoeffs,
-    /// Largest sphere radius: contacts reach `2 max_radius`.
+    /// Largest sphere radius: contacts reach `2 max_radius`, and with the
+    /// closure `2 max_radius (1 + reach)`.
     max_radius: f64,
     contacts: ContactStore,
     /// Per granular wall of the stage, one contact history per sphere.
@@ -96,7 +100,7 @@ impl DemModel {
         let omega = input.omega.unwrap_or(&[]);
         let (x, v, radius, mass) = (input.x, input.v, input.radius, input.mass);
         let list = input.neighbours;
-        let corrections = self.closure.as_ref().map(|c| &c.pair[..]);
+        let corrections = self.closure.as_ref().map(|c| c.pair_corrections());
         let (dt, update) = match input.step_dt {
             Some(dt) => (dt, true),
             None => (0.0, false),
@@ -117,7 +121,9 @@ impl DemModel {
                 let moved = corrections.map_or([0.0; 2], |c| c[k]);
                 let radsum = (si.radius + moved[0]) + (radius[j] + moved[1]);
                 let history = &mut self.contacts.history[k];
-                if rsq >= radsum * radsum {
+                // A surface moved past its centre (radsum <= 0) is caught
+                // by the closure's report; it is no contact here.
+                if radsum <= 0.0 || rsq >= radsum * radsum {
                     *history = Default::default();
                     continue;
                 }
@@ -209,18 +215,18 @@ impl ParticleModel for DemModel {
                 walls,
                 &self.wall_histories,
             );
-            out.closure = Some(closure.report);
+            out.closure = Some(*closure.report());
         }
         let mut tally = ModelTally::default();
         tally.terms[0] = self.forces(&sep, input, out.f, out.torque.as_deref_mut());
-        let corrections = self.closure.as_ref().map(|c| &c.wall[..]);
         for (w, (wall, history)) in walls.iter().zip(&mut self.wall_histories).enumerate() {
+            let corrections = self.closure.as_ref().map(|c| c.wall_corrections(w));
             out.granular_walls.push(wall.apply(
                 input,
                 out.f,
                 out.torque.as_deref_mut(),
                 history,
-                corrections.map(|c| &c[w][..]),
+                corrections,
             ));
         }
         tally

@@ -20,7 +20,7 @@ use super::super::simbox::MinimumImage;
 use super::wall::ActiveGranularWall;
 use crate::kernels::{
     surface_corrections, Closure, ContactHistory, ContactPoint, GranularMaterial, HalfSpace,
-    MprSwitch, MprTest,
+    MprSwitch, MprTest, POINT_FLOOR,
 };
 use serde::{Deserialize, Serialize};
 
@@ -91,10 +91,10 @@ impl MultiContact {
 /// Where a contact's correction goes.
 #[derive(Clone, Copy, Debug)]
 enum Side {
-    /// Pair-list entry, side 0 (the row's sphere) or 1 (its neighbour).
-    Pair(u32, u8),
-    /// Wall, sphere.
-    Wall(u32, u32),
+    /// A pair-list entry: `side` 0 is the row's sphere, 1 its neighbour.
+    Pair { entry: u32, side: u8 },
+    /// A wall (the sphere is the entry's).
+    Wall(u32),
 }
 
 /// A contact of one sphere, before grouping by sphere.
@@ -105,17 +105,25 @@ struct Entry {
     point: ContactPoint,
 }
 
-/// The largest corrections of one pass, and the first contact beyond the
-/// closure's reach.
+/// What one pass found: the extreme corrections, how many the advanced
+/// closure switched off, and the first contact where the closure stops
+/// meaning anything.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct ClosureReport {
     /// Largest correction over its sphere's radius (0 if none is positive).
     pub largest: f64,
     /// Most negative correction over its sphere's radius (0 if none is).
     pub smallest: f64,
+    /// Contacts (whole-contact switch) or terms (per-term switch) the
+    /// advanced closure switched off.
+    pub switched_off: usize,
     /// The first contact whose corrections reach beyond `reach` of
-    /// touching: a pair further apart might then touch too, unseen.
+    /// touching. A pair further apart, which receives no correction,
+    /// might then touch if it did: a warning sign, not a proof.
     pub beyond_reach: Option<BeyondReach>,
+    /// `(sphere, correction / radius)`: the first correction that moves a
+    /// surface onto or past its sphere's centre.
+    pub collapsed: Option<(usize, f64)>,
 }
 
 /// A contact whose corrections exceed the closure's reach.
@@ -144,11 +152,11 @@ pub struct ClosurePass {
     points: Vec<ContactPoint>,
     deltas: Vec<f64>,
     /// Per pair-list entry, the corrections of its two sides.
-    pub pair: Vec<[f64; 2]>,
+    pair: Vec<[f64; 2]>,
     /// Per wall, per sphere, the sphere's correction at the wall.
-    pub wall: Vec<Vec<f64>>,
+    wall: Vec<Vec<f64>>,
     /// What the last pass found.
-    pub report: ClosureReport,
+    report: ClosureReport,
 }
 
 impl ClosurePass {
@@ -178,6 +186,22 @@ impl ClosurePass {
         &self.settings
     }
 
+    /// Per pair-list entry, the corrections of its two sides (row sphere,
+    /// neighbour), from the last pass.
+    pub fn pair_corrections(&self) -> &[[f64; 2]] {
+        &self.pair
+    }
+
+    /// Per sphere, its correction at wall `w`, from the last pass.
+    pub fn wall_corrections(&self, w: usize) -> &[f64] {
+        &self.wall[w]
+    }
+
+    /// What the last pass found.
+    pub fn report(&self) -> &ClosureReport {
+        &self.report
+    }
+
     /// Computes every correction for the state in `input` from the normal
     /// forces stored in the pair and wall histories.
     pub fn update(
@@ -190,20 +214,21 @@ impl ClosurePass {
     ) {
         let (x, radius) = (input.x, input.radius);
         let n = x.len();
-        let reach = 1.0 + self.settings.reach;
-        self.collect(sep, input.neighbours, x, radius, pair_history, reach);
+        let reach_factor = 1.0 + self.settings.reach;
+        self.collect(sep, input.neighbours, x, radius, pair_history, reach_factor);
         for (w, (wall, history)) in walls.iter().zip(wall_history).enumerate() {
             let (axis, sign, plane) = wall.plane(input.elapsed);
             for i in 0..n {
                 let distance = sign * (x[i][axis] - plane);
-                if distance <= 0.0 || distance >= reach * radius[i] {
+                if distance <= 0.0 || distance >= reach_factor * radius[i] {
                     continue;
                 }
+                // On the wall's plane: a rigid wall does not give way.
                 let mut point = [0.0; 3];
                 point[axis] = -sign * distance;
                 self.entries.push(Entry {
                     sphere: i as u32,
-                    side: Side::Wall(w as u32, i as u32),
+                    side: Side::Wall(w as u32),
                     point: ContactPoint::new(point, history[i].normal_force, radius[i]),
                 });
             }
@@ -217,12 +242,15 @@ impl ClosurePass {
             w.clear();
             w.resize(n, 0.0);
         }
+        let mut switched_off = 0;
         for i in 0..n {
             let range = self.offsets[i]..self.offsets[i + 1];
-            if range.is_empty() {
+            // A sphere with one contact, or none that pressed, has nothing
+            // to correct.
+            if range.len() < 2 || self.points[range.clone()].iter().all(|p| p.force == 0.0) {
                 continue;
             }
-            surface_corrections(
+            switched_off += surface_corrections(
                 &self.half_space,
                 &self.closure,
                 radius[i],
@@ -231,12 +259,13 @@ impl ClosurePass {
             );
             for (e, &delta) in self.grouped[range.clone()].iter().zip(&self.deltas[range]) {
                 match e.side {
-                    Side::Pair(k, s) => self.pair[k as usize][s as usize] = delta,
-                    Side::Wall(w, i) => self.wall[w as usize][i as usize] = delta,
+                    Side::Pair { entry, side } => self.pair[entry as usize][side as usize] = delta,
+                    Side::Wall(w) => self.wall[w as usize][e.sphere as usize] = delta,
                 }
             }
         }
         self.report = self.survey(input.neighbours, radius);
+        self.report.switched_off = switched_off;
     }
 
     /// Every listed pair within reach, as two contact entries.
@@ -247,7 +276,7 @@ impl ClosurePass {
         x: &[[f64; 3]],
         radius: &[f64],
         history: &[ContactHistory],
-        reach: f64,
+        reach_factor: f64,
     ) {
         self.entries.clear();
         for i in 0..x.len() {
@@ -256,23 +285,31 @@ impl ClosurePass {
                 let (del, _) = sep.delta_image(&x[i], &x[j]);
                 let r = (del[0] * del[0] + del[1] * del[1] + del[2] * del[2]).sqrt();
                 let radsum = radius[i] + radius[j];
-                if r >= reach * radsum {
+                if r >= reach_factor * radsum {
                     continue;
                 }
                 // Halfway through the overlap, or each sphere's own
-                // surface while they are apart.
+                // surface while they are apart; never past the centre (a
+                // small sphere deep in a large one).
                 let inset = 0.5 * (radsum - r).max(0.0);
                 let towards_j = del.map(|c| -c / r);
                 let force = history[k].normal_force;
-                let (si, sj) = (radius[i] - inset, radius[j] - inset);
+                let si = (radius[i] - inset).max(POINT_FLOOR * radius[i]);
+                let sj = (radius[j] - inset).max(POINT_FLOOR * radius[j]);
                 self.entries.push(Entry {
                     sphere: i as u32,
-                    side: Side::Pair(k as u32, 0),
+                    side: Side::Pair {
+                        entry: k as u32,
+                        side: 0,
+                    },
                     point: ContactPoint::new(towards_j.map(|c| si * c), force, radius[i]),
                 });
                 self.entries.push(Entry {
                     sphere: j as u32,
-                    side: Side::Pair(k as u32, 1),
+                    side: Side::Pair {
+                        entry: k as u32,
+                        side: 1,
+                    },
                     point: ContactPoint::new(towards_j.map(|c| -sj * c), force, radius[j]),
                 });
             }
@@ -308,21 +345,26 @@ impl ClosurePass {
         self.offsets[0] = 0;
     }
 
-    /// The extremes of the corrections and the first contact beyond reach.
+    /// The extremes of the corrections, the first contact beyond reach
+    /// and the first surface moved onto its centre.
     fn survey(&self, list: &NeighbourList, radius: &[f64]) -> ClosureReport {
         let mut report = ClosureReport::default();
         let reach = self.settings.reach;
         for e in &self.grouped {
             let delta = match e.side {
-                Side::Pair(k, s) => self.pair[k as usize][s as usize],
-                Side::Wall(w, i) => self.wall[w as usize][i as usize],
+                Side::Pair { entry, side } => self.pair[entry as usize][side as usize],
+                Side::Wall(w) => self.wall[w as usize][e.sphere as usize],
             };
             let ratio = delta / radius[e.sphere as usize];
             report.largest = report.largest.max(ratio);
             report.smallest = report.smallest.min(ratio);
+            if ratio <= -1.0 && report.collapsed.is_none() {
+                report.collapsed = Some((e.sphere as usize, ratio));
+            }
         }
-        if report.largest <= 0.5 * reach {
-            // No pair's two corrections can together exceed the reach.
+        if report.largest <= reach {
+            // Two corrections each within `reach` of their radii add up
+            // to within `reach` of the radii's sum.
             return report;
         }
         'pairs: for i in 0..radius.len() {

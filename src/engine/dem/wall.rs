@@ -104,7 +104,10 @@ impl ActiveGranularWall {
         for i in 0..x.len() {
             let distance = sign * (x[i][axis] - plane);
             let correction = corrections.map_or(0.0, |c| c[i]);
-            if distance >= radius[i] + correction {
+            let surface = radius[i] + correction;
+            // A surface moved past the centre is caught by the closure's
+            // report; it is no contact here.
+            if surface <= 0.0 || distance >= surface {
                 history[i] = ContactHistory::default();
                 continue;
             }

@@ -12,7 +12,7 @@
 //! modulus 5e7 Pa (the study's Fig. B.1), with the spheres' Poisson's
 //! ratio, restitution and friction.
 
-use super::{Hydrogel, Variant};
+use super::{BoxWalls, Closures, Hydrogel, Variant};
 use crate::analysis::plot::{write_svg, Mark, Panel, PlotError, Series};
 use crate::engine::{GranularWall, WallSide};
 use crate::file_error::FileError;
@@ -39,12 +39,8 @@ pub struct BoxOptions {
     pub dt: f64,
     /// Recorded states per run.
     pub records: u64,
-    /// Standard closure's prefactor; the study's calibrated 0.82.
-    pub gamma: f64,
-    /// Advanced closure's prefactor; the study's calibrated 0.81.
-    pub gamma_advanced: f64,
-    /// Advanced closure's maximum penetration ratio; the study's 0.11.
-    pub mpr: f64,
+    /// The closures compared with plain Hertz.
+    pub closures: Closures,
 }
 
 impl Default for BoxOptions {
@@ -56,9 +52,7 @@ impl Default for BoxOptions {
             max_displacement: 0.5,
             dt: 0.05,
             records: 100,
-            gamma: 0.82,
-            gamma_advanced: 0.81,
-            mpr: 0.11,
+            closures: Closures::default(),
         }
     }
 }
@@ -111,16 +105,7 @@ impl BoxOptions {
         if self.records == 0 {
             return Err(BoxError::Options("--records must be at least 1".into()));
         }
-        for (name, v) in [
-            ("--gamma", self.gamma),
-            ("--gamma-advanced", self.gamma_advanced),
-            ("--mpr", self.mpr),
-        ] {
-            if !(v.is_finite() && v >= 0.0) {
-                return Err(BoxError::Options(format!("{name} must be >= 0 (got {v})")));
-            }
-        }
-        Ok(())
+        self.closures.validate().map_err(BoxError::Options)
     }
 }
 
@@ -173,14 +158,9 @@ pub struct Curve {
     pub variant: String,
     /// Lid displacement over the sphere radius.
     pub displacement: Vec<f64>,
-    /// Force on the lid over the box's cross-section (Pa).
-    pub lid_stress: Vec<f64>,
-    /// Mean force on the four side walls over their area below the lid
-    /// (Pa).
-    pub side_stress: Vec<f64>,
-    /// The largest multi-contact correction at the end, the most
-    /// compressed state, over the radius (0 for Hertz).
-    pub final_largest_correction: f64,
+    /// Stresses on the walls and the closure's corrections.
+    #[serde(flatten)]
+    pub walls: BoxWalls,
 }
 
 /// The study's result.
@@ -278,20 +258,11 @@ pub fn scene(
     }
 }
 
-fn column(stage: &crate::scene::StageOutput, name: &str) -> Vec<f64> {
-    let c = stage
-        .columns
-        .iter()
-        .position(|c| c.name == name)
-        .expect("a granular-wall stage records its walls");
-    stage.rows.iter().map(|r| r[c]).collect()
-}
-
 /// Runs every arrangement with every closure; `command` is recorded.
 pub fn run_box(opts: &BoxOptions, command: &str) -> Result<BoxReport, BoxError> {
     opts.validate()?;
     let hydrogel = Hydrogel::table_1(opts.diameter);
-    let variants = Variant::trio(opts.gamma, opts.gamma_advanced, opts.mpr);
+    let variants = opts.closures.variants();
     let mut curves = Vec::new();
     let mut steps = 0;
     for arrangement in [Arrangement::Single, Arrangement::Bcc] {
@@ -309,29 +280,13 @@ pub fn run_box(opts: &BoxOptions, command: &str) -> Result<BoxReport, BoxError> 
             if let Some(err) = err {
                 return Err(fail(err.to_string()));
             }
-            let stage = &outputs[0];
             let edge = scene.simbox.lengths[0] - 1.0;
-            let lid = column(stage, "granular_wall1_position");
-            let lid_force = column(stage, "granular_wall1_force");
-            let sides: Vec<Vec<f64>> = (2..6)
-                .map(|w| column(stage, &format!("granular_wall{w}_force")))
-                .collect();
-            let in_pa = hydrogel.youngs_modulus;
+            let walls = BoxWalls::read(&outputs[0], [edge; 2], hydrogel.youngs_modulus);
             curves.push(Curve {
                 arrangement,
                 variant: variant.name.clone(),
-                displacement: lid.iter().map(|z| (edge - z) / 0.5).collect(),
-                lid_stress: lid_force
-                    .iter()
-                    .map(|f| f / (edge * edge) * in_pa)
-                    .collect(),
-                side_stress: (0..lid.len())
-                    .map(|k| {
-                        let mean = sides.iter().map(|s| s[k]).sum::<f64>() / 4.0;
-                        mean / (edge * lid[k]) * in_pa
-                    })
-                    .collect(),
-                final_largest_correction: sys.report.closure.map_or(0.0, |c| c.largest),
+                displacement: walls.lid.iter().map(|z| (edge - z) / 0.5).collect(),
+                walls,
             });
         }
     }
@@ -371,13 +326,13 @@ pub fn table(report: &BoxReport) -> String {
             .find(|h| h.arrangement == c.arrangement && h.variant == report.variants[0].name);
         for &u in &marks {
             let (Some(lid), Some(side)) = (
-                at_displacement(&c.displacement, &c.lid_stress, u),
-                at_displacement(&c.displacement, &c.side_stress, u),
+                at_displacement(&c.displacement, &c.walls.lid_stress, u),
+                at_displacement(&c.displacement, &c.walls.side_stress, u),
             ) else {
                 continue;
             };
             let ratio = hertz
-                .and_then(|h| at_displacement(&h.displacement, &h.lid_stress, u))
+                .and_then(|h| at_displacement(&h.displacement, &h.walls.lid_stress, u))
                 .map_or(f64::NAN, |h| lid / h);
             out += &format!(
                 "{:<14} {:<34} {u:>6.2} {lid:>11.4e} {side:>11.4e} {ratio:>9.3}\n",
@@ -385,6 +340,14 @@ pub fn table(report: &BoxReport) -> String {
                 c.variant
             );
         }
+    }
+    for c in &report.curves {
+        let (largest, switched) = c.walls.extremes();
+        out += &format!(
+            "{} with {}: largest correction {largest:.4} R, at most {switched} contacts switched off in a recorded state\n",
+            c.arrangement.name(),
+            c.variant
+        );
     }
     out
 }
@@ -416,7 +379,11 @@ pub fn write_report(report: &BoxReport, dir: &Path) -> Result<(), BoxError> {
                 y_label: format!("{what} stress (Pa)"),
                 series: curves()
                     .map(|c| {
-                        let y = if lid { &c.lid_stress } else { &c.side_stress };
+                        let y = if lid {
+                            &c.walls.lid_stress
+                        } else {
+                            &c.walls.side_stress
+                        };
                         Series::new(c.variant.clone(), pts(c, y), Mark::Line)
                     })
                     .collect(),
