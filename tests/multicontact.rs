@@ -363,6 +363,11 @@ fn a_zero_ratio_on_magnitudes_is_plain_hertz() {
         let mc = json!({"prefactor": 1.0, "max_penetration_ratio": 0.0,
                         "switch": switch, "test": "magnitude"});
         let stage = squeeze(Some(mc), true);
+        let switched = column(&stage, "mc_switched_off");
+        assert!(
+            switched.iter().any(|&n| n > 0.0),
+            "{switch}: the closure must be on and switch"
+        );
         for w in 0..4 {
             let name = format!("granular_wall{w}_force");
             let (a, b) = (column(&base, &name), column(&stage, &name));
@@ -393,8 +398,9 @@ fn the_advanced_closure_falls_back_to_hertz_beyond_its_ratio() {
     let floor = column(&stage, "granular_wall0_force");
     let plate = column(&stage, "granular_wall1_force");
     let top = column(&stage, "granular_wall1_position");
+    let switched = column(&stage, "mc_switched_off");
     let (mut standard_rows, mut hertz_rows) = (0, 0);
-    for ((f0, f1), z) in floor.iter().zip(&plate).zip(&top) {
+    for (((f0, f1), z), off) in floor.iter().zip(&plate).zip(&top).zip(&switched) {
         let delta = RADIUS - 0.5 * z;
         if delta < 0.01 {
             continue;
@@ -407,9 +413,11 @@ fn the_advanced_closure_falls_back_to_hertz_beyond_its_ratio() {
                 (f - standard).abs() < 2e-3 * standard,
                 "{delta}: {f} vs {standard}"
             );
+            assert_eq!(*off, 0.0);
         } else if c(delta) * hertz > mpr * RADIUS {
             hertz_rows += 1;
             assert!((f - hertz).abs() < 2e-3 * hertz, "{delta}: {f} vs {hertz}");
+            assert_eq!(*off, 2.0, "both plates switched off");
         }
     }
     eprintln!("{standard_rows} rows as the standard closure, {hertz_rows} as Hertz");
@@ -422,12 +430,13 @@ fn the_advanced_closure_falls_back_to_hertz_beyond_its_ratio() {
 #[test]
 fn a_small_bed_compresses_and_the_closures_stiffen_it() {
     use bpm::studies::mcdem::compression::{build_bed, run_compression, CompressionOptions};
+    // 60 spheres fill this box to about 0.56: the bed is built taller.
     let opts = CompressionOptions {
         spheres: 60,
-        box_size: [0.09, 0.09, 0.09],
+        box_size: [0.0825, 0.0825, 0.0825],
         lid_speed: 0.5,
         max_fraction: 0.75,
-        cycles: 1,
+        cycles: 2,
         records: 20,
         ..CompressionOptions::default()
     };
@@ -453,9 +462,31 @@ fn a_small_bed_compresses_and_the_closures_stiffen_it() {
         }
     }
     assert!(worst <= 1e-6, "overlap {worst}");
+    assert!(bed.start_height > bed.edges[2] + 0.1, "built taller");
     let again = build_bed(&opts).unwrap();
     assert_eq!(bed.centres, again.centres, "the seed fixes the bed");
     let (report, _) = run_compression(&opts, "test", false).unwrap();
+    let built = bed.solid_volume() / (bed.edges[0] * bed.edges[1] * bed.start_height);
+    for run in &report.runs {
+        let ends: Vec<(f64, f64)> = run
+            .passes
+            .iter()
+            .map(|p| (p.fraction[0], p.fraction[p.fraction.len() - 1]))
+            .collect();
+        let expected = [
+            (built, 0.75),
+            (0.75, report.start_fraction),
+            (report.start_fraction, 0.75),
+            (0.75, report.start_fraction),
+        ];
+        assert_eq!(ends.len(), 4);
+        for ((a, b), (x, y)) in ends.iter().zip(expected) {
+            assert!((a - x).abs() < 1e-9 && (b - y).abs() < 1e-9, "{ends:?}");
+        }
+        for p in &run.passes {
+            assert!((p.lid_speed - opts.lid_speed).abs() < 0.05 * opts.lid_speed);
+        }
+    }
     let at_top = |run: usize| {
         let pass = &report.runs[run].passes[0];
         let last = pass.fraction.len() - 1;

@@ -18,6 +18,7 @@ pub use contacts::ContactStore;
 pub use multicontact::{BeyondReach, ClosurePass, ClosureReport, MultiContact};
 pub use wall::{ActiveGranularWall, GranularWall};
 
+use super::external::WallSide;
 use super::model::{EnergyTerm, ForceInput, ForceOutput, ModelTally, ParticleModel};
 use super::neighbor::Exclusions;
 use super::simbox::MinimumImage;
@@ -38,6 +39,10 @@ pub struct DemModel {
     contacts: ContactStore,
     /// Per granular wall of the stage, one contact history per sphere.
     wall_histories: Vec<Vec<ContactHistory>>,
+    /// Each wall's axis and side, for carrying loads across stages.
+    wall_planes: Vec<(usize, WallSide)>,
+    /// Whether the next evaluation starts a stage.
+    stage_start: bool,
     /// The multi-contact closure, if on.
     closure: Option<ClosurePass>,
 }
@@ -56,6 +61,8 @@ impl DemModel {
             max_radius,
             contacts: ContactStore::default(),
             wall_histories: Vec::new(),
+            wall_planes: Vec::new(),
+            stage_start: true,
             closure: multicontact.map(|m| ClosurePass::new(m, &material)),
         }
     }
@@ -168,6 +175,34 @@ impl DemModel {
     }
 }
 
+impl DemModel {
+    /// A stage's walls start with fresh contact histories, as LAMMPS
+    /// re-creates its walls each stage: their friction springs start
+    /// unloaded. Only the load a wall at the same place in the list, on
+    /// the same axis and side, carried at the last evaluation is kept, for
+    /// the multi-contact closure, which would otherwise lose the walls'
+    /// forces for the stage's first evaluation (it does not enter the
+    /// contact force itself).
+    fn renew_wall_histories(&mut self, walls: &[ActiveGranularWall], n: usize) {
+        let planes: Vec<(usize, WallSide)> =
+            walls.iter().map(|w| (w.wall.axis, w.wall.side)).collect();
+        let fresh = (0..walls.len())
+            .map(|w| {
+                let mut history = vec![ContactHistory::default(); n];
+                let same = self.wall_planes.get(w) == Some(&planes[w]);
+                if let (true, Some(old)) = (same, self.wall_histories.get(w)) {
+                    for (h, o) in history.iter_mut().zip(old) {
+                        h.normal_force = o.normal_force;
+                    }
+                }
+                history
+            })
+            .collect();
+        self.wall_histories = fresh;
+        self.wall_planes = planes;
+    }
+}
+
 impl ParticleModel for DemModel {
     fn name(&self) -> &'static str {
         "dem"
@@ -193,7 +228,7 @@ impl ParticleModel for DemModel {
     }
 
     fn begin_stage(&mut self) {
-        self.wall_histories.clear();
+        self.stage_start = true;
     }
 
     fn compute(&mut self, input: &ForceInput<'_>, out: &mut ForceOutput<'_>) -> ModelTally {
@@ -201,10 +236,11 @@ impl ParticleModel for DemModel {
         let sep = input.simbox.minimum_image();
         let walls = input.granular_walls;
         let n = input.x.len();
-        if self.wall_histories.len() != walls.len()
+        if std::mem::take(&mut self.stage_start)
+            || self.wall_histories.len() != walls.len()
             || self.wall_histories.iter().any(|h| h.len() != n)
         {
-            self.wall_histories = vec![vec![ContactHistory::default(); n]; walls.len()];
+            self.renew_wall_histories(walls, n);
         }
         self.contacts.align(input.neighbours);
         if let Some(closure) = &mut self.closure {

@@ -11,21 +11,16 @@
 //! distribution of that mean and spread (cut at three standard deviations), centres
 //! placed at random in a taller box at volume fraction 0.5, and overlaps
 //! removed by moving spheres apart along their lines of centres; the
-//! first compression packs it (a random bed jams below the study's 0.587
-//! in this box).
+//! first compression packs it (a random bed jams below the 0.586 of the
+//! full box).
 //! There is no gravity: the beads' weight in water (density 11.5 kg/m^3
 //! above the water's), 0.3 N in all, is 13% of the Hertz lid force at
-//! volume fraction 0.65 and 1.6% at 0.85 (docs/protocols.md).
+//! volume fraction 0.65 and 1.4% at 0.85 (docs/protocols.md).
 
-use super::{BoxWalls, Closures, Hydrogel, Variant};
+use super::{BoxWalls, Closures, Hydrogel, Variant, WalledBox};
 use crate::analysis::plot::{write_svg, Mark, Panel, PlotError, Series};
-use crate::engine::{GranularWall, WallSide};
 use crate::file_error::FileError;
-use crate::kernels::GranularMaterial;
-use crate::scene::{
-    build_system, run_scene, validate, BoxSpec, ForceField, Mass, ModelKind, Particles, RunOptions,
-    Scene, StageSpec,
-};
+use crate::scene::{build_system, run_scene, validate, Mass, RunOptions, Scene, StageSpec};
 use rand::{Rng, SeedableRng};
 use rand_distr::{Distribution, Normal};
 use serde::Serialize;
@@ -142,9 +137,17 @@ impl CompressionOptions {
             return bad("--spheres must be at least 1".into());
         }
         let start = self.start_fraction();
+        // The lid opens to the box's top between cycles: a bed that is
+        // jammed there never unloads.
         if start.is_nan() || start >= 0.62 {
             return bad(format!(
-                "{} spheres fill the box to volume fraction {start:.3}; the bed is built loose, below 0.62: use fewer spheres or a larger box",
+                "{} spheres fill the box to volume fraction {start:.3}, at or above random close packing (about 0.62 here): the lid could not open the bed between cycles; use fewer spheres or a larger box",
+                self.spheres
+            ));
+        }
+        if self.spheres > MAX_SPHERES {
+            return bad(format!(
+                "--spheres must be at most {MAX_SPHERES} (got {}): the bed builder checks every pair",
                 self.spheres
             ));
         }
@@ -174,7 +177,7 @@ impl CompressionOptions {
 /// The bed, in reduced units (lengths in mean diameters).
 #[derive(Clone, Debug, Serialize)]
 pub struct Bed {
-    /// Sphere centres, in the box `[0, L]`.
+    /// Sphere centres, in `[0, lx] x [0, ly] x [0, start_height]`.
     pub centres: Vec<[f64; 3]>,
     /// Sphere radii.
     pub radii: Vec<f64>,
@@ -189,12 +192,15 @@ pub struct Bed {
 impl Bed {
     /// Total sphere volume.
     pub fn solid_volume(&self) -> f64 {
-        self.radii
-            .iter()
-            .map(|r| 4.0 / 3.0 * std::f64::consts::PI * r * r * r)
-            .sum()
+        sphere_volume(&self.radii)
     }
 }
+
+/// Most spheres of a bed (its builder checks every pair each sweep).
+pub const MAX_SPHERES: usize = 5000;
+
+/// Most steps of one pass of the lid.
+const MAX_PASS_STEPS: u64 = 100_000_000;
 
 /// Largest pair overlap left when the bed counts as built (mean
 /// diameters): its Hertz force is some 1e-9 of the contact's stiffness.
@@ -219,16 +225,20 @@ pub fn build_bed(opts: &CompressionOptions) -> Result<Bed, CompressionError> {
     // A random bed at the study's volume fraction is jammed in this box:
     // it starts dilute in a taller box, and the first compression packs
     // it.
-    let solid: f64 = radii.iter().map(|r| PI_4_3 * r * r * r).sum();
+    let solid = sphere_volume(&radii);
     let area = edges[0] * edges[1];
-    let tall = [edges[0], edges[1], edges[2].max(solid / (area * DILUTE))];
+    let tall = [
+        edges[0],
+        edges[1],
+        edges[2].max(solid / (area * BUILT_FRACTION)),
+    ];
     let mut centres: Vec<[f64; 3]> = radii
         .iter()
         .map(|&r| [0, 1, 2].map(|k| r + rng.gen::<f64>() * (tall[k] - 2.0 * r)))
         .collect();
     let sweeps = push_apart(&mut centres, &radii, &tall).ok_or_else(|| {
         CompressionError::Bed(format!(
-            "spheres still overlap after {MAX_SWEEPS} sweeps at volume fraction {DILUTE}"
+            "spheres still overlap after {MAX_SWEEPS} sweeps at volume fraction {BUILT_FRACTION}"
         ))
     })?;
     Ok(Bed {
@@ -240,10 +250,16 @@ pub fn build_bed(opts: &CompressionOptions) -> Result<Bed, CompressionError> {
     })
 }
 
-/// Volume fraction of the bed as built.
-pub const DILUTE: f64 = 0.5;
+/// Volume fraction of the bed as built (or lower, if the box is emptier).
+pub const BUILT_FRACTION: f64 = 0.5;
 
-const PI_4_3: f64 = 4.0 / 3.0 * std::f64::consts::PI;
+/// Total volume of spheres of `radii`.
+fn sphere_volume(radii: &[f64]) -> f64 {
+    radii
+        .iter()
+        .map(|r| 4.0 / 3.0 * std::f64::consts::PI * r * r * r)
+        .sum()
+}
 
 /// Most sweeps of one push-apart.
 const MAX_SWEEPS: u64 = 100_000;
@@ -254,7 +270,6 @@ const MAX_SWEEPS: u64 = 100_000;
 fn push_apart(centres: &mut [[f64; 3]], radii: &[f64], edges: &[f64; 3]) -> Option<u64> {
     let n = centres.len();
     for sweep in 1..=MAX_SWEEPS {
-        let mut worst: f64 = 0.0;
         for i in 0..n {
             for j in i + 1..n {
                 let del = [0, 1, 2].map(|k| centres[j][k] - centres[i][k]);
@@ -263,10 +278,15 @@ fn push_apart(centres: &mut [[f64; 3]], radii: &[f64], edges: &[f64; 3]) -> Opti
                 if overlap <= 0.0 {
                     continue;
                 }
-                worst = worst.max(overlap);
                 // Each moves half the overlap and a little more, so that a
-                // pair once apart stays apart under round-off.
-                let push = 0.5 * overlap * 1.01 / r.max(1e-12);
+                // pair once apart stays apart under round-off; coincident
+                // centres part along x.
+                let (del, r) = if r > 0.0 {
+                    (del, r)
+                } else {
+                    ([1.0, 0.0, 0.0], 1.0)
+                };
+                let push = 0.5 * overlap * 1.01 / r;
                 for k in 0..3 {
                     centres[i][k] -= push * del[k];
                     centres[j][k] += push * del[k];
@@ -278,11 +298,26 @@ fn push_apart(centres: &mut [[f64; 3]], radii: &[f64], edges: &[f64; 3]) -> Opti
                 c[k] = c[k].clamp(r, edges[k] - r);
             }
         }
-        if worst <= BED_OVERLAP {
+        if largest_overlap(centres, radii) <= BED_OVERLAP {
             return Some(sweep);
         }
     }
     None
+}
+
+/// The largest overlap of any two spheres.
+pub fn largest_overlap(centres: &[[f64; 3]], radii: &[f64]) -> f64 {
+    let mut worst: f64 = 0.0;
+    for i in 0..centres.len() {
+        for j in i + 1..centres.len() {
+            let r = (0..3)
+                .map(|k| (centres[j][k] - centres[i][k]).powi(2))
+                .sum::<f64>()
+                .sqrt();
+            worst = worst.max(radii[i] + radii[j] - r);
+        }
+    }
+    worst
 }
 
 /// One pass of the lid, recorded.
@@ -290,6 +325,9 @@ fn push_apart(centres: &mut [[f64; 3]], radii: &[f64], edges: &[f64; 3]) -> Opti
 pub struct Pass {
     /// "compress 1", "decompress 1", ...
     pub name: String,
+    /// The lid's speed in this pass (m/s): the requested one, rounded so
+    /// that the pass is a whole number of recording intervals.
+    pub lid_speed: f64,
     /// Volume fraction (sphere volume over the box below the lid).
     pub fraction: Vec<f64>,
     /// Stresses on the walls and the closure's corrections.
@@ -302,10 +340,14 @@ pub struct Pass {
 pub struct Run {
     /// The closure's name.
     pub variant: String,
-    /// Every pass, in order.
+    /// Every pass, in order (up to the one that failed, if one did).
     pub passes: Vec<Pass>,
     /// Wall-clock time of the run (s).
     pub seconds: f64,
+    /// Why the run stopped early, if it did (the other closures still
+    /// run).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub stopped: Option<String>,
 }
 
 /// The study's result.
@@ -328,8 +370,8 @@ pub struct CompressionReport {
     /// Volume fraction of the bed as built, below the lid's starting
     /// height.
     pub built_fraction: f64,
-    /// Steps per pass of the lid (the first, from the built bed, takes
-    /// more).
+    /// Steps per pass of the lid after the first (which starts from the
+    /// built bed's height).
     pub steps_per_pass: u64,
     /// The closures compared.
     pub variants: Vec<Variant>,
@@ -337,37 +379,73 @@ pub struct CompressionReport {
     pub runs: Vec<Run>,
 }
 
+/// The lid's turning points and steps.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct LidPlan {
+    /// Where the lid turns back up (d): the bed at `max_fraction`.
+    bottom: f64,
+    /// Steps between recorded rows.
+    every: u64,
+    /// Steps of a pass between the box's top and the bottom.
+    steps: u64,
+    /// Steps of the first pass, from the built bed's height.
+    first_steps: u64,
+}
+
+/// Whole recording intervals per pass, so the lid turns exactly at the top
+/// of the box and at the bottom; the first pass starts at the built bed's
+/// height and takes as many intervals as it needs at the same speed.
+fn lid_plan(
+    bed: &Bed,
+    opts: &CompressionOptions,
+    hydrogel: &Hydrogel,
+) -> Result<LidPlan, CompressionError> {
+    let [lx, ly, lz] = bed.edges;
+    let bottom = bed.solid_volume() / (lx * ly * opts.max_fraction);
+    if bottom >= lz {
+        return Err(CompressionError::Options(format!(
+            "the bed as built fills the box to {:.4}, at or above --max-fraction {}: raise it",
+            bed.solid_volume() / (lx * ly * lz),
+            opts.max_fraction
+        )));
+    }
+    let speed = hydrogel.reduced_speed(opts.lid_speed);
+    let intervals = |travel: f64, every: f64| (travel / speed / opts.dt / every).ceil();
+    let every = intervals(lz - bottom, opts.records as f64);
+    let first = intervals(bed.start_height - bottom, every);
+    let steps = every * opts.records as f64;
+    let longest = steps.max(first * every);
+    if longest.is_nan() || longest > MAX_PASS_STEPS as f64 {
+        return Err(CompressionError::Options(format!(
+            "a pass of the lid would take {longest:.3e} steps, more than {MAX_PASS_STEPS}: raise --lid-speed or --dt"
+        )));
+    }
+    Ok(LidPlan {
+        bottom,
+        every: every as u64,
+        steps: steps as u64,
+        first_steps: (first * every) as u64,
+    })
+}
+
 /// The compression of `bed` with `variant` as a scene (reduced units:
 /// mean diameter, E, the mass of a sphere of the mean diameter); the lid
-/// is granular wall 1, the side walls 2 to 5.
+/// is granular wall 1, the side walls 2 to 5. Fails if the lid's passes
+/// cannot be planned (the bed too full, or too many steps).
 pub fn scene(
     bed: &Bed,
     variant: &Variant,
     opts: &CompressionOptions,
     hydrogel: &Hydrogel,
-) -> Scene {
-    let material = hydrogel.material();
-    let wall_material = GranularMaterial {
-        youngs_modulus: opts.wall_modulus / hydrogel.youngs_modulus,
-        ..material
-    };
+) -> Result<Scene, CompressionError> {
     let [lx, ly, lz] = bed.edges;
-    let bottom = bed.solid_volume() / (lx * ly * opts.max_fraction);
-    // Whole recording intervals per pass, so the lid turns exactly at the
-    // top of the box and at the bottom; the first pass starts higher, at
-    // the built bed's height, and takes as many more as it needs.
-    let speed = hydrogel.reduced_speed(opts.lid_speed);
-    let every = ((lz - bottom) / speed / opts.dt / opts.records as f64).ceil() as u64;
-    let steps = every * opts.records;
-    let first_steps =
-        ((bed.start_height - bottom) / speed / opts.dt / every as f64).ceil() as u64 * every;
-    let wall = |axis, side, position, velocity| GranularWall {
-        axis,
-        side,
-        position,
-        velocity,
-        material: wall_material,
-    };
+    let walled = WalledBox::new([lx, ly], bed.start_height, hydrogel, opts.wall_modulus);
+    let LidPlan {
+        bottom,
+        every,
+        steps,
+        first_steps,
+    } = lid_plan(bed, opts, hydrogel)?;
     let mut stages = Vec::new();
     for cycle in 1..=opts.cycles {
         let (top, down_steps) = if cycle == 1 {
@@ -381,53 +459,27 @@ pub fn scene(
         ];
         for (name, from, to, pass_steps) in passes {
             let velocity = (to - from) / (pass_steps as f64 * opts.dt);
-            let mut walls = vec![
-                wall(2, WallSide::Lo, 0.0, 0.0),
-                wall(2, WallSide::Hi, from, velocity),
-            ];
-            for axis in 0..2 {
-                walls.push(wall(axis, WallSide::Lo, 0.0, 0.0));
-                walls.push(wall(axis, WallSide::Hi, bed.edges[axis], 0.0));
-            }
             let mut stage = StageSpec::hold(&format!("{name} {cycle}"), pass_steps, opts.dt);
-            stage.granular_walls = walls;
+            stage.granular_walls = walled.walls(from, velocity);
             stage.record.every = every;
             stages.push(stage);
         }
     }
-    let mut force_field = ForceField::dem(material);
-    force_field.multicontact = variant.multicontact;
-    force_field.skin = 0.1;
-    Scene {
-        version: crate::scene::SCENE_VERSION,
-        model: ModelKind::Dem,
-        description: format!(
+    Ok(walled.scene(
+        format!(
             "{} hydrogel spheres compressed to volume fraction {} and back, {} (bpm mc-compress)",
             bed.radii.len(),
             opts.max_fraction,
             variant.name
         ),
-        seed: opts.seed,
-        simbox: BoxSpec {
-            lo: [-0.5; 3],
-            lengths: [lx + 1.0, ly + 1.0, bed.start_height + 1.0],
-            tilt: [0.0; 3],
-            periodic: [false; 3],
-        },
-        particles: Particles {
-            positions: bed.centres.clone(),
-            velocities: None,
-            angular_velocities: None,
-            grain: None,
-            mass: Mass::PerParticle(bed.radii.iter().map(|r| (2.0 * r).powi(3)).collect()),
-            radius: Some(bed.radii.clone()),
-            kind: None,
-        },
-        bonds: Default::default(),
-        force_field,
+        opts.seed,
+        bed.centres.clone(),
+        bed.radii.clone(),
+        Mass::PerParticle(bed.radii.iter().map(|r| (2.0 * r).powi(3)).collect()),
+        hydrogel,
+        variant,
         stages,
-        provenance: serde_json::Value::Null,
-    }
+    ))
 }
 
 /// Builds the bed and compresses it with every closure; `command` is
@@ -449,7 +501,7 @@ pub fn run_compression(
     let mut first_scene = None;
     let mut steps_per_pass = 0;
     for variant in &variants {
-        let scene = scene(&bed, variant, opts, &hydrogel);
+        let scene = scene(&bed, variant, opts, &hydrogel)?;
         let fail = |message: String| CompressionError::Run {
             variant: variant.name.clone(),
             message,
@@ -463,15 +515,14 @@ pub fn run_compression(
             ..RunOptions::quiet(1)
         };
         let (outputs, err) = run_scene(&mut sys, &scene, &run_opts);
-        if let Some(err) = err {
-            return Err(fail(err.to_string()));
-        }
         let passes = outputs
             .iter()
-            .map(|stage| {
+            .zip(&scene.stages)
+            .map(|(stage, spec)| {
                 let walls = BoxWalls::read(stage, [lx, ly], hydrogel.youngs_modulus);
                 Pass {
                     name: stage.name.clone(),
+                    lid_speed: hydrogel.physical_speed(spec.granular_walls[1].velocity.abs()),
                     fraction: walls.lid.iter().map(|h| solid / (lx * ly * h)).collect(),
                     walls,
                 }
@@ -481,6 +532,7 @@ pub fn run_compression(
             variant: variant.name.clone(),
             passes,
             seconds: start.elapsed().as_secs_f64(),
+            stopped: err.map(|e| e.to_string()),
         });
         first_scene.get_or_insert(scene);
     }
@@ -552,9 +604,12 @@ pub fn table(report: &CompressionReport) -> String {
             .map(|p| p.walls.extremes())
             .fold((0.0, 0.0), |a, b| (f64::max(a.0, b.0), f64::max(a.1, b.1)));
         out += &format!(
-            "{}: {:.0} s; largest correction {largest:.4} R, at most {switched} contacts switched off in a recorded state\n",
+            "{}: {:.0} s; largest correction {largest:.4} R, at most {switched} contact ends switched off in a recorded state\n",
             run.variant, run.seconds
         );
+        if let Some(why) = &run.stopped {
+            out += &format!("{} stopped: {why}\n", run.variant);
+        }
     }
     out
 }

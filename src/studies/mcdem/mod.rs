@@ -12,9 +12,11 @@
 pub mod compression;
 pub mod rigid_box;
 
-use crate::engine::MultiContact;
+use crate::engine::{GranularWall, MultiContact, WallSide};
 use crate::kernels::{GranularMaterial, NormalDamping};
-use crate::scene::StageOutput;
+use crate::scene::{
+    BoxSpec, ForceField, Mass, ModelKind, Particles, Scene, StageOutput, StageSpec,
+};
 use serde::Serialize;
 
 /// A contact closure compared in a study: plain Hertz (`None`) or a
@@ -86,6 +88,103 @@ impl Closures {
     }
 }
 
+/// A closed box of granular walls: a floor at 0, four side walls around
+/// the base `[0, lx] x [0, ly]`, and a lid; all of one material.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct WalledBox {
+    /// Base edges `[lx, ly]` (d).
+    pub base: [f64; 2],
+    /// The lid's highest position (d): the simulation box reaches above
+    /// it.
+    pub height: f64,
+    /// The walls' material.
+    pub material: GranularMaterial,
+}
+
+impl WalledBox {
+    /// A box of base `base` and highest lid `height` whose walls have the
+    /// spheres' material but for a modulus of `wall_modulus` Pa.
+    pub fn new(base: [f64; 2], height: f64, hydrogel: &Hydrogel, wall_modulus: f64) -> Self {
+        Self {
+            base,
+            height,
+            material: GranularMaterial {
+                youngs_modulus: wall_modulus / hydrogel.youngs_modulus,
+                ..hydrogel.material()
+            },
+        }
+    }
+
+    /// The walls with the lid at `lid` moving at `velocity` (d / tau):
+    /// floor 0, lid 1, side walls 2 to 5 (x lo, x hi, y lo, y hi), as
+    /// [`BoxWalls::read`] reads them.
+    pub fn walls(&self, lid: f64, velocity: f64) -> Vec<GranularWall> {
+        let wall = |axis, side, position, velocity| GranularWall {
+            axis,
+            side,
+            position,
+            velocity,
+            material: self.material,
+        };
+        let mut walls = vec![
+            wall(2, WallSide::Lo, 0.0, 0.0),
+            wall(2, WallSide::Hi, lid, velocity),
+        ];
+        for axis in 0..2 {
+            walls.push(wall(axis, WallSide::Lo, 0.0, 0.0));
+            walls.push(wall(axis, WallSide::Hi, self.base[axis], 0.0));
+        }
+        walls
+    }
+
+    /// A scene of hydrogel spheres at `positions` with `radius` and
+    /// `mass` in this box, contacts by `variant`, running `stages`
+    /// (reduced units; a closed simulation box half a diameter beyond the
+    /// walls).
+    #[allow(clippy::too_many_arguments)]
+    pub fn scene(
+        &self,
+        description: String,
+        seed: u64,
+        positions: Vec<[f64; 3]>,
+        radius: Vec<f64>,
+        mass: Mass,
+        hydrogel: &Hydrogel,
+        variant: &Variant,
+        stages: Vec<StageSpec>,
+    ) -> Scene {
+        let mut force_field = ForceField::dem(hydrogel.material());
+        force_field.multicontact = variant.multicontact;
+        // The skin is in d: a tenth of a diameter suits spheres this slow.
+        force_field.skin = 0.1;
+        Scene {
+            version: crate::scene::SCENE_VERSION,
+            model: ModelKind::Dem,
+            description,
+            seed,
+            simbox: BoxSpec {
+                lo: [-0.5; 3],
+                lengths: [self.base[0] + 1.0, self.base[1] + 1.0, self.height + 1.0],
+                tilt: [0.0; 3],
+                periodic: [false; 3],
+            },
+            particles: Particles {
+                positions,
+                velocities: None,
+                angular_velocities: None,
+                grain: None,
+                mass,
+                radius: Some(radius),
+                kind: None,
+            },
+            bonds: Default::default(),
+            force_field,
+            stages,
+            provenance: serde_json::Value::Null,
+        }
+    }
+}
+
 /// What a stage records of a box whose granular wall 0 is the floor, 1
 /// the lid and 2 to 5 the side walls (x lo, x hi, y lo, y hi), per
 /// recorded row.
@@ -109,12 +208,28 @@ pub struct BoxWalls {
 
 impl BoxWalls {
     /// Reads `stage` of a box of base `[lx, ly]` (d), stresses in units of
-    /// `pascal` Pa (the spheres' Young's modulus in reduced units).
-    pub fn read(stage: &StageOutput, base: [f64; 2], pascal: f64) -> Self {
-        let lid = column(stage, "granular_wall1_position");
-        let lid_force = column(stage, "granular_wall1_force");
+    /// `stress_unit` Pa (the spheres' Young's modulus, in reduced units
+    /// 1).
+    ///
+    /// # Panics
+    ///
+    /// If the stage does not record six granular walls.
+    pub fn read(stage: &StageOutput, base: [f64; 2], stress_unit: f64) -> Self {
+        let column = |name: &str| {
+            stage
+                .column(name)
+                .unwrap_or_else(|| panic!("a box's stage records {name}"))
+        };
+        // The closure's columns are absent under plain Hertz.
+        let optional = |name: &str| {
+            stage
+                .column(name)
+                .unwrap_or_else(|| vec![0.0; stage.rows.len()])
+        };
+        let lid = column("granular_wall1_position");
+        let lid_force = column("granular_wall1_force");
         let sides: Vec<Vec<f64>> = (2..6)
-            .map(|w| column(stage, &format!("granular_wall{w}_force")))
+            .map(|w| column(&format!("granular_wall{w}_force")))
             .collect();
         let side_stress = (0..lid.len())
             .map(|k| {
@@ -124,17 +239,17 @@ impl BoxWalls {
                         (sides[2 * axis][k] + sides[2 * axis + 1][k]) / area
                     })
                     .sum();
-                0.25 * sum * pascal
+                0.25 * sum * stress_unit
             })
             .collect();
         Self {
             lid_stress: lid_force
                 .iter()
-                .map(|f| f / (base[0] * base[1]) * pascal)
+                .map(|f| f / (base[0] * base[1]) * stress_unit)
                 .collect(),
             side_stress,
-            largest_correction: optional_column(stage, "mc_largest_correction"),
-            switched_off: optional_column(stage, "mc_switched_off"),
+            largest_correction: optional("mc_largest_correction"),
+            switched_off: optional("mc_switched_off"),
             lid,
         }
     }
@@ -143,24 +258,6 @@ impl BoxWalls {
     pub fn extremes(&self) -> (f64, f64) {
         let max = |v: &[f64]| v.iter().copied().fold(0.0, f64::max);
         (max(&self.largest_correction), max(&self.switched_off))
-    }
-}
-
-fn column(stage: &StageOutput, name: &str) -> Vec<f64> {
-    let c = stage
-        .columns
-        .iter()
-        .position(|c| c.name == name)
-        .expect("a granular-wall stage records its walls");
-    stage.rows.iter().map(|r| r[c]).collect()
-}
-
-/// The column `name`, or zeros where the stage does not record it (the
-/// closure's columns under plain Hertz).
-fn optional_column(stage: &StageOutput, name: &str) -> Vec<f64> {
-    match stage.columns.iter().position(|c| c.name == name) {
-        Some(c) => stage.rows.iter().map(|r| r[c]).collect(),
-        None => vec![0.0; stage.rows.len()],
     }
 }
 
@@ -198,7 +295,11 @@ impl Hydrogel {
         }
     }
 
-    /// A sphere's mass (kg).
+    /// A sphere's mass (kg), from the effective density: the beads move
+    /// in water, and the studies give them the inertia the reference
+    /// implementation gives them (without the water's added mass). With
+    /// the beads' full density the time unit would be about 9.4 times
+    /// longer, and a lid speed in m/s that many times faster in d / tau.
     pub fn mass(&self) -> f64 {
         self.effective_density * std::f64::consts::PI / 6.0 * self.diameter.powi(3)
     }
@@ -211,6 +312,11 @@ impl Hydrogel {
     /// A speed in m/s in d / tau.
     pub fn reduced_speed(&self, metres_per_second: f64) -> f64 {
         metres_per_second * self.time_unit() / self.diameter
+    }
+
+    /// A speed in d / tau in m/s.
+    pub fn physical_speed(&self, reduced: f64) -> f64 {
+        reduced * self.diameter / self.time_unit()
     }
 
     /// The sphere material in reduced units (`E = 1`). Damping and
@@ -230,5 +336,51 @@ impl Hydrogel {
             rolling: None,
             twisting: Default::default(),
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A stage output recording six granular walls' forces and positions
+    /// in one row.
+    fn box_stage(forces: [f64; 6], lid: f64) -> StageOutput {
+        let mut columns = Vec::new();
+        let mut row = Vec::new();
+        for (w, f) in forces.iter().enumerate() {
+            for (what, value) in [("force", *f), ("position", lid)] {
+                columns.push(serde_json::json!({
+                    "name": format!("granular_wall{w}_{what}"),
+                    "quantity": "time", "observable": "wall forces", "lammps": null
+                }));
+                row.push(value);
+            }
+        }
+        serde_json::from_value(serde_json::json!({
+            "name": "squeeze", "steps": 1, "columns": columns, "rows": [row],
+            "checkpoints": [], "wall_seconds": 0.0, "timers": {}, "neighbour_builds": 0
+        }))
+        .unwrap()
+    }
+
+    #[test]
+    fn side_stresses_divide_each_wall_force_by_its_own_area() {
+        // Base 2 x 3, lid at height 4: the x walls are 3 x 4, the y walls
+        // 2 x 4.
+        let stage = box_stage([0.0, 6.0, 12.0, 12.0, 8.0, 8.0], 4.0);
+        let walls = BoxWalls::read(&stage, [2.0, 3.0], 10.0);
+        assert_eq!(walls.lid_stress, vec![6.0 / 6.0 * 10.0]);
+        // x walls 12 / 12 = 1, y walls 8 / 8 = 1: mean 1, times 10.
+        assert!((walls.side_stress[0] - 10.0).abs() < 1e-12);
+        assert_eq!(walls.largest_correction, vec![0.0]);
+        // Swapped forces give a different mean: the areas are not swapped.
+        let swapped = BoxWalls::read(
+            &box_stage([0.0, 6.0, 8.0, 8.0, 12.0, 12.0], 4.0),
+            [2.0, 3.0],
+            10.0,
+        );
+        let expected = 0.25 * (2.0 * 8.0 / 12.0 + 2.0 * 12.0 / 8.0) * 10.0;
+        assert!((swapped.side_stress[0] - expected).abs() < 1e-12);
     }
 }

@@ -12,15 +12,10 @@
 //! modulus 5e7 Pa (the study's Fig. B.1), with the spheres' Poisson's
 //! ratio, restitution and friction.
 
-use super::{BoxWalls, Closures, Hydrogel, Variant};
+use super::{BoxWalls, Closures, Hydrogel, Variant, WalledBox};
 use crate::analysis::plot::{write_svg, Mark, Panel, PlotError, Series};
-use crate::engine::{GranularWall, WallSide};
 use crate::file_error::FileError;
-use crate::kernels::GranularMaterial;
-use crate::scene::{
-    build_system, run_scene, validate, BoxSpec, ForceField, Mass, ModelKind, Particles, RunOptions,
-    Scene, StageSpec,
-};
+use crate::scene::{build_system, run_scene, validate, Mass, RunOptions, Scene, StageSpec};
 use serde::Serialize;
 use std::path::Path;
 
@@ -56,6 +51,9 @@ impl Default for BoxOptions {
         }
     }
 }
+
+/// Most steps of one squeeze.
+const MAX_STEPS: f64 = 1e8;
 
 /// What can go wrong.
 #[derive(Debug, thiserror::Error)]
@@ -104,6 +102,13 @@ impl BoxOptions {
         }
         if self.records == 0 {
             return Err(BoxError::Options("--records must be at least 1".into()));
+        }
+        let hydrogel = Hydrogel::table_1(self.diameter);
+        let steps = 0.5 * self.max_displacement / hydrogel.reduced_speed(self.lid_speed) / self.dt;
+        if steps.is_nan() || steps > MAX_STEPS {
+            return Err(BoxError::Options(format!(
+                "the squeeze would take {steps:.3e} steps, more than {MAX_STEPS:e}: raise --lid-speed or --dt"
+            )));
         }
         self.closures.validate().map_err(BoxError::Options)
     }
@@ -194,68 +199,30 @@ pub fn scene(
 ) -> Scene {
     let (positions, edge) = arrangement.spheres();
     let n = positions.len();
-    let material = hydrogel.material();
-    let wall_material = GranularMaterial {
-        youngs_modulus: opts.wall_modulus / hydrogel.youngs_modulus,
-        ..material
-    };
+    let walled = WalledBox::new([edge; 2], edge, hydrogel, opts.wall_modulus);
     let speed = hydrogel.reduced_speed(opts.lid_speed);
     let travel = opts.max_displacement * 0.5;
     // A whole number of recording intervals, so the last row is at the
     // full travel.
     let every = (travel / speed / opts.dt / opts.records as f64).ceil() as u64;
     let steps = every * opts.records;
-    let wall = |axis, side, position, velocity| GranularWall {
-        axis,
-        side,
-        position,
-        velocity,
-        material: wall_material,
-    };
-    let mut walls = vec![
-        wall(2, WallSide::Lo, 0.0, 0.0),
-        wall(2, WallSide::Hi, edge, -speed),
-    ];
-    for axis in 0..2 {
-        walls.push(wall(axis, WallSide::Lo, 0.0, 0.0));
-        walls.push(wall(axis, WallSide::Hi, edge, 0.0));
-    }
     let mut stage = StageSpec::hold("squeeze", steps, opts.dt);
-    stage.granular_walls = walls;
+    stage.granular_walls = walled.walls(edge, -speed);
     stage.record.every = every;
-    let mut force_field = ForceField::dem(material);
-    force_field.multicontact = variant.multicontact;
-    // The skin is in d: a tenth of a diameter suits spheres this slow.
-    force_field.skin = 0.1;
-    Scene {
-        version: crate::scene::SCENE_VERSION,
-        model: ModelKind::Dem,
-        description: format!(
+    walled.scene(
+        format!(
             "{} squeezed in a rigid box, {} (bpm mc-box)",
             arrangement.name(),
             variant.name
         ),
-        seed: 1,
-        simbox: BoxSpec {
-            lo: [-0.5; 3],
-            lengths: [edge + 1.0; 3],
-            tilt: [0.0; 3],
-            periodic: [false; 3],
-        },
-        particles: Particles {
-            positions,
-            velocities: None,
-            angular_velocities: None,
-            grain: None,
-            mass: Mass::Uniform(1.0),
-            radius: Some(vec![0.5; n]),
-            kind: None,
-        },
-        bonds: Default::default(),
-        force_field,
-        stages: vec![stage],
-        provenance: serde_json::Value::Null,
-    }
+        1,
+        positions,
+        vec![0.5; n],
+        Mass::Uniform(1.0),
+        hydrogel,
+        variant,
+        vec![stage],
+    )
 }
 
 /// Runs every arrangement with every closure; `command` is recorded.
@@ -344,7 +311,7 @@ pub fn table(report: &BoxReport) -> String {
     for c in &report.curves {
         let (largest, switched) = c.walls.extremes();
         out += &format!(
-            "{} with {}: largest correction {largest:.4} R, at most {switched} contacts switched off in a recorded state\n",
+            "{} with {}: largest correction {largest:.4} R, at most {switched} contact ends switched off in a recorded state\n",
             c.arrangement.name(),
             c.variant
         );
