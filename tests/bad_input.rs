@@ -270,6 +270,7 @@ const SUBCOMMANDS: &[&[&str]] = &[
     &["compare-compaction", "{data}", "-o", "{out}"],
     &["mc-box", "-o", "{out}"],
     &["mc-compress", "-o", "{out}"],
+    &["mc-calibrate", "{data}", "-o", "{out}"],
 ];
 
 /// Value names of options that take paths or words, not numbers.

@@ -377,42 +377,16 @@ fn a_tiny_compaction_study_measures_moduli_and_writes_its_report() {
 /// output.
 #[test]
 fn a_tiny_dem_compaction_compresses_spheres_and_reports_both_volume_fractions() {
-    use bpm::analysis::packing::AnalysisOptions;
     use bpm::kernels::GranularCoeffs;
-    use bpm::scene::builders::grain::GrainKind;
     use bpm::studies::compaction::{
-        compare, run_compaction, CompactOptions, CompactionEngine, DemContact, ModuliOptions,
-        PackingSource,
+        compare, run_compaction, CompactionEngine, DemContact, PackingSource,
     };
     let dir = common::scratch_dir("tiny-dem-compaction");
     let dem = DemContact {
         friction: [0.15, 0.1, 0.1],
         ..DemContact::default()
     };
-    let mut opts = CompactOptions {
-        source: PackingSource::Build {
-            grains: 16,
-            kind: GrainKind::Rough,
-            radius: 2.0,
-            distinct_grains: 2,
-            template_fraction: 0.57,
-            time_scale: 0.05,
-        },
-        a_b: 0.0,
-        zero_net: false,
-        seeds: vec![3],
-        protocol: tiny_protocol(),
-        engine: CompactionEngine::Native,
-        analysis: AnalysisOptions {
-            mc_points: 50_000,
-            ..Default::default()
-        },
-        moduli: ModuliOptions {
-            states: 0,
-            ..ModuliOptions::default()
-        },
-        dem: Some(dem),
-    };
+    let mut opts = tiny_study(Some(dem), 50_000);
     let report = run_compaction(&opts, 1, None, &dir, "test", false, &mut |_| {}).unwrap();
     let run = &report.runs[0];
     assert!(run.stopped.is_none(), "{:?}", run.stopped);
@@ -522,6 +496,182 @@ fn a_tiny_dem_compaction_compresses_spheres_and_reports_both_volume_fractions() 
     let table = std::fs::read_to_string(lammps.join("compaction.txt")).unwrap();
     assert!(table.contains("# warning: LAMMPS negates"), "{table}");
     let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// `bpm mc-calibrate` end to end on a tiny grain study: the grains'
+/// packing is compressed again as spheres with plain Hertz and the
+/// closures; each sphere study carries its closure, a larger prefactor
+/// stiffens the spheres, the fit picks a law of the grid, a second call
+/// reuses every study, and the closure is refused where it cannot run.
+#[test]
+fn closures_are_calibrated_against_a_tiny_grain_study() {
+    use bpm::studies::compaction::{run_compaction, CompactOptions, CompactionEngine, DemContact};
+    use bpm::studies::mcdem::calibration::{run_calibration, CalibrationOptions, Law, DISTANCES};
+    let dir = common::scratch_dir("tiny-closure-calibration");
+    // Enough states near jamming for the fit of phi_c.
+    let mut grains = tiny_study(None, 20_000);
+    grains.protocol.states_per_stage = 12;
+    let grains_dir = dir.join("grains");
+    let g = run_compaction(&grains, 1, None, &grains_dir, "test", false, &mut |_| {}).unwrap();
+    assert!(g.runs[0].stopped.is_none(), "{:?}", g.runs[0].stopped);
+    assert!(
+        g.runs[0].fits.pressure.is_some(),
+        "the grains' phi_c is not fitted"
+    );
+    let opts = CalibrationOptions {
+        grains: vec![grains_dir.clone()],
+        gammas: vec![0.5, 2.0],
+        advanced_gammas: vec![1.0],
+        mprs: vec![0.1],
+        reach: 0.1,
+        volumetric_strain: 0.25,
+        window: [0.05, 0.15],
+        ..CalibrationOptions::default()
+    };
+    let out = dir.join("calibration");
+    let report = run_calibration(&opts, 1, &out, "test", false, &mut |_| {}).unwrap();
+    let study = &report.studies[0];
+    assert_eq!(study.label, "grains");
+    let laws: Vec<Law> = study.variants.iter().map(|v| v.law).collect();
+    assert_eq!(laws, opts.laws());
+    for v in &study.variants {
+        assert!(v.stopped.is_none(), "{:?}: {:?}", v.law, v.stopped);
+        let scene: bpm::scene::Scene = serde_json::from_str(
+            &std::fs::read_to_string(v.folder.join("seed-3/scene.json")).unwrap(),
+        )
+        .unwrap();
+        let m = scene.force_field.multicontact;
+        match v.law {
+            Law::Hertz => assert!(m.is_none()),
+            Law::Standard { gamma } => {
+                let m = m.unwrap();
+                assert_eq!(
+                    (m.prefactor, m.max_penetration_ratio, m.reach),
+                    (gamma, None, 0.1)
+                );
+            }
+            Law::Advanced { gamma, mpr } => {
+                let m = m.unwrap();
+                assert_eq!(
+                    (m.prefactor, m.max_penetration_ratio, m.reach),
+                    (gamma, Some(mpr), 0.1)
+                );
+            }
+        }
+    }
+    // From the same packing, a larger prefactor needs more pressure at the
+    // same distance from jamming, at the furthest distance all reach.
+    let ratios = |k: usize| &study.variants[k].ratio_at_distance;
+    let common_far = (0..DISTANCES.len())
+        .rev()
+        .find(|&i| (0..3).all(|k| ratios(k)[i].is_some()))
+        .expect("the spheres reach no common distance");
+    let at = |k: usize| ratios(k)[common_far].unwrap();
+    assert!(
+        at(0) < at(1) && at(1) < at(2),
+        "at phi - phi_c = {}: Hertz {}, gamma 0.5 {}, gamma 2 {}",
+        DISTANCES[common_far],
+        at(0),
+        at(1),
+        at(2)
+    );
+    // Every sphere variant is measured from plain Hertz's jamming point,
+    // which the closures hardly move.
+    let hertz_phi_c = study.variants[0].phi_c.unwrap();
+    for v in &study.variants {
+        assert_eq!(v.phi_c, Some(hertz_phi_c));
+        assert!((v.own_phi_c.unwrap() - hertz_phi_c).abs() < 0.01, "{v:?}");
+        assert!(!v.curve.is_empty());
+    }
+    assert!(matches!(
+        study.best_standard.expect("no standard fit").law,
+        Law::Standard { .. }
+    ));
+    for file in ["calibration.json", "calibration.svg", "calibration.txt"] {
+        assert!(out.join(file).is_file(), "{file} not written");
+    }
+    // A second call reuses every complete study and finds the same; one
+    // left without its run (as if interrupted) is run again, bit for bit.
+    let interrupted = study.variants[1].folder.join("compaction.json");
+    let mut record: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&interrupted).unwrap()).unwrap();
+    record["runs"] = serde_json::json!([]);
+    std::fs::write(&interrupted, record.to_string()).unwrap();
+    let mut said = Vec::new();
+    let again = run_calibration(&opts, 1, &out, "test", false, &mut |m| {
+        said.push(m.to_string())
+    })
+    .unwrap();
+    let count = |what: &str| said.iter().filter(|m| m.contains(what)).count();
+    assert_eq!((count("reused"), count("incomplete")), (3, 1), "{said:?}");
+    assert_eq!(
+        serde_json::to_value(&again.studies).unwrap(),
+        serde_json::to_value(&report.studies).unwrap()
+    );
+    // The spheres' study of a grain study is not a grain study; LAMMPS
+    // has no closure.
+    let e = run_calibration(
+        &CalibrationOptions {
+            grains: vec![study.variants[0].folder.clone()],
+            ..opts.clone()
+        },
+        1,
+        &dir.join("wrong"),
+        "test",
+        false,
+        &mut |_| {},
+    )
+    .unwrap_err();
+    assert!(e.to_string().contains("DEM spheres"), "{e}");
+    // The grains' packing is rebuilt only with their thread count.
+    assert_eq!(g.threads, Some(1));
+    let e = run_calibration(&opts, 2, &dir.join("wrong"), "test", false, &mut |_| {}).unwrap_err();
+    assert!(e.to_string().contains("--threads"), "{e}");
+    let lammps = CompactOptions {
+        engine: CompactionEngine::Lammps { ranks: 1 },
+        dem: Some(DemContact {
+            multicontact: Some(bpm::engine::dem::MultiContact::standard(0.82)),
+            ..DemContact::default()
+        }),
+        ..grains
+    };
+    let e = lammps.validate().unwrap_err();
+    assert!(e.to_string().contains("--closure"), "{e}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// A study of 16 rough grains of R = 2 d (seed 3, built in a twentieth of
+/// the full time), by the tiny protocol, without moduli: as grains, or
+/// as DEM spheres with `dem`.
+fn tiny_study(
+    dem: Option<bpm::studies::compaction::DemContact>,
+    mc_points: u64,
+) -> bpm::studies::compaction::CompactOptions {
+    use bpm::studies::compaction::{CompactionEngine, ModuliOptions, PackingSource};
+    bpm::studies::compaction::CompactOptions {
+        source: PackingSource::Build {
+            grains: 16,
+            kind: bpm::scene::builders::grain::GrainKind::Rough,
+            radius: 2.0,
+            distinct_grains: 2,
+            template_fraction: 0.57,
+            time_scale: 0.05,
+        },
+        a_b: 0.0,
+        zero_net: false,
+        seeds: vec![3],
+        protocol: tiny_protocol(),
+        engine: CompactionEngine::Native,
+        analysis: bpm::analysis::packing::AnalysisOptions {
+            mc_points,
+            ..Default::default()
+        },
+        moduli: ModuliOptions {
+            states: 0,
+            ..ModuliOptions::default()
+        },
+        dem,
+    }
 }
 
 /// A compaction protocol of a few thousand steps: jam for 2e3 tau, then

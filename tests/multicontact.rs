@@ -500,3 +500,47 @@ fn a_small_bed_compresses_and_the_closures_stiffen_it() {
     assert!(hertz > 0.0);
     assert!(standard > 1.1 * hertz && advanced > 1.1 * hertz);
 }
+
+/// A box compressed until the closure's range spans half of it stops the
+/// run: a sphere could then reach two images of one partner. With the
+/// range of plain contacts the same compression goes on further.
+#[test]
+fn a_box_compressed_below_twice_the_contact_range_stops_the_run() {
+    let run = |multicontact: Option<Value>| {
+        let mut ff = json!({"granular": material(E)});
+        if let Some(m) = multicontact {
+            ff["multicontact"] = m;
+        }
+        // L = 3.4 exp(-0.1 t): the half box meets the range 1.25 (diameter
+        // 1 with reach 0.25) at t = 3.075 tau, the diameter at t = 5.31.
+        let scene: Scene = serde_json::from_value(json!({
+            "model": "dem", "seed": 1,
+            "box": {"lo": [0.0, 0.0, 0.0], "lengths": [3.4, 3.4, 3.4],
+                    "periodic": [true, true, true]},
+            "particles": {"positions": [[0.5, 0.5, 0.5], [2.0, 2.0, 2.0]],
+                          "radius": [RADIUS, RADIUS]},
+            "force_field": ff,
+            "stages": [{"name": "squeeze", "steps": 500, "dt": 0.01,
+                        "deformation": {"isotropic": {"true_strain_rate": -0.1}},
+                        "record": {"every": 100}}]
+        }))
+        .unwrap();
+        validate(&scene).unwrap();
+        let mut sys = build_system(&scene, 1);
+        let (_, err) = run_scene(&mut sys, &scene, &RunOptions::quiet(1));
+        err.map(|e| e.to_string())
+    };
+    assert_eq!(run(None), None);
+    let err = run(Some(json!({"prefactor": 0.82})))
+        .expect("the compressed box must stop the closure's run");
+    assert!(
+        err.contains("normal to dimension 0") && err.contains("range 1.2500"),
+        "{err}"
+    );
+    let step: u64 = err
+        .split_whitespace()
+        .nth(2)
+        .and_then(|s| s.parse().ok())
+        .unwrap_or_else(|| panic!("no step in: {err}"));
+    assert!((307..=309).contains(&step), "stopped at step {step}: {err}");
+}

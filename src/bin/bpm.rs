@@ -1,6 +1,7 @@
 //! `bpm`: build scenes, run them on the native engine, benchmark it.
 
 use anyhow::{bail, Context, Result};
+use bpm::engine::dem::MultiContact;
 use bpm::options::validate_threads;
 use bpm::scene::builders::bulk::{build_bulk, BulkBuild, BulkProtocol};
 use bpm::scene::builders::grain::{build_grain, GrainKind, GrainParams};
@@ -15,7 +16,7 @@ use bpm::studies::hertz::{
     run_hertz, EngineAgreement, GrainSource, HertzOptions, Moduli, SqueezeEngine,
 };
 use bpm::studies::hertz_sweep::{run_hertz_sweep, SweepOptions};
-use bpm::studies::mcdem::{compression, rigid_box};
+use bpm::studies::mcdem::{calibration as mc_calibration, compression, rigid_box};
 use bpm::studies::{accuracy, calibration, compaction, large_strain, stability, upstream};
 use clap::{Parser, Subcommand, ValueEnum};
 use std::io::IsTerminal;
@@ -516,6 +517,22 @@ enum Command {
         /// R_eff sqrt(overlap).
         #[arg(long)]
         reference_overlap: Option<f64>,
+        /// DEM multi-contact closure (docs/model.md, "Multi-contact
+        /// closures"); plain Hertz without.
+        #[arg(long, value_enum)]
+        closure: Option<ClosureKind>,
+        /// Prefactor gamma of the closure [default 0.82 standard, 0.81
+        /// advanced].
+        #[arg(long)]
+        gamma: Option<f64>,
+        /// Maximum penetration ratio of the advanced closure [default 0.11].
+        #[arg(long)]
+        mpr: Option<f64>,
+        /// How far beyond touching, as a fraction of the two radii, the
+        /// closure looks for receivers [default 0.25]; the box must stay
+        /// wider than twice the spheres' diameter times (1 + reach).
+        #[arg(long)]
+        reach: Option<f64>,
         /// Refit the runs of an earlier OUTPUT/compaction.json and rewrite
         /// its plots and table, without running anything (other options
         /// are ignored).
@@ -736,6 +753,56 @@ enum Command {
         #[command(flatten)]
         closures: ClosureArgs,
     },
+    /// Calibrates the multi-contact closures against bonded grains
+    /// (docs/protocols.md, "Calibrating the closures against bonded
+    /// grains"): the packing of each grain study (a folder of `bpm
+    /// compact`) is compressed again as DEM spheres with plain Hertz, the
+    /// standard closure at each --gammas and the advanced one at each
+    /// --advanced-gammas and --mprs; each variant's pressure is compared
+    /// with the grains' at the same phi_MC - phi_c, and gamma and MPR are
+    /// fitted (least rms of ln P over --window). Writes
+    /// DIR/calibration.json, DIR/calibration.svg, DIR/calibration.txt and
+    /// one compaction study per variant in DIR/<grains>/<variant>/; a
+    /// variant already run with the same options is reused.
+    McCalibrate {
+        /// Grain compaction studies (folders with a compaction.json).
+        #[arg(required = true, num_args = 1..)]
+        grains: Vec<PathBuf>,
+        /// Output folder.
+        #[arg(short, long, default_value = "results/mcdem/calibration")]
+        output: PathBuf,
+        /// The spheres' friction mu_s,mu_r,mu_t.
+        #[arg(long, value_delimiter = ',', default_value = "0.15,0,0")]
+        friction: Vec<f64>,
+        /// Prefactors of the standard closure.
+        #[arg(
+            long,
+            value_delimiter = ',',
+            default_value = "0.5,0.82,1,1.1,1.25,1.5,2"
+        )]
+        gammas: Vec<f64>,
+        /// Prefactors of the advanced closure.
+        #[arg(long, value_delimiter = ',', default_value = "0.81,1.25,2")]
+        advanced_gammas: Vec<f64>,
+        /// Maximum penetration ratios of the advanced closure.
+        #[arg(long, value_delimiter = ',', default_value = "0.05,0.11")]
+        mprs: Vec<f64>,
+        /// The closures' reach (fraction of the two radii). The box must
+        /// stay wider than twice the spheres' diameter times (1 + reach),
+        /// which is why the default is below `compact`'s 0.25: 32 spheres
+        /// compressed by 48% leave room for 0.2.
+        #[arg(long, default_value_t = 0.2)]
+        reach: f64,
+        /// Volumetric strain of the box after jamming at which the spheres
+        /// stop.
+        #[arg(long, default_value_t = 0.48)]
+        volumetric_strain: f64,
+        /// Range lo,hi of phi_MC - phi_c over which the fit's error is
+        /// taken (default: where the closures act; nearer jamming the
+        /// overlaps are too small for a correction to matter).
+        #[arg(long, value_delimiter = ',', default_value = "0.1,0.3")]
+        window: Vec<f64>,
+    },
 }
 
 /// The closures a multi-contact study compares with plain Hertz.
@@ -760,6 +827,15 @@ impl From<ClosureArgs> for bpm::studies::mcdem::Closures {
             mpr: a.mpr,
         }
     }
+}
+
+#[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
+enum ClosureKind {
+    /// Every contact corrected by the sphere's other contacts.
+    Standard,
+    /// The standard closure, switched off beyond the maximum penetration
+    /// ratio.
+    Advanced,
 }
 
 #[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
@@ -1471,6 +1547,10 @@ fn real_main() -> Result<()> {
             restitution,
             tangential_damping,
             reference_overlap,
+            closure,
+            gamma,
+            mpr,
+            reach,
             refit,
         } => {
             if refit {
@@ -1490,6 +1570,10 @@ fn real_main() -> Result<()> {
                         ("--restitution", restitution.is_some()),
                         ("--tangential-damping", tangential_damping.is_some()),
                         ("--reference-overlap", reference_overlap.is_some()),
+                        ("--closure", closure.is_some()),
+                        ("--gamma", gamma.is_some()),
+                        ("--mpr", mpr.is_some()),
+                        ("--reach", reach.is_some()),
                     ];
                     if let Some((name, _)) = given.iter().find(|g| g.1) {
                         anyhow::bail!("{name} is a DEM option: add --model dem");
@@ -1497,6 +1581,29 @@ fn real_main() -> Result<()> {
                     None
                 }
                 CompactModel::Dem => {
+                    let closure_given = [("--gamma", gamma), ("--mpr", mpr), ("--reach", reach)];
+                    if closure.is_none() {
+                        if let Some((name, _)) = closure_given.iter().find(|g| g.1.is_some()) {
+                            anyhow::bail!("{name} sets the multi-contact closure: add --closure standard or --closure advanced");
+                        }
+                    }
+                    if closure == Some(ClosureKind::Standard) && mpr.is_some() {
+                        anyhow::bail!(
+                            "--mpr belongs to the advanced closure: use --closure advanced"
+                        );
+                    }
+                    let multicontact = closure.map(|kind| {
+                        let mut m = match kind {
+                            ClosureKind::Standard => MultiContact::standard(gamma.unwrap_or(0.82)),
+                            ClosureKind::Advanced => {
+                                MultiContact::advanced(gamma.unwrap_or(0.81), mpr.unwrap_or(0.11))
+                            }
+                        };
+                        if let Some(reach) = reach {
+                            m.reach = reach;
+                        }
+                        m
+                    });
                     let d = compaction::DemContact::default();
                     Some(compaction::DemContact {
                         friction: match friction {
@@ -1511,6 +1618,7 @@ fn real_main() -> Result<()> {
                         restitution: restitution.unwrap_or(d.restitution),
                         tangential_damping: tangential_damping.unwrap_or(d.tangential_damping),
                         reference_overlap: reference_overlap.unwrap_or(d.reference_overlap),
+                        multicontact,
                     })
                 }
             };
@@ -1747,6 +1855,51 @@ fn real_main() -> Result<()> {
             println!("{}", compression::table(&report));
             println!(
                 "wrote {}/compression.json, compression.svg and scene.json",
+                output.display()
+            );
+        }
+        Command::McCalibrate {
+            grains,
+            output,
+            friction,
+            gammas,
+            advanced_gammas,
+            mprs,
+            reach,
+            volumetric_strain,
+            window,
+        } => {
+            let [mu_s, mu_r, mu_t] = friction[..] else {
+                bail!(
+                    "--friction takes three values, mu_s,mu_r,mu_t; got {}",
+                    friction.len()
+                );
+            };
+            let [lo, hi] = window[..] else {
+                bail!("--window takes two distances lo,hi; got {}", window.len());
+            };
+            let opts = mc_calibration::CalibrationOptions {
+                grains,
+                friction: [mu_s, mu_r, mu_t],
+                gammas,
+                advanced_gammas,
+                mprs,
+                reach,
+                volumetric_strain,
+                window: [lo, hi],
+            };
+            opts.validate()?;
+            let report = mc_calibration::run_calibration(
+                &opts,
+                cli.threads,
+                &output,
+                &command(),
+                std::io::stderr().is_terminal(),
+                &mut print,
+            )?;
+            print!("{}", mc_calibration::table(&report));
+            println!(
+                "wrote {}/calibration.json, calibration.svg and calibration.txt",
                 output.display()
             );
         }

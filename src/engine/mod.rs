@@ -123,6 +123,21 @@ pub enum EngineError {
         /// The correction over the radius.
         ratio: f64,
     },
+    /// The box shrank or tilted until its periodic faces are closer than
+    /// twice the pair interactions' range: a particle could then meet two
+    /// images of one partner, and the minimum image would see only one.
+    #[error("at step {step} the box's periodic faces normal to dimension {dimension} are {face:.4} apart, no more than twice the pair interactions' range {cutoff:.4}: compress or shear less, or use more particles (a larger box)")]
+    BoxBelowCutoff {
+        /// Step after which the box was too small.
+        step: u64,
+        /// The dimension (0 = x) whose face distance is too short.
+        dimension: usize,
+        /// The face distance.
+        face: f64,
+        /// The pair cutoff (largest contact range; for DEM with a
+        /// multi-contact closure, including its reach).
+        cutoff: f64,
+    },
     /// The stage asks the model for something it does not have.
     #[error("the particle model does not support {what}")]
     Unsupported {

@@ -402,7 +402,8 @@ impl System {
                     })?;
             self.remap_into(new_box);
         }
-        Ok(())
+        // Before the next evaluation uses the new box.
+        self.check_box()
     }
 
     /// The verdict of the last force evaluation on its interactions: an
@@ -489,6 +490,26 @@ impl System {
             });
         }
         Ok(())
+    }
+
+    /// The box against the pair interactions' range, as the box deforms.
+    /// The scene's check at load adds the skin; here the range alone
+    /// counts, because forces use the minimum image at every evaluation:
+    /// only a partner within range through two images at once is missed.
+    fn check_box(&self) -> Result<(), EngineError> {
+        let Some(cutoff) = self.model.pair_cutoff() else {
+            return Ok(());
+        };
+        let faces = self.simbox.face_distances();
+        match (0..3).find(|&d| self.simbox.periodic[d] && cutoff >= 0.5 * faces[d]) {
+            Some(dimension) => Err(EngineError::BoxBelowCutoff {
+                step: self.step,
+                dimension,
+                face: faces[dimension],
+                cutoff,
+            }),
+            None => Ok(()),
+        }
     }
 
     /// Before a Lees-Edwards box change that may flip the tilt: rewrites

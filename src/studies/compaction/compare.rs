@@ -106,7 +106,11 @@ const DISTANCE_AT: [f64; 4] = [0.01, 0.03, 0.1, 0.3];
 /// `pick` of a study's jammed states at `phi - phi_c = x` (each run at its
 /// own `phi_c`, interpolated linearly in log-log), the geometric mean over
 /// runs; `None` where no run covers `x`.
-fn mean_at_distance(report: &CompactionReport, x: f64, pick: fn(&StateRow) -> f64) -> Option<f64> {
+pub fn mean_at_distance(
+    report: &CompactionReport,
+    x: f64,
+    pick: fn(&StateRow) -> f64,
+) -> Option<f64> {
     let logs: Vec<f64> = report
         .runs
         .iter()

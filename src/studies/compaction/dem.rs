@@ -24,10 +24,12 @@
 //! Here `k_t a = 8 G_eff a` is the Mindlin stiffness and `eta_t(a) = x_gt
 //! c_e sqrt(m_eff k_n a)` the tangential damping of two equal spheres.
 
+use crate::engine::dem::MultiContact;
 use crate::kernels::{
     GranularCoeffs, GranularMaterial, NormalDamping, SpringDashpotSlider, Twisting,
 };
 use crate::options::InvalidOption;
+use crate::scene::ForceField;
 use crate::studies::hertz::Moduli;
 use serde::{Deserialize, Serialize};
 
@@ -43,6 +45,10 @@ pub struct DemContact {
     pub tangential_damping: f64,
     /// `delta_ref / R_eff` of the rolling and twisting springs.
     pub reference_overlap: f64,
+    /// The multi-contact closure, if any (docs/model.md, "Multi-contact
+    /// closures"); plain Hertz without.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub multicontact: Option<MultiContact>,
 }
 
 impl Default for DemContact {
@@ -54,6 +60,7 @@ impl Default for DemContact {
             restitution: 0.5,
             tangential_damping: 1.0,
             reference_overlap: 0.01,
+            multicontact: None,
         }
     }
 }
@@ -91,7 +98,37 @@ impl DemContact {
                 format!("must be in (0, 1], got {r}"),
             ));
         }
+        if let Some(m) = &self.multicontact {
+            if !(m.prefactor.is_finite() && m.prefactor >= 0.0) {
+                return Err(InvalidOption::new(
+                    "--gamma",
+                    format!("must be finite and >= 0, got {}", m.prefactor),
+                ));
+            }
+            if let Some(mpr) = m.max_penetration_ratio {
+                if !(mpr.is_finite() && mpr >= 0.0) {
+                    return Err(InvalidOption::new(
+                        "--mpr",
+                        format!("must be finite and >= 0, got {mpr}"),
+                    ));
+                }
+            }
+            if !(m.reach.is_finite() && m.reach > 0.0) {
+                return Err(InvalidOption::new(
+                    "--reach",
+                    format!("must be finite and > 0, got {}", m.reach),
+                ));
+            }
+        }
         Ok(())
+    }
+
+    /// The DEM force field of spheres of `material`, with the closure.
+    pub fn force_field(&self, material: GranularMaterial) -> ForceField {
+        ForceField {
+            multicontact: self.multicontact,
+            ..ForceField::dem(material)
+        }
     }
 
     /// The material of equal spheres of `radius` and `mass` made of the

@@ -229,6 +229,13 @@ impl CompactOptions {
         }
         if let Some(dem) = &self.dem {
             dem.validate()?;
+            if dem.multicontact.is_some() && matches!(self.engine, CompactionEngine::Lammps { .. })
+            {
+                return Err(InvalidOption::new(
+                    "--closure",
+                    "runs in the native engine only: LAMMPS has no multi-contact closure (use --engine native)",
+                ));
+            }
             if self.zero_net {
                 return Err(InvalidOption::new(
                     "--zero-net",
@@ -515,6 +522,10 @@ pub struct CompactionReport {
     /// for these options).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub warnings: Vec<String>,
+    /// Threads of the run: a built packing depends on them (absent in
+    /// reports of versions that did not record it).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub threads: Option<usize>,
     /// One run per seed.
     pub runs: Vec<CompactionRun>,
 }
@@ -583,7 +594,7 @@ fn packing(
                             .map_err(packing_error)?;
                     let material =
                         dem.material_of(moduli, summary.template_radius, mean_mass(&scene));
-                    scene.force_field = ForceField::dem(material);
+                    scene.force_field = dem.force_field(material);
                     (scene, summary)
                 }
             };
@@ -605,7 +616,7 @@ fn packing(
                         ))
                     })?;
                     let material = dem.material_of(moduli, radius, mean_mass(&scene));
-                    scene.force_field = ForceField::dem(material);
+                    scene.force_field = dem.force_field(material);
                     separate_spheres(&mut scene).map_err(packing_error)?
                 }
             };
@@ -998,6 +1009,7 @@ pub fn run_compaction(
         moduli,
         rates: opts.protocol.rates(),
         warnings: Vec::new(),
+        threads: Some(threads),
         runs: Vec::new(),
     };
     if let (Some(dem), CompactionEngine::Lammps { .. }) = (&opts.dem, &opts.engine) {

@@ -7,8 +7,12 @@
 //!   cubic cell, squeezed in a rigid box: plate and side-wall stress
 //!   against the plate's displacement;
 //! - [`compression`] (`bpm mc-compress`): a bed of 514 spheres compressed
-//!   uniaxially to volume fraction 0.85 and back, twice.
+//!   uniaxially to volume fraction 0.85 and back, twice;
+//! - [`calibration`] (`bpm mc-calibrate`): the closures' `gamma` and `MPR`
+//!   fitted to the pressure of bonded grains compressed from the same
+//!   packing.
 
+pub mod calibration;
 pub mod compression;
 pub mod rigid_box;
 
