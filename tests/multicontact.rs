@@ -544,3 +544,60 @@ fn a_box_compressed_below_twice_the_contact_range_stops_the_run() {
         .unwrap_or_else(|| panic!("no step in: {err}"));
     assert!((307..=309).contains(&step), "stopped at step {step}: {err}");
 }
+
+/// The closure sees a sheared periodic box's lattice, not its cell: the
+/// tilts `+L/2` and `-L/2` describe one lattice (a Lees-Edwards flip
+/// turns the first into the second), so three spheres touching across the
+/// sheared face get the same corrections and forces in both cells.
+#[test]
+fn the_closure_is_the_same_across_a_tilt_flip() {
+    let run = |tilt: f64| {
+        let ff = json!({"granular": material(E), "multicontact": {"prefactor": 2.0}});
+        // A at the bottom face; B's image below the face (shifted by the
+        // tilt) and C touch A and each other, each overlapping by about
+        // 0.05 d.
+        let scene: Scene = serde_json::from_value(json!({
+            "model": "dem", "seed": 1,
+            "box": {"lo": [0.0, 0.0, 0.0], "lengths": [4.0, 4.0, 4.0],
+                    "tilt": [tilt, 0.0, 0.0], "periodic": [true, true, true]},
+            "particles": {"positions": [[1.0, 0.2, 2.0], [3.504, 3.394, 2.0], [1.95, 0.2, 2.0]],
+                          "radius": [RADIUS, RADIUS, RADIUS]},
+            "force_field": ff,
+            "stages": [{"name": "press", "steps": 20, "dt": 1e-3, "record": {"every": 20}}]
+        }))
+        .unwrap();
+        validate(&scene).unwrap();
+        let mut sys = build_system(&scene, 1);
+        let drivers = bpm::engine::StageDrivers {
+            dt: 1e-3,
+            ..Default::default()
+        };
+        sys.setup(&drivers);
+        let start = sys.simbox.clone();
+        for step in 1..=20 {
+            sys.step(&drivers, step, &start).unwrap();
+        }
+        let closure = sys.report.closure.expect("no closure report");
+        (
+            sys.particles.f.clone(),
+            closure.largest.max(-closure.smallest),
+        )
+    };
+    let (f_plus, largest_plus) = run(2.0);
+    let (f_minus, largest_minus) = run(-2.0);
+    assert!(largest_plus > 1e-3, "the closure is idle: {largest_plus}");
+    assert!(
+        (largest_plus - largest_minus).abs() < 1e-12 * largest_plus,
+        "{largest_plus} against {largest_minus}"
+    );
+    let scale = f_plus.iter().flatten().fold(0.0f64, |m, c| m.max(c.abs()));
+    assert!(scale > 0.1, "no contact force: {f_plus:?}");
+    for (a, b) in f_plus.iter().zip(&f_minus) {
+        for k in 0..3 {
+            assert!(
+                (a[k] - b[k]).abs() < 1e-12 * scale,
+                "{f_plus:?} against {f_minus:?}"
+            );
+        }
+    }
+}

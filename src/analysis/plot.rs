@@ -238,14 +238,20 @@ where
 
 /// Writes `panels` side by side as one SVG file.
 pub fn write_svg(path: &Path, panels: &[Panel]) -> Result<(), PlotError> {
+    write_svg_rows(path, panels, panels.len())
+}
+
+/// [`write_svg`] with `columns` panels per row, filled row by row.
+pub fn write_svg_rows(path: &Path, panels: &[Panel], columns: usize) -> Result<(), PlotError> {
     let err = |message: String| PlotError {
         path: path.display().to_string(),
         message,
     };
-    let width = 560 * panels.len().max(1) as u32;
-    let root = SVGBackend::new(path, (width, 420)).into_drawing_area();
+    let columns = columns.clamp(1, panels.len().max(1));
+    let rows = panels.len().div_ceil(columns).max(1);
+    let root = SVGBackend::new(path, (560 * columns as u32, 420 * rows as u32)).into_drawing_area();
     root.fill(&WHITE).map_err(|e| err(e.to_string()))?;
-    let areas = root.split_evenly((1, panels.len().max(1)));
+    let areas = root.split_evenly((rows, columns));
     for (area, panel) in areas.iter().zip(panels) {
         draw_panel(area, panel).map_err(err)?;
     }

@@ -18,7 +18,7 @@
 //! folder whose `compaction.json` already holds the same options is reused,
 //! so an interrupted calibration resumes where it stopped.
 
-use crate::analysis::plot::{write_svg, Mark, Panel, Series};
+use crate::analysis::plot::{write_svg_rows, Mark, Panel, Series};
 use crate::engine::dem::MultiContact;
 use crate::file_error::FileError;
 use crate::options::InvalidOption;
@@ -663,7 +663,8 @@ pub fn write_report(report: &CalibrationReport, dir: &Path) -> Result<(), Compac
     let json = serde_json::to_string_pretty(report)
         .map_err(|e| CompactionError::Packing(format!("serialising the calibration: {e}")))?;
     std::fs::write(&path, json).map_err(FileError::on("writing", &path))?;
-    write_svg(&dir.join("calibration.svg"), &panels(report))?;
+    // One row per grain study: standard, advanced, pressures.
+    write_svg_rows(&dir.join("calibration.svg"), &panels(report), 3)?;
     let path = dir.join("calibration.txt");
     std::fs::write(&path, table(report)).map_err(FileError::on("writing", &path))?;
     Ok(())
