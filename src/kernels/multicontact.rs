@@ -473,6 +473,46 @@ mod tests {
         assert!(signed[0] < 0.0, "the signed test keeps shrinking terms");
     }
 
+    /// Six equal contacts at the ends of three axes: each is corrected by
+    /// its opposite contact and four at a quarter turn, in closed form.
+    /// The quarter-turn term changes sign at nu = (1 - (1 + sqrt 2) / 2) / 2
+    /// = -0.104, so at negative nu a crowded sphere gets little correction
+    /// (the calibration against grains at nu = -0.10 shows it).
+    #[test]
+    fn six_axial_contacts_follow_the_closed_form_at_any_poisson_ratio() {
+        let (r, e, f) = (1.5, 2.0, 0.7);
+        let axes = [
+            [r, 0.0, 0.0],
+            [-r, 0.0, 0.0],
+            [0.0, r, 0.0],
+            [0.0, -r, 0.0],
+            [0.0, 0.0, r],
+            [0.0, 0.0, -r],
+        ];
+        let contacts: Vec<ContactPoint> =
+            axes.iter().map(|&p| ContactPoint::new(p, f, r)).collect();
+        let mut previous = f64::NEG_INFINITY;
+        for nu in [-0.3, -0.1, 0.0, 0.25, 0.4] {
+            let hs = HalfSpace::new(1.0, e, nu);
+            let opposite = (3.0 - 2.0 * nu) / 2.0;
+            let quarter = (0.5 - (1.0 - 2.0 * nu) / (1.0 + 2f64.sqrt())) / 2f64.sqrt();
+            let expected = (1.0 + nu) * f / (2.0 * PI * e * r) * (opposite + 4.0 * quarter);
+            let got = corrections(&hs, &Closure::Standard, r, &contacts);
+            for g in &got {
+                assert!(
+                    (g - expected).abs() < 1e-14,
+                    "nu {nu}: {g} against {expected}"
+                );
+            }
+            assert!(got[0] > previous, "nu {nu}: the correction falls with nu");
+            previous = got[0];
+        }
+        let flip = (1.0 - (1.0 + 2f64.sqrt()) / 2.0) / 2.0;
+        let hs = HalfSpace::new(1.0, e, flip);
+        let quarter = hs.displacement(&contacts[0], &contacts[2], r);
+        assert!(quarter.abs() < 1e-15, "{quarter}");
+    }
+
     #[test]
     fn incompressible_material_drops_the_compressibility_term() {
         // At nu = 1/2 the quarter-turn bracket is -1/2 exactly.
