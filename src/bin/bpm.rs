@@ -1592,12 +1592,17 @@ fn real_main() -> Result<()> {
                             "--mpr belongs to the advanced closure: use --closure advanced"
                         );
                     }
+                    // The defaults are the study's Appendix B values, as in mc-box.
+                    let paper = bpm::studies::mcdem::Closures::default();
                     let multicontact = closure.map(|kind| {
                         let mut m = match kind {
-                            ClosureKind::Standard => MultiContact::standard(gamma.unwrap_or(0.82)),
-                            ClosureKind::Advanced => {
-                                MultiContact::advanced(gamma.unwrap_or(0.81), mpr.unwrap_or(0.11))
+                            ClosureKind::Standard => {
+                                MultiContact::standard(gamma.unwrap_or(paper.gamma))
                             }
+                            ClosureKind::Advanced => MultiContact::advanced(
+                                gamma.unwrap_or(paper.gamma_advanced),
+                                mpr.unwrap_or(paper.mpr),
+                            ),
                         };
                         if let Some(reach) = reach {
                             m.reach = reach;
