@@ -271,6 +271,7 @@ const SUBCOMMANDS: &[&[&str]] = &[
     &["mc-box", "-o", "{out}"],
     &["mc-compress", "-o", "{out}"],
     &["mc-calibrate", "{data}", "-o", "{out}"],
+    &["mc-shear", "-o", "{out}"],
 ];
 
 /// Value names of options that take paths or words, not numbers.

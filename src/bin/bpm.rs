@@ -803,6 +803,123 @@ enum Command {
         #[arg(long, value_delimiter = ',', default_value = "0.1,0.3")]
         window: Vec<f64>,
     },
+    /// Simple shear above jamming (docs/protocols.md, "Simple shear
+    /// above jamming"): monodisperse spheres sheared at constant volume
+    /// with Lees-Edwards boundaries, fast then slowly, under plain Hertz
+    /// and the two closures; the quasi-static pressure fitted to
+    /// p/k = alpha (phi - phi_c)^beta against the multi-contact study's
+    /// Tables D.1 and D.2. Each run is saved under DIR/runs as it
+    /// finishes and reused by a rerun with the same parameters. Writes
+    /// DIR/shear.json, DIR/table.txt, DIR/shear.svg and DIR/scene.json.
+    McShear {
+        /// Output folder.
+        #[arg(short, long, default_value = "results/mcdem/shear")]
+        output: PathBuf,
+        /// The grid of curves and volume fractions; options below override
+        /// it.
+        #[arg(long, value_enum, default_value_t = ShearGrid::Default)]
+        grid: ShearGrid,
+        /// Volume fractions (default: the grid's).
+        #[arg(long, value_delimiter = ',')]
+        fractions: Option<Vec<f64>>,
+        /// Contact laws. Given any of --laws, --frictions and
+        /// --poissons, the curves are every combination of the three
+        /// lists, and a list not given takes every value in the grid (for
+        /// the default grid: all three laws, friction 0, 0.1, 0.5, 1,
+        /// Poisson's ratio 0.25, 0.4, 0.5).
+        #[arg(long, value_enum, value_delimiter = ',')]
+        laws: Option<Vec<ShearLaw>>,
+        /// Friction coefficients.
+        #[arg(long, value_delimiter = ',')]
+        frictions: Option<Vec<f64>>,
+        /// Poisson's ratios.
+        #[arg(long, value_delimiter = ',')]
+        poissons: Option<Vec<f64>>,
+        /// Spheres (grid default: 256; quick: 108).
+        #[arg(long)]
+        spheres: Option<usize>,
+        /// Dimensionless slow shear rate gamma_dot d / sqrt(k / rho)
+        /// [default: 2e-3].
+        #[arg(long)]
+        rate: Option<f64>,
+        /// The fast shear's rate over the slow one's [default: 4].
+        #[arg(long)]
+        rate_factor: Option<f64>,
+        /// Strain of the fast shear; its second half is averaged
+        /// (default 1.5; quick: 0.4).
+        #[arg(long)]
+        strain_fast: Option<f64>,
+        /// Strain of the slow shear (default 1.25; quick: 0.3).
+        #[arg(long)]
+        strain_slow: Option<f64>,
+        /// Strain at the start of the slow shear left out of its average
+        /// (default 0.25; quick: 0.1).
+        #[arg(long)]
+        discard: Option<f64>,
+        /// Time step (tau = sqrt(m / (E d))) [default: 0.05].
+        #[arg(long)]
+        dt: Option<f64>,
+        /// Normal restitution coefficient [default: 0.7].
+        #[arg(long)]
+        restitution: Option<f64>,
+        /// Prefactor of the standard closure [default: 0.82].
+        #[arg(long)]
+        gamma: Option<f64>,
+        /// Prefactor of the advanced closure [default: 0.81].
+        #[arg(long)]
+        gamma_advanced: Option<f64>,
+        /// Maximum penetration ratio of the advanced closure [default:
+        /// 0.08].
+        #[arg(long)]
+        mpr: Option<f64>,
+        /// How far beyond touching the closures still correct a pair
+        /// (fraction of the two radii) [default: 0.25].
+        #[arg(long)]
+        reach: Option<f64>,
+        /// Largest relative difference of the fast and slow pressure of a
+        /// quasi-static point [default: 0.05].
+        #[arg(long)]
+        quasi_static_tolerance: Option<f64>,
+        /// Jamming points as friction:phi_c pairs in increasing friction,
+        /// interpolated between (default: 0:0.636,0.1:0.61,0.3:0.596,
+        /// 0.5:0.59,1:0.587, see docs/protocols.md).
+        #[arg(long, value_delimiter = ',')]
+        phi_c: Option<Vec<String>>,
+        /// Neighbour skin (d) [default: 0.15].
+        #[arg(long)]
+        skin: Option<f64>,
+        /// Recorded rows per unit strain [default: 100].
+        #[arg(long)]
+        records_per_strain: Option<f64>,
+        /// Seed of the packing.
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+        /// Runs at a time, one thread each (the global --threads does not
+        /// apply: runs are independent, so they share the cores instead).
+        #[arg(long, default_value_t = 2)]
+        workers: usize,
+    },
+}
+
+/// `bpm mc-shear --grid`.
+#[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
+enum ShearGrid {
+    /// 21 curves at 6 volume fractions (about 21 minutes on 2 cores).
+    Default,
+    /// One curve per law at friction 0.5, Poisson's ratio 0.5, volume
+    /// fractions 0.75 and 0.9, 108 spheres, short strains.
+    Quick,
+}
+
+/// `bpm mc-shear --laws`.
+#[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
+enum ShearLaw {
+    /// Plain Hertz-Mindlin.
+    Hertz,
+    /// The standard closure.
+    Standard,
+    /// The advanced closure.
+    Advanced,
 }
 
 /// The closures a multi-contact study compares with plain Hertz.
@@ -1905,6 +2022,127 @@ fn real_main() -> Result<()> {
             print!("{}", mc_calibration::table(&report));
             println!(
                 "wrote {}/calibration.json, calibration.svg and calibration.txt",
+                output.display()
+            );
+        }
+        Command::McShear {
+            output,
+            grid,
+            fractions,
+            laws,
+            frictions,
+            poissons,
+            spheres,
+            rate,
+            rate_factor,
+            strain_fast,
+            strain_slow,
+            discard,
+            dt,
+            restitution,
+            gamma,
+            gamma_advanced,
+            mpr,
+            reach,
+            quasi_static_tolerance,
+            phi_c,
+            skin,
+            records_per_strain,
+            seed,
+            workers,
+        } => {
+            use bpm::studies::mcdem::shear::{self, ContactLaw, Grid, SeriesSpec, ShearOptions};
+            let grid = match grid {
+                ShearGrid::Default => Grid::Default,
+                ShearGrid::Quick => Grid::Quick,
+            };
+            let mut opts = ShearOptions::grid(grid);
+            if laws.is_some() || frictions.is_some() || poissons.is_some() {
+                let distinct = |f: fn(&SeriesSpec) -> f64| {
+                    let mut v: Vec<f64> = opts.series.iter().map(f).collect();
+                    v.sort_by(f64::total_cmp);
+                    v.dedup();
+                    v
+                };
+                let frictions = frictions.unwrap_or_else(|| distinct(|s| s.friction));
+                let poissons = poissons.unwrap_or_else(|| distinct(|s| s.poisson_ratio));
+                let laws: Vec<ContactLaw> = match laws {
+                    Some(l) => l
+                        .iter()
+                        .map(|l| match l {
+                            ShearLaw::Hertz => ContactLaw::Hertz,
+                            ShearLaw::Standard => ContactLaw::Standard,
+                            ShearLaw::Advanced => ContactLaw::Advanced,
+                        })
+                        .collect(),
+                    None => vec![
+                        ContactLaw::Hertz,
+                        ContactLaw::Standard,
+                        ContactLaw::Advanced,
+                    ],
+                };
+                opts.series.clear();
+                for &law in &laws {
+                    for &friction in &frictions {
+                        for &poisson_ratio in &poissons {
+                            opts.series.push(SeriesSpec {
+                                law,
+                                friction,
+                                poisson_ratio,
+                            });
+                        }
+                    }
+                }
+            }
+            if let Some(phi_c) = phi_c {
+                opts.jamming_points = phi_c
+                    .iter()
+                    .map(|pair| {
+                        let parsed = pair
+                            .split_once(':')
+                            .and_then(|(mu, phi)| Some((mu.trim().parse().ok()?, phi.trim().parse().ok()?)));
+                        parsed.with_context(|| {
+                            format!("--phi-c takes friction:phi_c pairs such as 0.5:0.59 (got {pair:?})")
+                        })
+                    })
+                    .collect::<Result<_>>()?;
+            }
+            macro_rules! set {
+                ($($field:ident),*) => { $(if let Some(v) = $field { opts.$field = v; })* };
+            }
+            set!(
+                fractions,
+                spheres,
+                rate,
+                rate_factor,
+                strain_fast,
+                strain_slow,
+                discard,
+                dt,
+                restitution,
+                reach,
+                quasi_static_tolerance,
+                skin,
+                records_per_strain
+            );
+            if let Some(v) = gamma {
+                opts.closures.gamma = v;
+            }
+            if let Some(v) = gamma_advanced {
+                opts.closures.gamma_advanced = v;
+            }
+            if let Some(v) = mpr {
+                opts.closures.mpr = v;
+            }
+            opts.seed = seed;
+            opts.workers = workers;
+            opts.validate()?;
+            let (report, scene) =
+                shear::run_shear(&opts, &output, &command(), std::io::stderr().is_terminal())?;
+            shear::write_report(&report, &scene, &output)?;
+            print!("{}", shear::table(&report));
+            println!(
+                "wrote {}/shear.json, table.txt, shear.svg, scene.json and runs/",
                 output.display()
             );
         }

@@ -15,7 +15,7 @@ use crate::scene::validate::{validate, SceneError};
 /// A scene of model `bpm` in the periodic cube `[0, length)^3`: unit
 /// masses, no velocities, grains, bonds or stages; builders fill in the
 /// rest (and change the model).
-fn periodic_cube(
+pub(crate) fn periodic_cube(
     description: String,
     seed: u64,
     length: f64,

@@ -10,11 +10,15 @@
 //!   uniaxially to volume fraction 0.85 and back, twice;
 //! - [`calibration`] (`bpm mc-calibrate`): the closures' `gamma` and `MPR`
 //!   fitted to the pressure of bonded grains compressed from the same
-//!   packing.
+//!   packing;
+//! - [`shear`] (`bpm mc-shear`): monodisperse spheres sheared at constant
+//!   volume above jamming; the quasi-static pressure's power law against
+//!   the study's Tables D.1 and D.2.
 
 pub mod calibration;
 pub mod compression;
 pub mod rigid_box;
+pub mod shear;
 
 use crate::engine::{GranularWall, MultiContact, WallSide};
 use crate::kernels::{GranularMaterial, NormalDamping};
@@ -329,17 +333,26 @@ impl Hydrogel {
     /// damping, and tangential damping `sqrt(2 (1 - nu) / (2 - nu))` times
     /// the normal one, which is its tangential dashpot in this contact law.
     pub fn material(&self) -> GranularMaterial {
-        let nu = self.poisson_ratio;
-        GranularMaterial {
-            youngs_modulus: 1.0,
-            poisson_ratio: nu,
-            restitution: self.restitution,
-            damping: NormalDamping::CoeffRestitution,
-            tangential_damping: (2.0 * (1.0 - nu) / (2.0 - nu)).sqrt(),
-            sliding_friction: self.friction,
-            rolling: None,
-            twisting: Default::default(),
-        }
+        reference_material(self.poisson_ratio, self.restitution, self.friction)
+    }
+}
+
+/// Spheres of Young's modulus 1 with the contact law of the closures'
+/// reference implementation (LIGGGHTS's Hertz model): the restitution form
+/// of the damping, tangential damping `sqrt(2 (1 - nu) / (2 - nu))` times
+/// the normal one (its tangential dashpot in this contact law), sliding
+/// friction only.
+pub fn reference_material(poisson_ratio: f64, restitution: f64, friction: f64) -> GranularMaterial {
+    let nu = poisson_ratio;
+    GranularMaterial {
+        youngs_modulus: 1.0,
+        poisson_ratio: nu,
+        restitution,
+        damping: NormalDamping::CoeffRestitution,
+        tangential_damping: (2.0 * (1.0 - nu) / (2.0 - nu)).sqrt(),
+        sliding_friction: friction,
+        rolling: None,
+        twisting: Default::default(),
     }
 }
 
