@@ -70,10 +70,15 @@ pub enum Regime {
     /// The fast pressure is higher: the quasi-static pressure is
     /// extrapolated to zero rate.
     RateDependent,
-    /// The fast pressure is lower, beyond tolerance and noise: the fast
-    /// window (earlier in strain) had not reached the steady state, so the
-    /// rates cannot be compared; the slow pressure stands, unextrapolated.
+    /// A window drifts, or the fast pressure is lower beyond tolerance
+    /// and noise: the fast window (earlier in strain) had not reached the
+    /// steady state, so the rates cannot be compared; the slow pressure
+    /// stands, unextrapolated.
     Unsettled,
+    /// The two agree only within noise larger than the tolerance: a rate
+    /// effect of the tolerance's size could not be seen. The slow
+    /// pressure stands.
+    Unresolved,
 }
 
 /// One volume fraction of a curve, analysed.
@@ -171,9 +176,15 @@ impl ShearPoint {
                 // Two standard errors of the difference count as noise.
                 let noise = 2.0 * f.error.hypot(s.error);
                 let tolerance = (opts.quasi_static_tolerance * s.mean).max(noise);
+                // Drifting windows are not steady: their rates cannot be
+                // compared.
                 let extrapolate = |n: f64| s.mean - gap / (run.key.rate_factor.powf(n) - 1.0);
                 point.rate_effect = Some(gap / s.mean);
-                let (regime, pressure) = if gap.abs() <= tolerance {
+                let (regime, pressure) = if f.drifts || s.drifts {
+                    (Regime::Unsettled, s.mean)
+                } else if gap.abs() <= tolerance && noise > opts.quasi_static_tolerance * s.mean {
+                    (Regime::Unresolved, s.mean)
+                } else if gap.abs() <= tolerance {
                     (Regime::QuasiStatic, s.mean)
                 } else if gap > 0.0 {
                     point.extrapolated_linear = Some(extrapolate(1.0));
@@ -194,8 +205,8 @@ impl ShearPoint {
     pub fn fitted_pressure(&self, every_point: bool) -> Option<f64> {
         match self.regime? {
             Regime::QuasiStatic => self.quasi_static,
-            Regime::RateDependent | Regime::Unsettled if every_point => self.quasi_static,
-            Regime::RateDependent | Regime::Unsettled => None,
+            _ if every_point => self.quasi_static,
+            _ => None,
         }
         .filter(|p| *p > 0.0)
     }
@@ -720,7 +731,19 @@ mod tests {
         }
         let p = ShearPoint::analyse(&noisy, &opts);
         assert!(p.slow.unwrap().error > 0.01, "{:?}", p.slow);
-        assert_eq!(p.regime, Some(Regime::QuasiStatic));
+        assert!(!p.slow.unwrap().drifts);
+        // ... but that noise is above the 5% tolerance: unresolved.
+        assert_eq!(p.regime, Some(Regime::Unresolved));
+        assert_eq!(p.fitted_pressure(false), None);
+        assert!((p.fitted_pressure(true).unwrap() - p.slow.unwrap().mean).abs() < 1e-15);
+        // A slow window that drifts is not steady, whatever the rates say.
+        let mut drifting = recorded(0.1, 0.1);
+        for (k, p) in drifting.stages[1].pressure.iter_mut().enumerate() {
+            *p *= 1.0 + 0.005 * k as f64;
+        }
+        let p = ShearPoint::analyse(&drifting, &opts);
+        assert!(p.slow.unwrap().drifts);
+        assert_eq!(p.regime, Some(Regime::Unsettled));
         // A run that stopped in its slow stage has no pressure to fit.
         let mut stopped = recorded(0.1, 0.1);
         stopped.stages[1].complete = false;

@@ -367,12 +367,25 @@ impl ShearOptions {
             ),
         ];
         for (name, strain) in rows {
-            if strain * self.records_per_strain < BLOCKS as f64 {
+            // The recording interval is rounded to whole steps, which can
+            // leave two thirds of the nominal rows.
+            if strain * self.records_per_strain < 1.5 * BLOCKS as f64 {
                 return bad(format!(
-                    "{name} ({strain} averaged) at --records-per-strain {} gives fewer than {BLOCKS} rows to average",
-                    self.records_per_strain
+                    "{name} ({strain} averaged) at --records-per-strain {} gives too few rows to average ({:.1}; at least {:.1})",
+                    self.records_per_strain,
+                    strain * self.records_per_strain,
+                    1.5 * BLOCKS as f64
                 ));
             }
+        }
+        let densest = self.fractions.iter().copied().fold(0.0, f64::max);
+        let preparation = ((densest / START_FRACTION).ln() / (3.0 * PREPARATION_RATE)
+            + PREPARATION_HOLD * self.fractions.len() as f64)
+            / self.dt;
+        if preparation > MAX_RUN_STEPS {
+            return bad(format!(
+                "preparing the packings would take {preparation:.3e} steps, more than {MAX_RUN_STEPS:e}: raise --dt"
+            ));
         }
         for s in &self.series {
             let slow = shear_rate(self.rate, s.poisson_ratio);
@@ -385,8 +398,7 @@ impl ShearOptions {
         }
         // A sheared box flips its tilt at half an edge, where its faces lie
         // L / sqrt(1.25) apart; the pair range (the closures' reach and the
-        // skin included) must stay within half of that.
-        let densest = self.fractions.iter().copied().fold(0.0, f64::max);
+        // skin included, whatever the laws) must stay within half of that.
         let range = 1.0 + self.reach + self.skin;
         let edge = cube_edge(self.spheres, densest);
         if 0.5 * edge / 1.25f64.sqrt() <= range {
@@ -594,7 +606,8 @@ mod tests {
         refused(&|o| o.closures.mpr = -1.0, "--mpr");
         refused(&|o| o.series.push(o.series[0]), "twice");
         refused(&|o| o.spheres = 40, "use at least 53 spheres");
-        refused(&|o| o.records_per_strain = 5.0, "fewer than 5 rows");
+        refused(&|o| o.records_per_strain = 5.0, "too few rows");
+        refused(&|o| o.dt = 1e-7, "preparing");
         refused(&|o| o.rate = 1e-12, "steps");
         assert!(ShearOptions::default().validate().is_ok());
         assert!(ShearOptions::grid(Grid::Quick).validate().is_ok());

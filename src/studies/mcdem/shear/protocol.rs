@@ -312,7 +312,7 @@ pub fn shear_scene(key: &RunKey, packing: &Packing) -> Scene {
             .map(|x| [fast * x[1], 0.0, 0.0])
             .collect(),
     );
-    scene.particles.angular_velocities = Some(vec![[0.0, 0.0, -0.5 * fast]; key.spheres]);
+    scene.particles.angular_velocities = Some(vec![[0.0, 0.0, -0.5 * fast]; packing.centres.len()]);
     scene.stages = [
         ("fast", fast, key.strains[0]),
         ("slow", slow, key.strains[1]),

@@ -25,7 +25,8 @@ pub fn table(report: &ShearReport) -> String {
                 (Some(why), _) => format!("stopped: {why}"),
                 (None, Some(Regime::QuasiStatic)) => "quasi-static".into(),
                 (None, Some(Regime::RateDependent)) => "rate-dependent".into(),
-                (None, Some(Regime::Unsettled)) => "unsettled (fast below slow)".into(),
+                (None, Some(Regime::Unsettled)) => "unsettled".into(),
+                (None, Some(Regime::Unresolved)) => "unresolved (noise above tolerance)".into(),
                 (None, None) => "no pressure".into(),
             };
             let drifts = [("fast", p.fast), ("slow", p.slow)]
@@ -62,7 +63,7 @@ pub fn table(report: &ShearReport) -> String {
             fmt_opt(f.zip(paper).map(|(f, p)| f.exponent - p.beta), 2),
         )
     };
-    out += "\nfits p/k = alpha (phi - phi_c)^beta at the assumed phi_c, points more than 0.005 above it:\n";
+    out += &format!("\nfits p/k = alpha (phi - phi_c)^beta at the assumed phi_c, points more than {MIN_DISTANCE} above it:\n");
     out += "quasi-static points only | every point, rate-dependent ones extrapolated | the tables | every point at the Hertz curves' phi_c\n";
     let heads = format!(
         "{:>8} {:>12} {:>2} {:>6} {:>6}",
@@ -89,7 +90,7 @@ pub fn table(report: &ShearReport) -> String {
             fmt_opt(h.map(|h| h.exponent), 3),
         );
     }
-    out += "\np/k over the tables' law at the assumed phi_c (* rate-dependent, extrapolated; ~ unsettled, slow pressure); log-rms over the row\n";
+    out += "\np/k over the tables' law at the assumed phi_c (* rate-dependent, extrapolated; ~ unsettled or unresolved, slow pressure); log-rms over the row\n";
     out += &format!("{:<9} {:>4} {:>5} |", "law", "mu", "nu");
     for phi in &report.options.fractions {
         out += &format!(" {phi:>7}");
@@ -111,7 +112,7 @@ pub fn table(report: &ShearReport) -> String {
                     let mark = match r.regime {
                         Regime::QuasiStatic => " ",
                         Regime::RateDependent => "*",
-                        Regime::Unsettled => "~",
+                        Regime::Unsettled | Regime::Unresolved => "~",
                     };
                     format!("{:.3}{mark}", r.ratio)
                 });
