@@ -1,5 +1,5 @@
 //! Least-squares straight lines: moduli from stress-strain series, power
-//! laws in log-log.
+//! laws in log-log; and linear interpolation along a sampled curve.
 
 /// A fitted line `y = slope x + intercept`.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -72,9 +72,31 @@ pub fn fit_line(x: &[f64], y: &[f64]) -> Option<LineFit> {
     })
 }
 
+/// `y(x0)` by linear interpolation in increasing `x`; `None` outside it.
+pub fn interpolate(x: &[f64], y: &[f64], x0: f64) -> Option<f64> {
+    let k = x.partition_point(|&v| v < x0);
+    if k == 0 || k >= x.len() {
+        return (x.first() == Some(&x0)).then(|| y[0]);
+    }
+    let (x1, x2) = (x[k - 1], x[k]);
+    let w = if x2 > x1 { (x0 - x1) / (x2 - x1) } else { 0.0 };
+    Some(y[k - 1] + w * (y[k] - y[k - 1]))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn interpolation_is_exact_on_a_line_and_refuses_outside() {
+        let x = [0.0, 1.0, 3.0];
+        let y = [1.0, 3.0, 7.0];
+        assert_eq!(interpolate(&x, &y, 2.0), Some(5.0));
+        assert_eq!(interpolate(&x, &y, 0.0), Some(1.0));
+        assert_eq!(interpolate(&x, &y, 3.0), Some(7.0));
+        assert_eq!(interpolate(&x, &y, 3.5), None);
+        assert_eq!(interpolate(&x, &y, -0.5), None);
+    }
 
     #[test]
     fn recovers_an_exact_line() {

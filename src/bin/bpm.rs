@@ -2058,12 +2058,8 @@ fn real_main() -> Result<()> {
             };
             let mut opts = ShearOptions::grid(grid);
             if laws.is_some() || frictions.is_some() || poissons.is_some() {
-                let distinct = |f: fn(&SeriesSpec) -> f64| {
-                    let mut v: Vec<f64> = opts.series.iter().map(f).collect();
-                    v.sort_by(f64::total_cmp);
-                    v.dedup();
-                    v
-                };
+                let distinct =
+                    |f: fn(&SeriesSpec) -> f64| shear::sorted_distinct(opts.series.iter().map(f));
                 let frictions = frictions.unwrap_or_else(|| distinct(|s| s.friction));
                 let poissons = poissons.unwrap_or_else(|| distinct(|s| s.poisson_ratio));
                 let laws: Vec<ContactLaw> = match laws {

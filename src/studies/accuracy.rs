@@ -13,6 +13,7 @@
 //! Cost is the wall-clock time of the runs and, to compare without the
 //! machine's noise, particles times steps.
 
+use crate::analysis::fit::interpolate;
 use crate::analysis::hertz::{effective_modulus, hertz_deviation, squeeze_curve};
 use crate::analysis::plot::{write_svg, Mark, Panel, PlotError, Series};
 use crate::file_error::FileError;
@@ -677,17 +678,6 @@ fn curve_difference(run: &SqueezeRun, reference: &SqueezeRun) -> f64 {
     (diffs.iter().map(|d| d * d).sum::<f64>() / diffs.len() as f64).sqrt()
 }
 
-/// `y(x0)` by linear interpolation in increasing `x`; `None` outside it.
-fn interpolate(x: &[f64], y: &[f64], x0: f64) -> Option<f64> {
-    let k = x.partition_point(|&v| v < x0);
-    if k == 0 || k >= x.len() {
-        return (x.first() == Some(&x0)).then(|| y[0]);
-    }
-    let (x1, x2) = (x[k - 1], x[k]);
-    let w = if x2 > x1 { (x0 - x1) / (x2 - x1) } else { 0.0 };
-    Some(y[k - 1] + w * (y[k] - y[k - 1]))
-}
-
 fn min(values: &[f64]) -> f64 {
     values.iter().copied().fold(f64::INFINITY, f64::min)
 }
@@ -858,16 +848,6 @@ pub fn table(report: &AccuracyReport) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn interpolation_is_exact_on_a_line_and_refuses_outside() {
-        let x = [0.0, 1.0, 3.0];
-        let y = [1.0, 3.0, 7.0];
-        assert_eq!(interpolate(&x, &y, 2.0), Some(5.0));
-        assert_eq!(interpolate(&x, &y, 0.0), Some(1.0));
-        assert_eq!(interpolate(&x, &y, 3.5), None);
-        assert_eq!(interpolate(&x, &y, -0.5), None);
-    }
 
     #[test]
     fn a_curve_ten_percent_higher_differs_by_ten_percent() {

@@ -3,6 +3,7 @@
 //! two flat walls in either engine, their force-overlap curves against
 //! Hertz's law, ensemble mean and spread, JSON and plots.
 
+use crate::analysis::fit::interpolate;
 use crate::analysis::hertz::{
     effective_modulus, hertz_deviation, hertz_normalised_force, squeeze_curve, HertzDeviation,
     SqueezeCurve, CONTACT_THRESHOLD,
@@ -521,20 +522,6 @@ pub fn squeeze_grains(
         squeezes,
         ensemble,
         wall_seconds: start.elapsed().as_secs_f64(),
-    })
-}
-
-/// Linear interpolation of the curve at `x` (None outside it).
-fn interpolate(xs: &[f64], ys: &[f64], x: f64) -> Option<f64> {
-    let k = xs.iter().position(|&v| v >= x)?;
-    if k == 0 {
-        return (xs[0] == x).then_some(ys[0]);
-    }
-    let (x0, x1, y0, y1) = (xs[k - 1], xs[k], ys[k - 1], ys[k]);
-    Some(if x1 > x0 {
-        y0 + (y1 - y0) * (x - x0) / (x1 - x0)
-    } else {
-        y1
     })
 }
 

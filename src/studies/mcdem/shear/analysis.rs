@@ -2,8 +2,8 @@
 //! the quasi-static test, the power-law fits, the comparison with the
 //! study's tables and its trends.
 
-use super::protocol::{shear_rate, stiffness};
-use super::{ContactLaw, RecordedRun, SeriesSpec, ShearOptions, StageSeries};
+use super::protocol::{stage_rates, stiffness};
+use super::{sorted_distinct, ContactLaw, RecordedRun, SeriesSpec, ShearOptions, StageSeries};
 use crate::analysis::jamming::{power_law_at, power_law_with_jamming_point, PowerLaw};
 use serde::{Deserialize, Serialize};
 
@@ -389,10 +389,7 @@ pub fn analyse(opts: &ShearOptions, runs: &[RecordedRun]) -> Analysis {
             SeriesResult {
                 spec: *spec,
                 stiffness: stiffness(spec.poisson_ratio),
-                shear_rates: {
-                    let slow = shear_rate(opts.rate, spec.poisson_ratio);
-                    [opts.rate_factor * slow, slow]
-                },
+                shear_rates: stage_rates(opts.rate, opts.rate_factor, spec.poisson_ratio),
                 points,
                 fit,
                 fit_extrapolated,
@@ -403,9 +400,7 @@ pub fn analyse(opts: &ShearOptions, runs: &[RecordedRun]) -> Analysis {
             }
         })
         .collect();
-    let mut frictions: Vec<f64> = opts.series.iter().map(|s| s.friction).collect();
-    frictions.sort_by(f64::total_cmp);
-    frictions.dedup();
+    let frictions = sorted_distinct(opts.series.iter().map(|s| s.friction));
     let hertz_jamming: Vec<(f64, Option<PowerLaw>)> = frictions
         .iter()
         .map(|&mu| {
@@ -458,9 +453,7 @@ fn pressure_of(
 /// quasi-static points are compared.
 fn trend_checks(series: &[SeriesResult], opts: &ShearOptions) -> Vec<TrendCheck> {
     let mut checks = Vec::new();
-    let mut frictions: Vec<f64> = series.iter().map(|s| s.spec.friction).collect();
-    frictions.sort_by(f64::total_cmp);
-    frictions.dedup();
+    let frictions = sorted_distinct(series.iter().map(|s| s.spec.friction));
     let nus = |law: ContactLaw, mu: f64| {
         let mut v: Vec<f64> = series
             .iter()

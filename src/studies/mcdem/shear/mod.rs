@@ -29,12 +29,13 @@ pub use analysis::{
     TrendCheck, WindowMean, BLOCKS,
 };
 pub use protocol::{
-    cube_edge, material, prepare_packings, run_point, shear_rate, shear_scene, stiffness, Packing,
-    RecordedRun, RunKey, StageSeries,
+    cube_edge, material, prepare_packings, run_point, shear_rate, shear_scene, stage_rates,
+    stiffness, Packing, RecordedRun, RunKey, StageSeries,
 };
 pub use report::{table, write_report};
 
 use super::Closures;
+use crate::analysis::fit::interpolate;
 use crate::analysis::plot::PlotError;
 use crate::engine::MultiContact;
 use crate::file_error::FileError;
@@ -425,9 +426,14 @@ impl ShearOptions {
         self.closures.validate().map_err(ShearError::Options)
     }
 
-    /// The jamming point assumed at friction `mu`.
+    /// The jamming point assumed at friction `mu`: linear between the
+    /// listed frictions, constant beyond their ends.
     pub fn jamming_point(&self, mu: f64) -> f64 {
-        interpolate(&self.jamming_points, mu)
+        let (frictions, phis): (Vec<f64>, Vec<f64>) = self.jamming_points.iter().copied().unzip();
+        let (Some(&lo), Some(&hi)) = (frictions.first(), frictions.last()) else {
+            return f64::NAN;
+        };
+        interpolate(&frictions, &phis, mu.clamp(lo, hi)).unwrap_or(f64::NAN)
     }
 }
 
@@ -438,20 +444,12 @@ fn has_duplicates(values: &[f64]) -> bool {
         .any(|(i, a)| values[..i].iter().any(|b| (a - b).abs() < 1e-12))
 }
 
-/// Linear interpolation in `table` (sorted by x), constant beyond its ends.
-fn interpolate(table: &[(f64, f64)], x: f64) -> f64 {
-    let (first, last) = (table[0], table[table.len() - 1]);
-    if x <= first.0 {
-        return first.1;
-    }
-    if x >= last.0 {
-        return last.1;
-    }
-    table
-        .windows(2)
-        .find(|w| x <= w[1].0)
-        .map(|w| w[0].1 + (x - w[0].0) / (w[1].0 - w[0].0) * (w[1].1 - w[0].1))
-        .unwrap_or(last.1)
+/// The distinct values of `values`, in increasing order.
+pub fn sorted_distinct(values: impl IntoIterator<Item = f64>) -> Vec<f64> {
+    let mut v: Vec<f64> = values.into_iter().collect();
+    v.sort_by(f64::total_cmp);
+    v.dedup();
+    v
 }
 
 /// The study's result.

@@ -31,6 +31,13 @@ pub fn shear_rate(rate: f64, poisson_ratio: f64) -> f64 {
     rate * (stiffness(poisson_ratio) / density).sqrt()
 }
 
+/// The shear rates (1 / tau) of the fast and the slow stage: the slow
+/// one at dimensionless rate `rate`, the fast one `rate_factor` times it.
+pub fn stage_rates(rate: f64, rate_factor: f64, poisson_ratio: f64) -> [f64; 2] {
+    let slow = shear_rate(rate, poisson_ratio);
+    [rate_factor * slow, slow]
+}
+
 /// Edge of the cube that `spheres` unit spheres fill to `phi`.
 pub fn cube_edge(spheres: usize, phi: f64) -> f64 {
     (spheres as f64 * std::f64::consts::PI / (6.0 * phi)).cbrt()
@@ -277,8 +284,7 @@ impl RunKey {
 
     /// The shear rates (1 / tau) of the fast and slow stage.
     pub fn shear_rates(&self) -> [f64; 2] {
-        let slow = shear_rate(self.rate, self.series.poisson_ratio);
-        [self.rate_factor * slow, slow]
+        stage_rates(self.rate, self.rate_factor, self.series.poisson_ratio)
     }
 }
 
