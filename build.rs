@@ -30,6 +30,8 @@ fn main() {
         "bond_bpm_multibody.cpp",
         "pair_bpm_contact.cpp",
         "fix_bpm_reference.cpp",
+        "pair_bpm_granular.cpp",
+        "fix_bpm_contacts.cpp",
         "bpm_plugin.cpp",
     ];
     let mut build = cc::Build::new();
@@ -53,6 +55,8 @@ fn main() {
         "bond_bpm_multibody.h",
         "pair_bpm_contact.h",
         "fix_bpm_reference.h",
+        "pair_bpm_granular.h",
+        "fix_bpm_contacts.h",
         "fault_message.h",
     ] {
         println!("cargo:rerun-if-changed=lammps-plugin/{h}");

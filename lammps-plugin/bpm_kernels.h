@@ -16,7 +16,8 @@ enum {
   BPM_ERR_INDEX = 2, /* an atom index outside 0..nall */
   BPM_ERR_TYPE = 3,  /* a bond or atom type without coefficients */
   BPM_ERR_PANIC = 4, /* internal error in the kernels (a bug) */
-  BPM_ERR_UNSTABLE = 5 /* forces computed, but an interaction left the model's range (fault) */
+  BPM_ERR_UNSTABLE = 5, /* forces computed, but an interaction left the model's range (fault) */
+  BPM_ERR_STOPPED = 6   /* a pass stopped; the message written says why */
 };
 
 /* Kinds of fault: the first sign of a blow-up, caught while values are finite. */
@@ -105,6 +106,52 @@ int64_t bpm_describe_fault(const bpm_fault *fault, int64_t name_i, int64_t name_
  * bond without damping, for LAMMPS's Bond::single. */
 double bpm_bond_single(double r, double r0, double dilation, const bpm_bond_coeffs *coeffs,
                        double *fforce);
+
+/* pair_style bpm/granular (src/ffi/granular.rs): DEM sphere contacts with
+ * the optional multi-contact closure. A handle holds the coefficients and
+ * the passes' buffers. Each owned atom carries a contact-memory row of
+ * 1 + 9 slots doubles ([count, (partner tag, 8 values) x slots]); every
+ * atom a correction row of 1 + 2 slots ([count, (partner tag, Delta) x
+ * slots]), owned rows written by the corrections pass, ghost rows copied
+ * from their owners before the forces pass. Needs newton off for pairs. */
+typedef struct bpm_granular bpm_granular;
+
+/* The arrays of a pass: nall atoms (x, v, omega as 3 nall doubles; radius,
+ * rmass nall; tag nall IDs), the first nlocal owned. */
+typedef struct {
+  const double *x, *v, *omega, *radius, *rmass;
+  const int64_t *tag;
+  int64_t nall, nlocal;
+} bpm_granular_atoms;
+
+/* Parses the nwords words of pair_coeff after "* *"; NULL on bad input,
+ * with the reason in message (len bytes). */
+bpm_granular *bpm_granular_create(int32_t nwords, const char *const *words, char *message,
+                                  int64_t len);
+void bpm_granular_destroy(bpm_granular *style);
+/* Contacts per row. */
+int64_t bpm_granular_slots(const bpm_granular *style);
+/* Pair cutoff for spheres up to max_radius (the closure's reach included). */
+double bpm_granular_cutoff(const bpm_granular *style, double max_radius);
+/* Whether the closure is on (corrections pass and ghost copy needed). */
+int32_t bpm_granular_has_closure(const bpm_granular *style);
+/* What pass 1 found: the largest correction over its atom's radius, and
+ * the contacts (or terms) the advanced closure switched off. */
+typedef struct { double largest; int64_t switched_off; } bpm_granular_summary;
+
+/* Pass 1: owned rows of corrections from the memory rows; summary if not NULL. */
+int bpm_granular_corrections(bpm_granular *style, const bpm_granular_atoms *atoms, int64_t inum,
+                             const int32_t *ilist, const int32_t *numneigh,
+                             const int32_t *const *firstneigh, const double *history,
+                             double *corrections, int64_t step, bpm_granular_summary *summary,
+                             char *message, int64_t len);
+/* Pass 2: forces and torques on owned atoms, memory rows advanced when
+ * update != 0; virial to tally if not NULL. */
+int bpm_granular_forces(const bpm_granular *style, const bpm_granular_atoms *atoms, int64_t inum,
+                        const int32_t *ilist, const int32_t *numneigh,
+                        const int32_t *const *firstneigh, const double *corrections,
+                        double *history, double *f, double *torque, double dt, int32_t update,
+                        int64_t step, bpm_tally *tally, char *message, int64_t len);
 
 #ifdef __cplusplus
 }

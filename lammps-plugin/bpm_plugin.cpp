@@ -5,8 +5,10 @@
 #include "fmt_compat.h"
 
 #include "bond_bpm_multibody.h"
+#include "fix_bpm_contacts.h"
 #include "fix_bpm_reference.h"
 #include "pair_bpm_contact.h"
+#include "pair_bpm_granular.h"
 
 #include "force.h"
 #include "input.h"
@@ -27,9 +29,19 @@ static Pair *pair_creator(LAMMPS *lmp)
   return new PairBPMContact(lmp);
 }
 
+static Pair *granular_creator(LAMMPS *lmp)
+{
+  return new PairBPMGranular(lmp);
+}
+
 static Fix *fix_creator(LAMMPS *lmp, int narg, char **arg)
 {
   return new FixBPMReference(lmp, narg, arg);
+}
+
+static Fix *contacts_creator(LAMMPS *lmp, int narg, char **arg)
+{
+  return new FixBPMContacts(lmp, narg, arg);
 }
 
 extern "C" void bpm_register_styles(void *handle)
@@ -37,7 +49,9 @@ extern "C" void bpm_register_styles(void *handle)
   auto lmp = static_cast<LAMMPS *>(handle);
   (*lmp->force->bond_map)["bpm/multibody"] = &bond_creator;
   (*lmp->force->pair_map)["bpm/contact"] = &pair_creator;
+  (*lmp->force->pair_map)["bpm/granular"] = &granular_creator;
   (*lmp->modify->fix_map)["BPM/REFERENCE"] = &fix_creator;
+  (*lmp->modify->fix_map)["BPM/CONTACTS"] = &contacts_creator;
 }
 
 /* lmp-bpm: LAMMPS's own main with our styles registered. */
@@ -79,10 +93,18 @@ extern "C" void lammpsplugin_init(void *lmp, void *handle, void *regfunc)
   plugin.info = "bonded particle model contact pair style";
   plugin.creator.v1 = (lammpsplugin_factory1 *) &pair_creator;
   register_plugin(&plugin, lmp);
+  plugin.name = "bpm/granular";
+  plugin.info = "DEM sphere contacts with the multi-contact closure";
+  plugin.creator.v1 = (lammpsplugin_factory1 *) &granular_creator;
+  register_plugin(&plugin, lmp);
   plugin.style = "fix";
   plugin.name = "BPM/REFERENCE";
   plugin.info = "reference lengths of bond_style bpm/multibody (internal)";
   plugin.creator.v2 = (lammpsplugin_factory2 *) &fix_creator;
+  register_plugin(&plugin, lmp);
+  plugin.name = "BPM/CONTACTS";
+  plugin.info = "contact rows of pair_style bpm/granular (internal)";
+  plugin.creator.v2 = (lammpsplugin_factory2 *) &contacts_creator;
   register_plugin(&plugin, lmp);
 }
 #endif

@@ -13,6 +13,7 @@ mod bond;
 mod fault;
 mod geometry;
 mod granular;
+mod granular_list;
 mod isa;
 mod multicontact;
 mod pair;
@@ -34,10 +35,13 @@ pub use granular::{
     tsuji_prefactor, ContactForce, ContactHistory, GranularCoeffs, GranularMaterial, NormalDamping,
     Sphere, SpringDashpotSlider, Twisting, WallTouch,
 };
+pub use granular_list::{
+    CorrectionSummary, GranularList, Layout, ListAtoms, ListClosure, ListError, HISTORY_VALUES,
+};
 pub use isa::Isa;
 pub use multicontact::{
-    surface_corrections, Closure, ContactPoint, HalfSpace, MprSwitch, MprTest, COINCIDENT_POINTS,
-    NEGLIGIBLE, POINT_FLOOR,
+    pair_contact_points, surface_corrections, Closure, ContactPoint, HalfSpace, MprSwitch, MprTest,
+    COINCIDENT_POINTS, NEGLIGIBLE, POINT_FLOOR,
 };
 pub use pair::{pair_energy, pair_force_magnitude, pair_forces, PairCoeffs, PairInputs};
 pub use tally::{Ownership, Tally};

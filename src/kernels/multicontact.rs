@@ -172,6 +172,30 @@ impl ContactPoint {
     }
 }
 
+/// The contact points of spheres `i` and `j` (radii `radius_i`,
+/// `radius_j`) at separation `del = x_i - x_j`, `r = |del| > 0`, whose
+/// contact pressed with `force`: each relative to its own sphere's centre.
+/// Halfway through the overlap, or each sphere's own surface point facing
+/// the other while they are apart; never past a centre (a small sphere
+/// deep in a large one). Both engines form the closure's points here.
+#[inline]
+pub fn pair_contact_points(
+    del: &[f64; 3],
+    r: f64,
+    radius_i: f64,
+    radius_j: f64,
+    force: f64,
+) -> [ContactPoint; 2] {
+    let inset = 0.5 * (radius_i + radius_j - r).max(0.0);
+    let towards_j = del.map(|c| -c / r);
+    let si = (radius_i - inset).max(POINT_FLOOR * radius_i);
+    let sj = (radius_j - inset).max(POINT_FLOOR * radius_j);
+    [
+        ContactPoint::new(towards_j.map(|c| si * c), force, radius_i),
+        ContactPoint::new(towards_j.map(|c| -sj * c), force, radius_j),
+    ]
+}
+
 /// The radius correction `Delta_c` of each of one sphere's `contacts`
 /// (radius `radius`), written to `corrections` (same length): the
 /// displacements from every other contact that carried a force, combined

@@ -2,7 +2,10 @@
 //! `-var` values of the input templates in `lammps_inputs/` (embedded in
 //! the binary, written next to each run by [`super::templates`]).
 
-use crate::kernels::{GranularCoeffs, GranularMaterial, NormalDamping, Twisting};
+use crate::engine::MultiContact;
+use crate::kernels::{
+    GranularCoeffs, GranularMaterial, MprSwitch, MprTest, NormalDamping, Twisting,
+};
 pub use crate::scene::datafile::{type_masses, write_data_file};
 use crate::scene::load::reference_lengths;
 use crate::scene::Scene;
@@ -31,12 +34,23 @@ impl ScriptVars {
             .collect();
         let g = |v: f64| format!("{v:.17e}");
         if let Some(material) = &ff.granular {
+            // The closure's pair style computes each pair on every rank
+            // that owns one of its spheres: newton off, whatever is asked.
+            let closure = uses_closure(scene);
+            let newton = newton && !closure;
             let vars = [
                 ("inputs", inputs.display().to_string()),
                 ("data", data.to_string()),
                 ("boundary", boundary.join(" ")),
                 ("newton", if newton { "on" } else { "off" }.to_string()),
-                ("granular", granular_pair_coeff(material)),
+                (
+                    "pair",
+                    if closure { "bpm/granular" } else { "granular" }.to_string(),
+                ),
+                (
+                    "granular",
+                    dem_pair_coeff(material, ff.multicontact.as_ref(), closure),
+                ),
                 ("skin", g(ff.skin)),
                 ("integrator", "nve/sphere".to_string()),
             ];
@@ -109,6 +123,45 @@ pub fn granular_pair_coeff(m: &GranularMaterial) -> String {
         g(m.sliding_friction),
         rolling_twisting(m)
     )
+}
+
+/// Whether any force field of `scene` turns the multi-contact closure on:
+/// then the whole scene runs with the plugin's `pair_style bpm/granular`
+/// (a stage without the closure gives it plain Hertz), so the contact
+/// memory carries across stages as in the native engine.
+pub fn uses_closure(scene: &Scene) -> bool {
+    scene.force_field.multicontact.is_some()
+        || scene.stages.iter().any(|s| {
+            s.force_field
+                .as_ref()
+                .is_some_and(|ff| ff.multicontact.is_some())
+        })
+}
+
+/// The arguments of `pair_coeff * *` for spheres of `m`: LAMMPS's
+/// `pair_style granular` ([`granular_pair_coeff`]), or with `bpm_style`
+/// the plugin's `pair_style bpm/granular`, which reads the same words and
+/// then the closure `mc`: `multicontact gamma [mpr MPR switch S test T]
+/// reach R` (parsed by `bpm::ffi::parse_coeffs`).
+pub fn dem_pair_coeff(m: &GranularMaterial, mc: Option<&MultiContact>, bpm_style: bool) -> String {
+    let mut s = granular_pair_coeff(m);
+    if let (true, Some(mc)) = (bpm_style, mc) {
+        let g = |v: f64| format!("{v:.17e}");
+        s += &format!(" multicontact {}", g(mc.prefactor));
+        if let Some(mpr) = mc.max_penetration_ratio {
+            let switch = match mc.switch {
+                MprSwitch::WholeContact => "whole_contact",
+                MprSwitch::PerTerm => "per_term",
+            };
+            let test = match mc.test {
+                MprTest::Signed => "signed",
+                MprTest::Magnitude => "magnitude",
+            };
+            s += &format!(" mpr {} switch {switch} test {test}", g(mpr));
+        }
+        s += &format!(" reach {}", g(mc.reach));
+    }
+    s
 }
 
 /// LAMMPS 2021's prefactor `4/3 E / (2 (1 - nu))` of a granular wall's
@@ -212,5 +265,30 @@ mod tests {
         );
         assert_eq!(words[2].parse::<f64>().unwrap(), wall.restitution);
         assert!(model.contains("rolling sds") && model.ends_with("twisting marshall"));
+    }
+
+    /// The plugin's style reads back every setting the harness writes.
+    #[test]
+    fn the_closure_coefficients_round_trip_through_the_plugin_parser() {
+        let material = crate::verify::dem_check_material(true);
+        for mc in [
+            MultiContact::standard(0.82),
+            MultiContact {
+                switch: MprSwitch::PerTerm,
+                test: MprTest::Magnitude,
+                reach: 0.4,
+                ..MultiContact::advanced(0.81, 0.11)
+            },
+        ] {
+            let words = dem_pair_coeff(&material, Some(&mc), true);
+            let parsed =
+                crate::ffi::parse_coeffs(&words.split_whitespace().collect::<Vec<_>>()).unwrap();
+            assert_eq!(parsed.material, material);
+            assert_eq!(parsed.multicontact, Some(mc));
+        }
+        assert_eq!(
+            dem_pair_coeff(&material, Some(&MultiContact::standard(0.8)), false),
+            granular_pair_coeff(&material)
+        );
     }
 }

@@ -10,14 +10,15 @@
 //! checkpoints) and reads the recorded rows back after each.
 
 use super::datafile::{
-    granular_pair_coeff, granular_wall_model, type_masses, write_data_file,
+    dem_pair_coeff, granular_wall_model, type_masses, uses_closure, write_data_file,
     write_reference_lengths, ScriptVars,
 };
 use super::templates::{write_templates, FOLDER as TEMPLATE_FOLDER};
 use crate::engine::{ActiveGranularWall, Deformation, ShearRemap, TiltFactor, WallSide};
 use crate::kernels::{GranularMaterial, NormalDamping};
 use crate::scene::observables::{
-    energy_terms, lammps_energy_compute, rotates, stage_columns, Column,
+    closure_columns, energy_terms, lammps_energy_compute, rotates, stage_columns, Column,
+    LAMMPS_CLOSURE_COMPUTE,
 };
 use crate::scene::run::{random_velocities, stage_seed};
 use crate::scene::{ForceField, ModelKind, Scene, StageSpec};
@@ -159,8 +160,11 @@ fn check_supported(index: usize, stage: &StageSpec, scene: &Scene) -> Result<(),
         ff.granular
             .is_some_and(|m| m.damping == NormalDamping::CoeffRestitution)
     };
-    if restitution_form(&scene.force_field)
-        || stage.force_field.as_ref().is_some_and(restitution_form)
+    let closure = uses_closure(scene);
+    // The plugin's pair style has the restitution form; LAMMPS's does not.
+    if (!closure
+        && (restitution_form(&scene.force_field)
+            || stage.force_field.as_ref().is_some_and(restitution_form)))
         || stage
             .granular_walls
             .iter()
@@ -170,14 +174,9 @@ fn check_supported(index: usize, stage: &StageSpec, scene: &Scene) -> Result<(),
             "the restitution form of the DEM damping (LAMMPS 29Sep2021 has only `damping tsuji`)",
         ));
     }
-    if scene.force_field.multicontact.is_some()
-        || stage
-            .force_field
-            .as_ref()
-            .is_some_and(|ff| ff.multicontact.is_some())
-    {
+    if closure && !stage.granular_walls.is_empty() {
         return Err(unsupported(
-            "the multi-contact closure (it has no LAMMPS pair style yet: run it with the native engine)",
+            "granular walls with the multi-contact closure (the closure counts walls as contacts, and LAMMPS's fix wall/gran tells the pair style nothing of its contacts)",
         ));
     }
     if !dem && type_masses(scene).is_none() {
@@ -227,10 +226,15 @@ pub(crate) fn yes_no(flag: bool) -> &'static str {
     }
 }
 
-fn force_field_commands(ff: &ForceField) -> Vec<String> {
+/// The commands of a stage's force field; `closure_style`: the scene runs
+/// with `pair_style bpm/granular` ([`uses_closure`]).
+fn force_field_commands(ff: &ForceField, closure_style: bool) -> Vec<String> {
     if let Some(material) = &ff.granular {
         return vec![
-            format!("pair_coeff      * * {}", granular_pair_coeff(material)),
+            format!(
+                "pair_coeff      * * {}",
+                dem_pair_coeff(material, ff.multicontact.as_ref(), closure_style)
+            ),
             format!("neighbor        {} bin", g(ff.skin)),
         ];
     }
@@ -442,13 +446,22 @@ pub fn write_driver(
     // The spheres' material in force at each stage (granular walls mix
     // theirs with it).
     let mut spheres = scene.force_field.granular.as_ref();
+    // Whether the closure is on at each stage, as the native engine records
+    // its columns.
+    let mut closure_on = scene.force_field.multicontact.is_some();
+    if uses_closure(scene) {
+        cmd(
+            &mut lines,
+            format!("compute         {LAMMPS_CLOSURE_COMPUTE} all pair bpm/granular"),
+        );
+    }
     for (i, stage) in scene.stages.iter().enumerate() {
         cmd(
             &mut lines,
             format!("\n# Stage {i} `{}`: {} steps", stage.name, stage.steps),
         );
         if let Some(ff) = &stage.force_field {
-            for c in force_field_commands(ff) {
+            for c in force_field_commands(ff, uses_closure(scene)) {
                 cmd(&mut lines, c);
             }
         }
@@ -496,7 +509,13 @@ pub fn write_driver(
         }
         let external = external_commands(stage, spheres);
         lines.extend(external.variables.into_iter().map(DriverLine::Command));
-        let columns = stage_columns(energy_terms(scene.model), rotates(scene.model), stage);
+        if let Some(ff) = &stage.force_field {
+            closure_on = ff.multicontact.is_some();
+        }
+        let mut columns = stage_columns(energy_terms(scene.model), rotates(scene.model), stage);
+        if closure_on {
+            columns.extend(closure_columns());
+        }
         let template = match &stage.deformation {
             None if stage.barostat.is_some() => {
                 let b = stage.barostat.as_ref().expect("checked by the guard");

@@ -168,18 +168,23 @@ pub fn stage_columns(terms: &[EnergyTerm], rotational: bool, stage: &StageSpec) 
     c
 }
 
+/// LAMMPS's compute of the multi-contact closure's two values (`compute
+/// pair bpm/granular`: the pair style's largest correction and switched-off
+/// count).
+pub const LAMMPS_CLOSURE_COMPUTE: &str = "bpm_mc";
+
 /// The columns a stage adds when its spheres have the multi-contact
-/// closure (native engine only).
+/// closure.
 pub fn closure_columns() -> Vec<Column> {
-    let col = |name: &str, quantity| Column {
+    let col = |name: &str, quantity, index: usize| Column {
         name: name.into(),
         quantity,
         observable: "multi-contact corrections".into(),
-        lammps: None,
+        lammps: Some(format!("c_{LAMMPS_CLOSURE_COMPUTE}[{index}]")),
     };
     vec![
-        col("mc_largest_correction", Quantity::LargestCorrection),
-        col("mc_switched_off", Quantity::SwitchedOff),
+        col("mc_largest_correction", Quantity::LargestCorrection, 1),
+        col("mc_switched_off", Quantity::SwitchedOff, 2),
     ]
 }
 

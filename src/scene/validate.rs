@@ -82,7 +82,7 @@ pub fn simbox_of(scene: &Scene) -> SimBox {
     }
 }
 
-fn check_granular(prefix: &str, m: &GranularMaterial) -> Result<(), SceneError> {
+pub(crate) fn check_granular(prefix: &str, m: &GranularMaterial) -> Result<(), SceneError> {
     positive(&format!("{prefix}.youngs_modulus"), m.youngs_modulus)?;
     let nu = finite(&format!("{prefix}.poisson_ratio"), m.poisson_ratio)?;
     if !(nu > -1.0 && nu <= 0.5) {
@@ -118,7 +118,7 @@ fn check_granular(prefix: &str, m: &GranularMaterial) -> Result<(), SceneError> 
     Ok(())
 }
 
-fn check_multicontact(prefix: &str, m: &MultiContact) -> Result<(), SceneError> {
+pub(crate) fn check_multicontact(prefix: &str, m: &MultiContact) -> Result<(), SceneError> {
     non_negative(&format!("{prefix}.prefactor"), m.prefactor)?;
     match m.max_penetration_ratio {
         Some(mpr) => {

@@ -19,8 +19,8 @@ use super::super::neighbor::NeighbourList;
 use super::super::simbox::MinimumImage;
 use super::wall::ActiveGranularWall;
 use crate::kernels::{
-    surface_corrections, Closure, ContactHistory, ContactPoint, GranularMaterial, HalfSpace,
-    MprSwitch, MprTest, POINT_FLOOR,
+    pair_contact_points, surface_corrections, Closure, ContactHistory, ContactPoint,
+    GranularMaterial, HalfSpace, MprSwitch, MprTest,
 };
 use serde::{Deserialize, Serialize};
 
@@ -288,21 +288,15 @@ impl ClosurePass {
                 if r >= reach_factor * radsum {
                     continue;
                 }
-                // Halfway through the overlap, or each sphere's own
-                // surface while they are apart; never past the centre (a
-                // small sphere deep in a large one).
-                let inset = 0.5 * (radsum - r).max(0.0);
-                let towards_j = del.map(|c| -c / r);
-                let force = history[k].normal_force;
-                let si = (radius[i] - inset).max(POINT_FLOOR * radius[i]);
-                let sj = (radius[j] - inset).max(POINT_FLOOR * radius[j]);
+                let [pi, pj] =
+                    pair_contact_points(&del, r, radius[i], radius[j], history[k].normal_force);
                 self.entries.push(Entry {
                     sphere: i as u32,
                     side: Side::Pair {
                         entry: k as u32,
                         side: 0,
                     },
-                    point: ContactPoint::new(towards_j.map(|c| si * c), force, radius[i]),
+                    point: pi,
                 });
                 self.entries.push(Entry {
                     sphere: j as u32,
@@ -310,7 +304,7 @@ impl ClosurePass {
                         entry: k as u32,
                         side: 1,
                     },
-                    point: ContactPoint::new(towards_j.map(|c| -sj * c), force, radius[j]),
+                    point: pj,
                 });
             }
         }

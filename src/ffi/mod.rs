@@ -26,6 +26,13 @@ pub const BPM_ERR_PANIC: i32 = 4;
 /// The forces were computed, but an interaction was outside the model's
 /// range ([`Fault`], written to the `fault` argument): the run is blowing up.
 pub const BPM_ERR_UNSTABLE: i32 = 5;
+/// A pass stopped before its end; the message written says why (a
+/// multi-contact correction beyond the model's range, a full contact row,
+/// a bad coefficient).
+pub const BPM_ERR_STOPPED: i32 = 6;
+
+mod granular;
+pub use granular::{parse_coeffs, GranularStyle, GranularStyleCoeffs, DEFAULT_SLOTS};
 
 /// Writes the first fault of `pass` to `fault` (if not null) and returns
 /// the status of the call.
@@ -50,11 +57,11 @@ unsafe fn report(pass: &ForcePass, tally: *mut Tally, fault: *mut Fault) -> i32 
 const _: () = assert!(std::mem::size_of::<Fault>() == 56 && std::mem::align_of::<Fault>() == 8);
 const _: () = assert!(std::mem::size_of::<RawFault>() == 56);
 
-fn guard(f: impl FnOnce() -> i32) -> i32 {
+pub(crate) fn guard(f: impl FnOnce() -> i32) -> i32 {
     catch_unwind(AssertUnwindSafe(f)).unwrap_or(BPM_ERR_PANIC)
 }
 
-unsafe fn rows<'a>(p: *const f64, n: usize) -> &'a [[f64; 3]] {
+pub(crate) unsafe fn rows<'a>(p: *const f64, n: usize) -> &'a [[f64; 3]] {
     if n == 0 {
         &[]
     } else {
@@ -66,12 +73,50 @@ unsafe fn opt_rows<'a>(p: *const f64, n: usize) -> Option<&'a [[f64; 3]]> {
     (!p.is_null()).then(|| rows(p, n))
 }
 
-unsafe fn list<'a, T>(p: *const T, n: usize) -> &'a [T] {
+pub(crate) unsafe fn list<'a, T>(p: *const T, n: usize) -> &'a [T] {
     if n == 0 {
         &[]
     } else {
         slice::from_raw_parts(p, n)
     }
+}
+
+/// The rows of a LAMMPS neighbour list (`ilist`, `numneigh`,
+/// `firstneigh`) as `(i, neighbour indices)`, each row checked first
+/// (indices below `nall`, counts not negative, pointers not null), so the
+/// passes over it need neither checks nor allocation.
+///
+/// # Safety
+/// `numneigh` and `firstneigh` hold an entry for every index in `ilist`
+/// below `nall`, and each `firstneigh[i]` points to `numneigh[i]` ints.
+pub(crate) unsafe fn half_list<'a>(
+    ilist: &'a [i32],
+    numneigh: *const i32,
+    firstneigh: *const *const i32,
+    nall: usize,
+) -> Result<impl Iterator<Item = (usize, &'a [i32])> + Clone + 'a, i32> {
+    for &i in ilist {
+        if i < 0 || i as usize >= nall {
+            return Err(BPM_ERR_INDEX);
+        }
+        let count = *numneigh.add(i as usize);
+        let first = *firstneigh.add(i as usize);
+        if count < 0 || (count > 0 && first.is_null()) {
+            return Err(BPM_ERR_NULL);
+        }
+        if list(first, count as usize)
+            .iter()
+            .any(|&j| (j & NEIGHMASK) as usize >= nall)
+        {
+            return Err(BPM_ERR_INDEX);
+        }
+    }
+    Ok(ilist.iter().map(move |&i| {
+        let i = i as usize;
+        // SAFETY: checked above: i < nall, count >= 0, first non-null when count > 0.
+        let js = unsafe { list(*firstneigh.add(i), *numneigh.add(i) as usize) };
+        (i, js)
+    }))
 }
 
 fn check_bonds(bonds: &[BondEntry], nall: usize, ntypes: usize) -> i32 {
@@ -86,7 +131,7 @@ fn check_bonds(bonds: &[BondEntry], nall: usize, ntypes: usize) -> i32 {
     BPM_OK
 }
 
-fn counts(values: &[i64]) -> Option<Vec<usize>> {
+pub(crate) fn counts(values: &[i64]) -> Option<Vec<usize>> {
     values.iter().map(|&v| usize::try_from(v).ok()).collect()
 }
 
@@ -375,29 +420,10 @@ pub unsafe extern "C" fn bpm_pair_forces(
         }
         let ilist = list(ilist, inum);
         let types = (!types.is_null()).then(|| list(types, nall));
-        // Validate every row first, so the pass itself needs no allocation.
-        for &i in ilist {
-            if i < 0 || i as usize >= nall {
-                return BPM_ERR_INDEX;
-            }
-            let count = *numneigh.add(i as usize);
-            let first = *firstneigh.add(i as usize);
-            if count < 0 || (count > 0 && first.is_null()) {
-                return BPM_ERR_NULL;
-            }
-            if list(first, count as usize)
-                .iter()
-                .any(|&j| (j & NEIGHMASK) as usize >= nall)
-            {
-                return BPM_ERR_INDEX;
-            }
-        }
-        let rows_in = ilist.iter().map(|&i| {
-            let i = i as usize;
-            // SAFETY: checked above: i < nall, count >= 0, first non-null when count > 0.
-            let js = unsafe { list(*firstneigh.add(i), *numneigh.add(i) as usize) };
-            (i, js)
-        });
+        let rows_in = match half_list(ilist, numneigh, firstneigh, nall) {
+            Ok(rows) => rows,
+            Err(status) => return status,
+        };
         if let Some(t) = types {
             if t.iter().any(|&t| t < 1 || t as usize > ntypes) {
                 return BPM_ERR_TYPE;

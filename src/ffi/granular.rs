@@ -1,0 +1,586 @@
+//! The C ABI of `pair_style bpm/granular`: DEM sphere contacts with the
+//! optional multi-contact closure ([`crate::kernels::GranularList`]).
+//!
+//! The shim hands over the words of `pair_coeff * *` and gets a handle
+//! (the coefficients, parsed and checked here, and the passes' buffers),
+//! then per force evaluation calls the corrections pass, copies the
+//! correction rows to ghosts, and calls the forces pass. Every failure
+//! comes back as a status and a message naming atoms by their IDs.
+
+use super::{
+    counts, guard, half_list, list, rows, BPM_ERR_INDEX, BPM_ERR_NULL, BPM_ERR_STOPPED, BPM_OK,
+};
+use crate::engine::MultiContact;
+use crate::kernels::{
+    GranularCoeffs, GranularList, GranularMaterial, HalfSpace, Layout, ListAtoms, ListClosure,
+    MprSwitch, MprTest, NormalDamping, SpringDashpotSlider, Tally, Twisting,
+};
+use crate::scene::validate::{check_granular, check_multicontact};
+use std::ffi::{c_char, CStr};
+use std::slice;
+
+/// Contacts per atom a row holds unless `slots` says otherwise: above the
+/// 12 to 14 touching neighbours of a dense packing, with room for the
+/// pairs within the closure's reach.
+pub const DEFAULT_SLOTS: usize = 32;
+
+/// What `pair_coeff * *` of `pair_style bpm/granular` sets.
+#[derive(Clone, Debug, PartialEq)]
+pub struct GranularStyleCoeffs {
+    /// The spheres' material and friction.
+    pub material: GranularMaterial,
+    /// The closure, if on.
+    pub multicontact: Option<MultiContact>,
+    /// Contacts per atom row.
+    pub slots: usize,
+}
+
+/// Parses the words after `pair_coeff * *`:
+///
+/// ```text
+/// hertz/material E e nu damping tsuji|coeff_restitution
+///     tangential mindlin NULL x_gt mu_s
+///     [rolling sds k_r g_r mu_r] [twisting marshall | twisting sds k g mu]
+///     [multicontact gamma [mpr MPR] [switch whole_contact|per_term]
+///                         [test signed|magnitude] [reach R]]
+///     [slots N]
+/// ```
+///
+/// the spelling of LAMMPS's `pair_style granular` for the material (as
+/// the harness writes it), then the closure. Every value is checked as a
+/// scene's would be.
+pub fn parse_coeffs(words: &[&str]) -> Result<GranularStyleCoeffs, String> {
+    let mut w = Words { words, at: 0 };
+    w.expect("hertz/material")?;
+    let youngs_modulus = w.number("E")?;
+    let restitution = w.number("e")?;
+    let poisson_ratio = w.number("nu")?;
+    w.expect("damping")?;
+    let damping = match w.next("the damping model")? {
+        "tsuji" => NormalDamping::Tsuji,
+        "coeff_restitution" => NormalDamping::CoeffRestitution,
+        other => {
+            return Err(format!(
+                "damping `{other}`: expected tsuji or coeff_restitution"
+            ))
+        }
+    };
+    w.expect("tangential")?;
+    w.expect("mindlin")?;
+    w.expect("NULL")?;
+    let tangential_damping = w.number("x_gt")?;
+    let sliding_friction = w.number("mu_s")?;
+    let mut material = GranularMaterial {
+        youngs_modulus,
+        poisson_ratio,
+        restitution,
+        damping,
+        tangential_damping,
+        sliding_friction,
+        rolling: None,
+        twisting: Twisting::None,
+    };
+    let mut multicontact = None;
+    let mut slots = DEFAULT_SLOTS;
+    while let Some(word) = w.peek() {
+        w.at += 1;
+        match word {
+            "rolling" => {
+                w.expect("sds")?;
+                material.rolling = Some(w.slider("rolling")?);
+            }
+            "twisting" => {
+                material.twisting = match w.next("the twisting model")? {
+                    "marshall" => Twisting::Marshall,
+                    "sds" => Twisting::Sds(w.slider("twisting")?),
+                    other => return Err(format!("twisting `{other}`: expected marshall or sds")),
+                }
+            }
+            "multicontact" => {
+                let mut m = MultiContact::standard(w.number("the prefactor gamma")?);
+                loop {
+                    match w.peek() {
+                        Some("mpr") => {
+                            w.at += 1;
+                            m.max_penetration_ratio = Some(w.number("mpr")?);
+                        }
+                        Some("switch") => {
+                            w.at += 1;
+                            m.switch = match w.next("the switch")? {
+                                "whole_contact" => MprSwitch::WholeContact,
+                                "per_term" => MprSwitch::PerTerm,
+                                other => {
+                                    return Err(format!(
+                                        "switch `{other}`: expected whole_contact or per_term"
+                                    ))
+                                }
+                            }
+                        }
+                        Some("test") => {
+                            w.at += 1;
+                            m.test = match w.next("the test")? {
+                                "signed" => MprTest::Signed,
+                                "magnitude" => MprTest::Magnitude,
+                                other => {
+                                    return Err(format!(
+                                        "test `{other}`: expected signed or magnitude"
+                                    ))
+                                }
+                            }
+                        }
+                        Some("reach") => {
+                            w.at += 1;
+                            m.reach = w.number("reach")?;
+                        }
+                        _ => break,
+                    }
+                }
+                multicontact = Some(m);
+            }
+            "slots" => {
+                let n = w.number("slots")?;
+                if !((1.0..=4096.0).contains(&n) && n.fract() == 0.0) {
+                    return Err(format!(
+                        "slots must be a whole number from 1 to 4096, got {n}"
+                    ));
+                }
+                slots = n as usize;
+            }
+            other => {
+                return Err(format!(
+                    "unknown keyword `{other}` (expected rolling, twisting, multicontact or slots)"
+                ))
+            }
+        }
+    }
+    check_granular("pair_coeff", &material).map_err(|e| e.to_string())?;
+    if let Some(m) = &multicontact {
+        check_multicontact("pair_coeff multicontact", m).map_err(|e| e.to_string())?;
+    }
+    Ok(GranularStyleCoeffs {
+        material,
+        multicontact,
+        slots,
+    })
+}
+
+/// A cursor over the words of a command.
+struct Words<'a> {
+    words: &'a [&'a str],
+    at: usize,
+}
+
+impl<'a> Words<'a> {
+    fn peek(&self) -> Option<&'a str> {
+        self.words.get(self.at).copied()
+    }
+
+    fn next(&mut self, what: &str) -> Result<&'a str, String> {
+        let word = self
+            .peek()
+            .ok_or_else(|| format!("missing {what} at the end"))?;
+        self.at += 1;
+        Ok(word)
+    }
+
+    fn expect(&mut self, keyword: &str) -> Result<(), String> {
+        match self.next(&format!("`{keyword}`"))? {
+            w if w == keyword => Ok(()),
+            w => Err(format!("expected `{keyword}`, got `{w}`")),
+        }
+    }
+
+    fn number(&mut self, what: &str) -> Result<f64, String> {
+        let word = self.next(what)?;
+        word.parse::<f64>()
+            .ok()
+            .filter(|v| v.is_finite())
+            .ok_or_else(|| format!("{what} must be a finite number, got `{word}`"))
+    }
+
+    fn slider(&mut self, what: &str) -> Result<SpringDashpotSlider, String> {
+        Ok(SpringDashpotSlider {
+            stiffness: self.number(&format!("{what} stiffness"))?,
+            damping: self.number(&format!("{what} damping"))?,
+            friction: self.number(&format!("{what} friction"))?,
+        })
+    }
+}
+
+/// The state behind a `bpm_granular` handle.
+#[derive(Debug)]
+pub struct GranularStyle {
+    coeffs: GranularStyleCoeffs,
+    list: GranularList,
+}
+
+impl GranularStyle {
+    /// The style of `coeffs`.
+    pub fn new(coeffs: GranularStyleCoeffs) -> Self {
+        let m = &coeffs.material;
+        let closure = coeffs.multicontact.map(|mc| ListClosure {
+            closure: mc.closure(),
+            half_space: HalfSpace::new(mc.prefactor, m.youngs_modulus, m.poisson_ratio),
+            reach: mc.reach,
+        });
+        let list = GranularList::new(GranularCoeffs::of(m), closure, coeffs.slots);
+        Self { coeffs, list }
+    }
+}
+
+/// Writes `message` into `buf` (`len` bytes), NUL-terminated and cut.
+unsafe fn write_message(message: &str, buf: *mut c_char, len: i64) {
+    if buf.is_null() || len <= 0 {
+        return;
+    }
+    let bytes = message.as_bytes();
+    let n = bytes.len().min(len as usize - 1);
+    std::ptr::copy_nonoverlapping(bytes.as_ptr(), buf as *mut u8, n);
+    *buf.add(n) = 0;
+}
+
+/// Parses the `nwords` words of `pair_coeff * *` ([`parse_coeffs`]) into
+/// a new handle; on bad input returns null and writes why to `message`.
+///
+/// # Safety
+/// `words` holds `nwords` NUL-terminated strings; `message` `len` bytes.
+#[no_mangle]
+pub unsafe extern "C" fn bpm_granular_create(
+    nwords: i32,
+    words: *const *const c_char,
+    message: *mut c_char,
+    len: i64,
+) -> *mut GranularStyle {
+    let parsed = std::panic::catch_unwind(|| {
+        if nwords < 0 || (nwords > 0 && words.is_null()) {
+            return Err("no words given".to_string());
+        }
+        let mut owned = Vec::with_capacity(nwords as usize);
+        for k in 0..nwords as usize {
+            let p = *words.add(k);
+            if p.is_null() {
+                return Err(format!("word {k} is null"));
+            }
+            owned.push(CStr::from_ptr(p).to_string_lossy().into_owned());
+        }
+        let refs: Vec<&str> = owned.iter().map(String::as_str).collect();
+        parse_coeffs(&refs)
+    });
+    match parsed {
+        Ok(Ok(coeffs)) => Box::into_raw(Box::new(GranularStyle::new(coeffs))),
+        Ok(Err(reason)) => {
+            write_message(&reason, message, len);
+            std::ptr::null_mut()
+        }
+        Err(_) => {
+            write_message("internal error in the kernels (a bug)", message, len);
+            std::ptr::null_mut()
+        }
+    }
+}
+
+/// Frees a handle (null: nothing).
+///
+/// # Safety
+/// `style` is null or from [`bpm_granular_create`], not freed before.
+#[no_mangle]
+pub unsafe extern "C" fn bpm_granular_destroy(style: *mut GranularStyle) {
+    if !style.is_null() {
+        drop(Box::from_raw(style));
+    }
+}
+
+/// Contacts per atom row: rows of the contact memory hold `1 + 9 slots`
+/// doubles, rows of the corrections `1 + 2 slots`. 0 for a null handle.
+///
+/// # Safety
+/// `style` is null or a live handle.
+#[no_mangle]
+pub unsafe extern "C" fn bpm_granular_slots(style: *const GranularStyle) -> i64 {
+    style.as_ref().map_or(0, |s| s.coeffs.slots as i64)
+}
+
+/// The pair cutoff for spheres up to `max_radius`: `2 max_radius (1 +
+/// reach)` with the closure (pairs within its reach receive corrections),
+/// else `2 max_radius`. A negative value for a null handle.
+///
+/// # Safety
+/// `style` is null or a live handle.
+#[no_mangle]
+pub unsafe extern "C" fn bpm_granular_cutoff(style: *const GranularStyle, max_radius: f64) -> f64 {
+    style.as_ref().map_or(-1.0, |s| {
+        let reach = s.coeffs.multicontact.map_or(0.0, |m| m.reach);
+        2.0 * max_radius * (1.0 + reach)
+    })
+}
+
+/// Whether the closure is on (then the corrections pass and the copy of
+/// its rows to ghosts are needed).
+///
+/// # Safety
+/// `style` is null or a live handle.
+#[no_mangle]
+pub unsafe extern "C" fn bpm_granular_has_closure(style: *const GranularStyle) -> i32 {
+    style
+        .as_ref()
+        .is_some_and(|s| s.coeffs.multicontact.is_some()) as i32
+}
+
+/// The per-atom arrays of a pass: `nall` atoms, the first `nlocal` owned.
+#[repr(C)]
+#[derive(Clone, Copy, Debug)]
+pub struct RawAtoms {
+    x: *const f64,
+    v: *const f64,
+    omega: *const f64,
+    radius: *const f64,
+    rmass: *const f64,
+    tag: *const i64,
+    nall: i64,
+    nlocal: i64,
+}
+
+impl RawAtoms {
+    /// The arrays as slices, or null status.
+    unsafe fn view(&self) -> Result<ListAtoms<'_>, i32> {
+        let Some([nall, nlocal]) = counts(&[self.nall, self.nlocal]).map(|c| [c[0], c[1]]) else {
+            return Err(BPM_ERR_NULL);
+        };
+        let arrays = [self.x, self.v, self.omega, self.radius, self.rmass];
+        if nlocal > nall || (nall > 0 && (arrays.iter().any(|p| p.is_null()) || self.tag.is_null()))
+        {
+            return Err(BPM_ERR_NULL);
+        }
+        Ok(ListAtoms {
+            x: rows(self.x, nall),
+            v: rows(self.v, nall),
+            omega: rows(self.omega, nall),
+            radius: list(self.radius, nall),
+            mass: list(self.rmass, nall),
+            tag: list(self.tag, nall),
+            n_owned: nlocal,
+        })
+    }
+}
+
+/// What pass 1 found over a rank's atoms (`bpm_granular_summary`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default)]
+pub struct RawSummary {
+    /// Largest correction over its atom's radius (0 if none is positive).
+    pub largest: f64,
+    /// Contacts (whole-contact switch) or terms (per-term switch) the
+    /// advanced closure switched off.
+    pub switched_off: i64,
+}
+
+/// Pass 1: the corrections of every owned atom's contacts into
+/// `corrections` (`nall` rows of `1 + 2 slots` doubles; owned rows
+/// written), from the contact memory `history` (`nlocal` rows of `1 + 9
+/// slots`), and what it found to `summary` (if not null). Without the
+/// closure, empties the owned rows. On a stop
+/// (BPM_ERR_STOPPED) writes why to `message`.
+///
+/// # Safety
+/// Arrays as [`RawAtoms`] says; the list as [`super::bpm_pair_forces`];
+/// `history` and `corrections` sized as above; `message` `len` bytes.
+#[no_mangle]
+pub unsafe extern "C" fn bpm_granular_corrections(
+    style: *mut GranularStyle,
+    atoms: *const RawAtoms,
+    inum: i64,
+    ilist: *const i32,
+    numneigh: *const i32,
+    firstneigh: *const *const i32,
+    history: *const f64,
+    corrections: *mut f64,
+    step: i64,
+    summary: *mut RawSummary,
+    message: *mut c_char,
+    len: i64,
+) -> i32 {
+    guard(|| {
+        let (Some(style), Some(atoms)) = (style.as_mut(), atoms.as_ref()) else {
+            return BPM_ERR_NULL;
+        };
+        let atoms = match atoms.view() {
+            Ok(a) => a,
+            Err(status) => return status,
+        };
+        let nall = atoms.x.len();
+        let Some(inum) = counts(&[inum]).map(|c| c[0]) else {
+            return BPM_ERR_NULL;
+        };
+        let slots = style.coeffs.slots;
+        if nall > 0 && (history.is_null() || corrections.is_null())
+            || (inum > 0 && (ilist.is_null() || numneigh.is_null() || firstneigh.is_null()))
+        {
+            return BPM_ERR_NULL;
+        }
+        let ilist = list(ilist, inum);
+        // Rows belong to owned atoms (newton off): the memory is theirs.
+        if ilist.iter().any(|&i| i as usize >= atoms.n_owned) {
+            return BPM_ERR_INDEX;
+        }
+        let rows_in = match half_list(ilist, numneigh, firstneigh, nall) {
+            Ok(r) => r,
+            Err(status) => return status,
+        };
+        let history = list(history, atoms.n_owned * Layout::history(slots).stride());
+        let corrections = if nall == 0 {
+            &mut []
+        } else {
+            slice::from_raw_parts_mut(corrections, nall * Layout::corrections(slots).stride())
+        };
+        match style
+            .list
+            .corrections(&atoms, rows_in, history, corrections, step)
+        {
+            Ok(found) => {
+                if let Some(out) = summary.as_mut() {
+                    *out = RawSummary {
+                        largest: found.largest,
+                        switched_off: found.switched_off as i64,
+                    };
+                }
+                BPM_OK
+            }
+            Err(e) => {
+                write_message(&e.to_string(), message, len);
+                BPM_ERR_STOPPED
+            }
+        }
+    })
+}
+
+/// Pass 2: the contact forces and torques of the listed pairs on owned
+/// atoms (newton off), added to `f` and `torque` (`3 nall` doubles each),
+/// with the corrections complete on ghosts; the contact memory advanced
+/// over `dt` when `update` is not 0 (a step, not a set-up). The virial
+/// goes to `tally` (null: not summed). On a stop (BPM_ERR_STOPPED) writes
+/// why to `message`.
+///
+/// # Safety
+/// As [`bpm_granular_corrections`]; `history` writable.
+#[no_mangle]
+pub unsafe extern "C" fn bpm_granular_forces(
+    style: *const GranularStyle,
+    atoms: *const RawAtoms,
+    inum: i64,
+    ilist: *const i32,
+    numneigh: *const i32,
+    firstneigh: *const *const i32,
+    corrections: *const f64,
+    history: *mut f64,
+    f: *mut f64,
+    torque: *mut f64,
+    dt: f64,
+    update: i32,
+    step: i64,
+    tally: *mut Tally,
+    message: *mut c_char,
+    len: i64,
+) -> i32 {
+    guard(|| {
+        let (Some(style), Some(atoms)) = (style.as_ref(), atoms.as_ref()) else {
+            return BPM_ERR_NULL;
+        };
+        let atoms = match atoms.view() {
+            Ok(a) => a,
+            Err(status) => return status,
+        };
+        let nall = atoms.x.len();
+        let Some(inum) = counts(&[inum]).map(|c| c[0]) else {
+            return BPM_ERR_NULL;
+        };
+        let slots = style.coeffs.slots;
+        if nall > 0
+            && (history.is_null() || corrections.is_null() || f.is_null() || torque.is_null())
+            || (inum > 0 && (ilist.is_null() || numneigh.is_null() || firstneigh.is_null()))
+        {
+            return BPM_ERR_NULL;
+        }
+        let ilist = list(ilist, inum);
+        // Rows belong to owned atoms (newton off): the memory is theirs.
+        if ilist.iter().any(|&i| i as usize >= atoms.n_owned) {
+            return BPM_ERR_INDEX;
+        }
+        let rows_in = match half_list(ilist, numneigh, firstneigh, nall) {
+            Ok(r) => r,
+            Err(status) => return status,
+        };
+        let (history, f, torque) = if nall == 0 {
+            (&mut [][..], &mut [][..], &mut [][..])
+        } else {
+            (
+                slice::from_raw_parts_mut(history, atoms.n_owned * Layout::history(slots).stride()),
+                slice::from_raw_parts_mut(f as *mut [f64; 3], nall),
+                slice::from_raw_parts_mut(torque as *mut [f64; 3], nall),
+            )
+        };
+        let corrections = list(corrections, nall * Layout::corrections(slots).stride());
+        match style.list.forces(
+            &atoms,
+            rows_in,
+            corrections,
+            history,
+            f,
+            torque,
+            dt,
+            update != 0,
+            step,
+        ) {
+            Ok(t) => {
+                if let Some(out) = tally.as_mut() {
+                    *out = t;
+                }
+                BPM_OK
+            }
+            Err(e) => {
+                write_message(&e.to_string(), message, len);
+                BPM_ERR_STOPPED
+            }
+        }
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn coefficients_parse_with_every_option_and_bad_ones_are_named() {
+        let words = "hertz/material 1000 0.5 0.3 damping tsuji tangential mindlin NULL 1 0.5 \
+                     rolling sds 300 5 0.2 twisting marshall \
+                     multicontact 0.81 mpr 0.11 switch per_term test magnitude reach 0.3 slots 40";
+        let c = parse_coeffs(&words.split_whitespace().collect::<Vec<_>>()).unwrap();
+        assert_eq!(c.material.youngs_modulus, 1000.0);
+        assert_eq!(c.material.restitution, 0.5);
+        assert_eq!(c.material.poisson_ratio, 0.3);
+        assert_eq!(c.material.rolling.unwrap().friction, 0.2);
+        assert_eq!(c.material.twisting, Twisting::Marshall);
+        let m = c.multicontact.unwrap();
+        assert_eq!(
+            (m.prefactor, m.max_penetration_ratio, m.reach),
+            (0.81, Some(0.11), 0.3)
+        );
+        assert_eq!((m.switch, m.test), (MprSwitch::PerTerm, MprTest::Magnitude));
+        assert_eq!(c.slots, 40);
+        let plain = "hertz/material 1000 0.5 0.3 damping tsuji tangential mindlin NULL 1 0.5";
+        let c = parse_coeffs(&plain.split_whitespace().collect::<Vec<_>>()).unwrap();
+        assert_eq!((c.multicontact, c.slots), (None, DEFAULT_SLOTS));
+        for (bad, says) in [
+            ("hertz/material -1 0.5 0.3 damping tsuji tangential mindlin NULL 1 0.5", "youngs_modulus"),
+            ("hertz/material 1000 0.5 0.3 damping tsuji tangential mindlin NULL 1", "mu_s"),
+            ("hertz/material 1000 0.5 0.3 damping tsuji tangential mindlin NULL 1 x", "mu_s"),
+            ("hertz 1000 0.5 0.3", "hertz/material"),
+            ("hertz/material 1000 0.5 0.3 damping tsuji tangential mindlin NULL 1 0.5 multicontact -1", "prefactor"),
+            ("hertz/material 1000 0.5 0.3 damping tsuji tangential mindlin NULL 1 0.5 multicontact 0.8 reach 0", "reach"),
+            ("hertz/material 1000 0.5 0.3 damping tsuji tangential mindlin NULL 1 0.5 slots 0", "slots"),
+            ("hertz/material 1000 0.5 0.3 damping tsuji tangential mindlin NULL 1 0.5 bogus", "bogus"),
+        ] {
+            let err = parse_coeffs(&bad.split_whitespace().collect::<Vec<_>>()).unwrap_err();
+            assert!(err.contains(says), "{bad}: {err}");
+        }
+    }
+}

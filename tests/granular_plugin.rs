@@ -1,0 +1,303 @@
+//! The plugin's `pair_style bpm/granular` (DEM contacts with the
+//! multi-contact closure) in Debian's LAMMPS: against the native engine on
+//! one and two ranks, its contact memory through a restart file, and its
+//! errors on bad input.
+
+mod common;
+
+use bpm::engine::MultiContact;
+use bpm::scene::Scene;
+use bpm::verify::scenes::{dem_trajectory, DemLoading};
+use bpm::verify::tolerances::tolerance;
+use bpm::verify::{compare_runs, max_relative_deviation, run_lmp_bpm, run_native, LammpsLauncher};
+use std::path::{Path, PathBuf};
+
+fn lmp() -> &'static Path {
+    Path::new(env!("CARGO_BIN_EXE_lmp-bpm"))
+}
+
+fn workdir() -> PathBuf {
+    common::scratch_dir("granular-plugin")
+}
+
+/// The 64 overlapping spheres of `bpm check` under `loading` with the
+/// closure `mc` (rolling and twisting friction with `rolling_twisting`).
+fn closure_scene(
+    rolling_twisting: bool,
+    loading: DemLoading,
+    steps: u64,
+    mc: MultiContact,
+) -> Scene {
+    let mut scene = dem_trajectory(3, rolling_twisting, loading, steps);
+    scene.force_field.multicontact = Some(mc);
+    scene
+}
+
+fn last(scene_run: &[bpm::scene::StageOutput], column: &str) -> Vec<f64> {
+    scene_run[0].column(column).unwrap()
+}
+
+/// The advanced closure switching contacts off, compressed on one rank;
+/// the standard one with rolling and twisting friction, sheared across
+/// two ranks through list rebuilds: each trajectory within the check's
+/// tolerances of the native one, and each far from plain Hertz's.
+#[test]
+fn the_closure_in_lammps_follows_the_native_engine_and_changes_the_stress() {
+    let dir = workdir();
+    let launcher = LammpsLauncher {
+        bpm: PathBuf::from(env!("CARGO_BIN_EXE_bpm")),
+        dir: dir.clone(),
+    };
+    for (rt, loading, mc, ranks) in [
+        (
+            false,
+            DemLoading::Compress,
+            MultiContact::advanced(0.81, 0.015),
+            1,
+        ),
+        (
+            true,
+            DemLoading::LeesEdwards,
+            MultiContact::standard(0.82),
+            2,
+        ),
+    ] {
+        let scene = closure_scene(rt, loading, 800, mc);
+        let tag = format!("{}-{ranks}", loading.name());
+        let native = run_native(&scene, &tag, 1).unwrap();
+        let lammps = launcher.run(&scene, &tag, ranks, false).unwrap();
+        let deviations = compare_runs(&native.stages, &lammps.stages).unwrap();
+        assert!(deviations
+            .iter()
+            .any(|d| d.observable == "multi-contact corrections"));
+        for d in &deviations {
+            let tol = tolerance(&format!("trajectory {}", d.observable));
+            assert!(
+                d.max_deviation <= tol,
+                "{tag}: {} deviates by {:e} (step {}), tolerance {tol:e}",
+                d.observable,
+                d.max_deviation,
+                d.at_step
+            );
+        }
+        let largest = last(&lammps.stages, "mc_largest_correction");
+        // The first evaluation has no loads remembered, so no corrections.
+        assert_eq!(largest[0], 0.0);
+        assert!(largest[1..].iter().all(|&c| c > 0.01), "{largest:?}");
+        if mc.max_penetration_ratio.is_some() {
+            let switched = last(&lammps.stages, "mc_switched_off");
+            assert!(switched.iter().any(|&s| s > 0.0), "{switched:?}");
+        }
+        let mut plain = scene.clone();
+        plain.force_field.multicontact = None;
+        let hertz = run_native(&plain, &format!("{tag}-hertz"), 1).unwrap();
+        let (p, q) = (
+            last(&lammps.stages, "pressure"),
+            last(&hertz.stages, "pressure"),
+        );
+        let (p, q) = (p[p.len() - 1], q[q.len() - 1]);
+        assert!(
+            (p - q).abs() > 0.05 * q.abs(),
+            "{tag}: closure pressure {p}, Hertz {q}"
+        );
+    }
+}
+
+/// The part of `setup_dem.in` that defines the spheres, with `edits`
+/// applied, then `tail`: the script of a hand-written LAMMPS run.
+fn dem_script(edits: &[(&str, &str)], tail: &str) -> String {
+    let mut text = bpm::lammps::templates::template("setup_dem.in")
+        .unwrap()
+        .to_string();
+    for (from, to) in edits {
+        assert!(text.contains(from), "setup_dem.in has no `{from}`");
+        text = text.replace(from, to);
+    }
+    text + tail
+}
+
+/// Runs `script` (named `tag`) on the spheres of `scene` with one rank.
+fn run_script(scene: &Scene, tag: &str, script: &str) -> Result<String, String> {
+    let path = workdir().join(format!("{tag}.in"));
+    std::fs::write(&path, script).unwrap();
+    run_lmp_bpm(
+        lmp(),
+        scene,
+        path.to_str().unwrap(),
+        false,
+        1,
+        &workdir(),
+        tag,
+        &[],
+        0,
+    )
+    .map_err(|e| e.to_string())
+}
+
+/// The rows `id x y z fx fy fz tqx tqy tqz` of a dump sorted by id.
+fn read_rows(path: &Path) -> Vec<Vec<f64>> {
+    let text = std::fs::read_to_string(path).unwrap();
+    let mut rows: Vec<Vec<f64>> = text
+        .lines()
+        .skip_while(|l| !l.starts_with("ITEM: ATOMS"))
+        .skip(1)
+        .map(|l| l.split_whitespace().map(|w| w.parse().unwrap()).collect())
+        .collect();
+    rows.sort_by(|a, b| a[0].total_cmp(&b[0]));
+    rows
+}
+
+/// A run stopped in a restart file and resumed ends where the run that
+/// wrote it ends: the contact memory (sliding, rolling and twisting
+/// springs, and the loads the closure reads) is in the restart file, and
+/// the pair style's coefficients too. A resumed run that lost the memory
+/// differs by the springs' forces.
+#[test]
+fn a_restart_keeps_the_contact_memory_and_the_closure() {
+    let scene = closure_scene(
+        true,
+        DemLoading::Hold,
+        0,
+        MultiContact::advanced(0.81, 0.015),
+    );
+    let dir = workdir();
+    let restart = dir.join("granular.restart");
+    let dump = |name: &str| dir.join(format!("{name}.dump"));
+    let motion = "fix             move all nve/sphere\ntimestep        0.01\n";
+    let write = |name: &str| {
+        format!(
+            "write_dump      all custom {} id x y z fx fy fz tqx tqy tqz modify sort id format float %.17g\n",
+            dump(name).display()
+        )
+    };
+    let continuous = dem_script(
+        &[],
+        &format!(
+            "{motion}run 300\nwrite_restart   {}\nrun 300\n{}",
+            restart.display(),
+            write("continuous")
+        ),
+    );
+    run_script(&scene, "restart-write", &continuous).unwrap();
+    let resume = |name: &str, forget: bool| {
+        format!(
+            "units lj\nread_restart    {}\nnewton          off\ncomm_modify     vel yes\nneighbor        {} bin\nneigh_modify    delay 0 every 1 check yes\natom_modify     sort 0 0.0\n{}{motion}run 300\n{}",
+            restart.display(),
+            scene.force_field.skin,
+            // The restart's rows reach the fix when the first run creates
+            // it, and are dropped after that run's set-up: a fix made anew
+            // after `run 0` starts empty.
+            if forget { "run 0\nunfix BPM_CONTACTS\n" } else { "" },
+            write(name)
+        )
+    };
+    run_script(&scene, "restart-read", &resume("resumed", false)).unwrap();
+    let (a, b) = (read_rows(&dump("continuous")), read_rows(&dump("resumed")));
+    assert_eq!(a.len(), 64);
+    assert_eq!(a.len(), b.len());
+    let cols = |rows: &[Vec<f64>], from: usize| -> Vec<[f64; 3]> {
+        rows.iter()
+            .map(|r| [r[from], r[from + 1], r[from + 2]])
+            .collect()
+    };
+    let dx = cols(&a, 1)
+        .iter()
+        .zip(&cols(&b, 1))
+        .map(|(p, q)| common::dist(p, q))
+        .fold(0.0, f64::max);
+    let df = max_relative_deviation(&cols(&b, 4), &cols(&a, 4));
+    let dt = max_relative_deviation(&cols(&b, 7), &cols(&a, 7));
+    assert!(
+        dx <= tolerance("restart positions")
+            && df <= tolerance("restart forces")
+            && dt <= tolerance("restart forces"),
+        "after restart: positions differ by {dx:e} d, forces by {df:e}, torques by {dt:e}"
+    );
+    // Without the memory (fix removed after reading), the springs restart
+    // unloaded and the run goes elsewhere.
+    run_script(&scene, "restart-forget", &resume("forgot", true)).unwrap();
+    let c = read_rows(&dump("forgot"));
+    let lost = max_relative_deviation(&cols(&c, 7), &cols(&a, 7));
+    assert!(
+        lost > 1e-3,
+        "torques without the memory differ by only {lost:e}"
+    );
+}
+
+#[test]
+fn bad_input_of_the_granular_style_gets_a_clear_lammps_error() {
+    let scene = closure_scene(false, DemLoading::Hold, 0, MultiContact::standard(0.82));
+    let coeff = "pair_coeff      * * ${granular}";
+    let material = "hertz/material 100 0.5 0.25 damping tsuji tangential mindlin NULL 1 0.3";
+    // (name, edits of setup_dem.in, expected words of the error)
+    type Case<'a> = (&'a str, Vec<(&'a str, String)>, &'a str);
+    let cases: Vec<Case> = vec![
+        (
+            "newton_on",
+            vec![("newton          ${newton}", "newton on".into())],
+            "newton off",
+        ),
+        (
+            "ghost_velocity",
+            vec![("comm_modify     vel yes", "".into())],
+            "comm_modify vel yes",
+        ),
+        (
+            "per_type",
+            vec![(coeff, format!("pair_coeff 1 1 {material}"))],
+            "one material for every type",
+        ),
+        (
+            "unknown",
+            vec![(
+                coeff,
+                format!("pair_coeff * * {material} multicontact 0.8 bogus"),
+            )],
+            "unknown keyword `bogus`",
+        ),
+        (
+            "negative_modulus",
+            vec![(
+                coeff,
+                format!("pair_coeff * * {}", material.replace(" 100 ", " -100 ")),
+            )],
+            "youngs_modulus",
+        ),
+        (
+            "reach",
+            vec![(
+                coeff,
+                format!("pair_coeff * * {material} multicontact 0.8 reach 0"),
+            )],
+            "reach",
+        ),
+        (
+            "slots",
+            vec![(
+                coeff,
+                format!("pair_coeff * * {material} multicontact 0.8 slots 2"),
+            )],
+            "more than 2 contacts",
+        ),
+        ("no_coeff", vec![(coeff, "".into())], "oeffs are not set"),
+    ];
+    for (tag, edits, expected) in cases {
+        let edits: Vec<(&str, &str)> = edits.iter().map(|(a, b)| (*a, b.as_str())).collect();
+        let script = dem_script(&edits, "run 0\n");
+        let err = match run_script(&scene, tag, &script) {
+            Ok(out) => panic!("{tag}: LAMMPS accepted bad input:\n{out}"),
+            Err(e) => e,
+        };
+        assert!(
+            err.contains(expected),
+            "{tag}: expected `{expected}` in:\n{err}"
+        );
+        assert!(
+            !err.contains("Segmentation") && !err.contains("panicked"),
+            "{tag}: crashed:\n{err}"
+        );
+    }
+    let atomic = "units lj\natom_style atomic\nnewton off\nregion b block 0 5 0 5 0 5\ncreate_box 1 b\ncreate_atoms 1 single 1 1 1\nmass 1 1\ncomm_modify vel yes\npair_style bpm/granular\npair_coeff * * hertz/material 100 0.5 0.25 damping tsuji tangential mindlin NULL 1 0.3\nrun 0\n";
+    let err = run_script(&scene, "atomic", atomic).unwrap_err();
+    assert!(err.contains("atom_style sphere"), "{err}");
+}
