@@ -36,7 +36,12 @@ fn plugin_load_registers_our_styles() {
         steps: 0,
     };
     let out = lmp.run(&input, &[], 1, setup).unwrap();
-    for style in ["bpm/multibody", "bpm/contact"] {
+    for style in [
+        "bpm/multibody",
+        "bpm/contact",
+        "bpm/granular",
+        "BPM/CONTACTS",
+    ] {
         assert!(out.contains(style), "`plugin list` lacks {style}:\n{out}");
     }
     let _ = std::fs::remove_dir_all(&dir);
@@ -98,5 +103,77 @@ fn pair_damping_differs_from_upstream_by_its_smoothing_factor_only() {
         .find(|r| r.observable == "step-0 forces, factor applied")
         .unwrap();
     assert!(explained.pass, "{explained:?}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// The plugin's `pair_style bpm/granular` in the modern LAMMPS (loaded
+/// with `plugin load`, its 2022+ communication calls) on two ranks: the
+/// pressure and the closure's largest correction every 100 steps of a
+/// Lees-Edwards shear with the standard closure and rolling and twisting
+/// friction equal the native engine's, as Debian's LAMMPS does in `bpm
+/// check`.
+#[test]
+fn the_closure_in_the_modern_lammps_follows_the_native_engine() {
+    use bpm::engine::MultiContact;
+    use bpm::verify::scenes::{dem_trajectory, DemLoading};
+    let lmp = modern();
+    let dir = workdir("closure");
+    let mut scene = dem_trajectory(2, true, DemLoading::LeesEdwards, 600);
+    scene.force_field.multicontact = Some(MultiContact::standard(0.82));
+    let native = bpm::verify::run_native(&scene, "closure", 1).unwrap();
+    let driver = bpm::lammps::write_driver(&scene, &dir, "closure", false).unwrap();
+    // The driver as the harness writes it, with a thermo line every 100
+    // steps of the values compared.
+    let text = driver.text().replacen(
+        "run             600",
+        "thermo_style    custom step press c_bpm_mc[1] temp\nthermo          100\nthermo_modify   format float %.17g norm no\nrun             600",
+        1,
+    );
+    assert!(text.contains("c_bpm_mc[1]"), "no run line found:\n{text}");
+    let input = dir.join("modern.in");
+    std::fs::write(
+        &input,
+        format!("plugin load {}\n{text}", lmp.plugin.display()),
+    )
+    .unwrap();
+    let work = bpm::verify::Work {
+        particles: 64,
+        steps: 600,
+    };
+    let out = lmp.run(&input, &[], 2, work).unwrap();
+    let thermo: Vec<[f64; 3]> = out
+        .lines()
+        .filter_map(|l| {
+            let w: Vec<f64> = l
+                .split_whitespace()
+                .map(|w| w.parse().ok())
+                .collect::<Option<_>>()?;
+            // `temp`: the stage's end sets thermo_modify temp.
+            (w.len() == 4 && w[0] % 100.0 == 0.0).then(|| [w[0], w[1], w[2]])
+        })
+        .collect();
+    assert_eq!(thermo.len(), 7, "thermo rows:\n{out}");
+    let stage = &native.stages[0];
+    let (steps, pressure, largest) = (
+        stage.column("step").unwrap(),
+        stage.column("pressure").unwrap(),
+        stage.column("mc_largest_correction").unwrap(),
+    );
+    let scale = pressure.iter().fold(0.0f64, |m, p| m.max(p.abs()));
+    for [step, p, c] in thermo {
+        let k = steps.iter().position(|&s| s == step).unwrap();
+        assert!(
+            (p - pressure[k]).abs() <= tolerance("trajectory stress") * scale,
+            "step {step}: pressure {p} against native {}",
+            pressure[k]
+        );
+        assert!(
+            (c - largest[k]).abs()
+                <= tolerance("trajectory multi-contact corrections") * largest[k],
+            "step {step}: largest correction {c} against native {}",
+            largest[k]
+        );
+    }
+    assert!(largest.iter().any(|&c| c > 0.01));
     let _ = std::fs::remove_dir_all(&dir);
 }

@@ -149,7 +149,9 @@ impl CheckReport {
     }
 }
 
-fn verdict(
+/// The verdict on `observable` of `scene` run by LAMMPS as `lammps` says,
+/// against its tolerance.
+pub fn verdict(
     scene: &str,
     lammps: &str,
     observable: &str,

@@ -3,6 +3,7 @@
 
 pub mod check;
 pub mod compare;
+pub mod cross_check;
 pub mod engines;
 pub mod launch;
 pub mod scenes;
