@@ -145,13 +145,19 @@ int bpm_granular_corrections(bpm_granular *style, const bpm_granular_atoms *atom
                              const int32_t *const *firstneigh, const double *history,
                              double *corrections, int64_t step, bpm_granular_summary *summary,
                              char *message, int64_t len);
+/* Stops (BPM_ERR_STOPPED, why in message) when a pair of periodic faces
+ * (h: LAMMPS's shape matrix, 6 doubles; periodic: 3 flags) is not more
+ * than twice the cutoff apart. */
+int bpm_granular_check_box(const bpm_granular *style, double max_radius, const double *h,
+                           const int32_t *periodic, int64_t step, char *message, int64_t len);
 /* Pass 2: forces and torques on owned atoms, memory rows advanced when
- * update != 0; virial to tally if not NULL. */
-int bpm_granular_forces(const bpm_granular *style, const bpm_granular_atoms *atoms, int64_t inum,
+ * update != 0 and renewed (only listed contacts kept) when renew != 0;
+ * virial to tally if not NULL. */
+int bpm_granular_forces(bpm_granular *style, const bpm_granular_atoms *atoms, int64_t inum,
                         const int32_t *ilist, const int32_t *numneigh,
                         const int32_t *const *firstneigh, const double *corrections,
                         double *history, double *f, double *torque, double dt, int32_t update,
-                        int64_t step, bpm_tally *tally, char *message, int64_t len);
+                        int32_t renew, int64_t step, bpm_tally *tally, char *message, int64_t len);
 
 #ifdef __cplusplus
 }

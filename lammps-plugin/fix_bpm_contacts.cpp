@@ -24,6 +24,8 @@ FixBPMContacts::FixBPMContacts(LAMMPS *lmp, int narg, char **arg) :
   correction_stride = 1 + 2 * nslots;
   restart_peratom = 1;
   create_attribute = 1;
+  stores_ids = 1;                   // partner IDs: reset_atoms id would scramble them
+  maxexchange = memory_stride;      // one atom's row in Comm::exchange()
   comm_forward = correction_stride;
   grow_arrays(atom->nmax);
   atom->add_callback(Atom::GROW);
@@ -73,9 +75,9 @@ int FixBPMContacts::pack_forward_comm(int n, int *list, double *buf, int, int *)
   return m;
 }
 
+// The pair style sized the rows for every ghost before the copy.
 void FixBPMContacts::unpack_forward_comm(int n, int first, double *buf)
 {
-  correction_rows(first + n);
   std::memcpy(corrections + (bigint) first * correction_stride, buf, sizeof(double) * n * correction_stride);
 }
 

@@ -5,6 +5,7 @@
 
 #include "atom.h"
 #include "comm.h"
+#include "domain.h"
 #include "error.h"
 #include "force.h"
 #include "memory.h"
@@ -112,6 +113,8 @@ void PairBPMGranular::init_style()
   if (force->newton_pair)
     error->all(FLERR, std::string("pair_style bpm/granular needs newton off for pairs (each rank "
                                   "computes the pairs of its atoms and their closure): 'newton off'"));
+  if (!atom->tag_enable)
+    error->all(FLERR, std::string("pair_style bpm/granular needs atom IDs: contacts are kept by partner ID"));
   if (!comm->ghost_velocity)
     error->all(FLERR, std::string("pair_style bpm/granular needs ghost velocities: add 'comm_modify vel yes'"));
   ensure_contacts();
@@ -145,9 +148,13 @@ void PairBPMGranular::compute(int eflag, int vflag)
                            tags.data(), nall, nlocal};
   double *corrections = contacts->correction_rows(nall);
   char message[1024];
+  int status = bpm_granular_check_box(style, max_radius, domain->h, domain->periodicity,
+                                      update->ntimestep, message, sizeof(message));
+  if (status != BPM_OK) stop("box", status, message);
+  pvector[0] = pvector[1] = 0.0;
   if (bpm_granular_has_closure(style)) {
     bpm_granular_summary summary{};
-    int status = bpm_granular_corrections(style, &atoms, list->inum, list->ilist, list->numneigh,
+    status = bpm_granular_corrections(style, &atoms, list->inum, list->ilist, list->numneigh,
                                           list->firstneigh, contacts->memory_rows(), corrections,
                                           update->ntimestep, &summary, message, sizeof(message));
     if (status != BPM_OK) stop("corrections", status, message);
@@ -160,11 +167,12 @@ void PairBPMGranular::compute(int eflag, int vflag)
   bpm_tally tally{};
   // A set-up (run 0, the first evaluation of a run) does not advance the
   // contact springs, as LAMMPS's own granular styles.
-  int status = bpm_granular_forces(style, &atoms, list->inum, list->ilist, list->numneigh,
-                                   list->firstneigh, corrections, contacts->memory_rows(),
-                                   atom->f[0], atom->torque[0], update->dt, !update->setupflag,
-                                   update->ntimestep, vflag_global ? &tally : nullptr, message,
-                                   sizeof(message));
+  // After a rebuild the memory keeps only the listed contacts.
+  status = bpm_granular_forces(style, &atoms, list->inum, list->ilist, list->numneigh,
+                               list->firstneigh, corrections, contacts->memory_rows(), atom->f[0],
+                               atom->torque[0], update->dt, !update->setupflag,
+                               neighbor->ago == 0, update->ntimestep,
+                               vflag_global ? &tally : nullptr, message, sizeof(message));
   if (status != BPM_OK) stop("forces", status, message);
   if (vflag_global)
     for (int k = 0; k < 6; k++) virial[k] += tally.virial[k];

@@ -247,6 +247,7 @@ const SUBCOMMANDS: &[&[&str]] = &[
     &["run", "{scene}", "-o", "{out}"],
     &["bench", "-o", "{out}"],
     &["check", "-o", "{out}"],
+    &["cross-check", "{scene}", "-o", "{out}"],
     &["calibrate", "-o", "{out}"],
     &["upstream-check", "-o", "{out}"],
     &["hertz", "-o", "{out}"],

@@ -279,6 +279,15 @@ fn bad_input_of_the_granular_style_gets_a_clear_lammps_error() {
             )],
             "more than 2 contacts",
         ),
+        (
+            // A reach of one radius sum: the cutoff exceeds half the box.
+            "small_box",
+            vec![(
+                coeff,
+                format!("pair_coeff * * {material} multicontact 0.8 reach 1"),
+            )],
+            "twice the pair cutoff",
+        ),
         ("no_coeff", vec![(coeff, "".into())], "oeffs are not set"),
     ];
     for (tag, edits, expected) in cases {
@@ -300,4 +309,48 @@ fn bad_input_of_the_granular_style_gets_a_clear_lammps_error() {
     let atomic = "units lj\natom_style atomic\nnewton off\nregion b block 0 5 0 5 0 5\ncreate_box 1 b\ncreate_atoms 1 single 1 1 1\nmass 1 1\ncomm_modify vel yes\npair_style bpm/granular\npair_coeff * * hertz/material 100 0.5 0.25 damping tsuji tangential mindlin NULL 1 0.3\nrun 0\n";
     let err = run_script(&scene, "atomic", atomic).unwrap_err();
     assert!(err.contains("atom_style sphere"), "{err}");
+}
+
+/// `bpm cross-check` on a scene file with the closure: both rank counts
+/// judged, every verdict passing, the report written; a rank count of 0 is
+/// refused by name.
+#[test]
+fn cross_check_runs_a_scene_file_through_both_engines() {
+    let dir = workdir().join("cross-check");
+    std::fs::create_dir_all(&dir).unwrap();
+    let scene = closure_scene(
+        false,
+        DemLoading::Compress,
+        200,
+        MultiContact::advanced(0.81, 0.015),
+    );
+    let path = dir.join("closure.json");
+    bpm::scene::write_scene(&path, &scene).unwrap();
+    let bpm = |args: &[&str]| {
+        std::process::Command::new(env!("CARGO_BIN_EXE_bpm"))
+            .arg("cross-check")
+            .arg(&path)
+            .args(args)
+            .output()
+            .unwrap()
+    };
+    let out = bpm(&["--ranks", "1,2", "-o", dir.to_str().unwrap()]);
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "{text}{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let report: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("cross_check.json")).unwrap())
+            .unwrap();
+    let verdicts = report["verdicts"].as_array().unwrap();
+    assert!(verdicts.len() >= 10, "{report}");
+    assert!(verdicts.iter().all(|v| v["pass"] == true));
+    assert!(verdicts.iter().any(|v| v["lammps"] == "np2 newton off"
+        && v["observable"] == "trajectory multi-contact corrections"));
+    assert_eq!(report["time_ratios"].as_array().unwrap().len(), 2);
+    let refused = bpm(&["--ranks", "0", "-o", dir.to_str().unwrap()]);
+    assert!(!refused.status.success());
+    assert!(String::from_utf8_lossy(&refused.stderr).contains("--ranks"));
 }

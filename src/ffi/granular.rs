@@ -326,6 +326,71 @@ pub unsafe extern "C" fn bpm_granular_has_closure(style: *const GranularStyle) -
         .is_some_and(|s| s.coeffs.multicontact.is_some()) as i32
 }
 
+/// Checks that the box's periodic faces are more than twice the pair
+/// cutoff for spheres up to `max_radius` apart (`h`: LAMMPS's shape
+/// matrix `[xprd, yprd, zprd, yz, xz, xy]`; `periodic`: 3 flags), as the
+/// native engine does every step: a closer pair of faces would show an
+/// atom two images of one partner, which share a contact row. Writes why
+/// to `message` and returns BPM_ERR_STOPPED if not.
+///
+/// # Safety
+/// `style` null or live; `h` 6 doubles, `periodic` 3 ints; `message` `len` bytes.
+#[no_mangle]
+pub unsafe extern "C" fn bpm_granular_check_box(
+    style: *const GranularStyle,
+    max_radius: f64,
+    h: *const f64,
+    periodic: *const i32,
+    step: i64,
+    message: *mut c_char,
+    len: i64,
+) -> i32 {
+    guard(|| {
+        if h.is_null() || periodic.is_null() {
+            return BPM_ERR_NULL;
+        }
+        let cutoff = bpm_granular_cutoff(style, max_radius);
+        if cutoff < 0.0 {
+            return BPM_ERR_NULL;
+        }
+        let faces = face_distances(list(h, 6));
+        let periodic = list(periodic, 3);
+        match (0..3).find(|&d| periodic[d] != 0 && cutoff >= 0.5 * faces[d]) {
+            None => BPM_OK,
+            Some(d) => {
+                let text = format!(
+                    "at step {step} the box's periodic faces normal to dimension {d} are {:.4} apart, no more than twice the pair cutoff {cutoff:.4} (the closure's reach included): an atom would meet two images of one partner. Use more atoms (a larger box), or compress or shear less",
+                    faces[d]
+                );
+                write_message(&text, message, len);
+                BPM_ERR_STOPPED
+            }
+        }
+    })
+}
+
+/// The distances between opposite faces of a LAMMPS box with shape matrix
+/// `h = [xprd, yprd, zprd, yz, xz, xy]` (edge vectors `a = (xprd, 0, 0)`,
+/// `b = (xy, yprd, 0)`, `c = (xz, yz, zprd)`): the volume over each face's
+/// area.
+fn face_distances(h: &[f64]) -> [f64; 3] {
+    let (a, b, c) = ([h[0], 0.0, 0.0], [h[5], h[1], 0.0], [h[4], h[3], h[2]]);
+    let cross = |u: [f64; 3], v: [f64; 3]| {
+        [
+            u[1] * v[2] - u[2] * v[1],
+            u[2] * v[0] - u[0] * v[2],
+            u[0] * v[1] - u[1] * v[0],
+        ]
+    };
+    let norm = |u: [f64; 3]| (u[0] * u[0] + u[1] * u[1] + u[2] * u[2]).sqrt();
+    let volume = h[0] * h[1] * h[2];
+    [
+        volume / norm(cross(b, c)),
+        volume / norm(cross(c, a)),
+        volume / norm(cross(a, b)),
+    ]
+}
+
 /// The per-atom arrays of a pass: `nall` atoms, the first `nlocal` owned.
 #[repr(C)]
 #[derive(Clone, Copy, Debug)]
@@ -456,7 +521,9 @@ pub unsafe extern "C" fn bpm_granular_corrections(
 /// Pass 2: the contact forces and torques of the listed pairs on owned
 /// atoms (newton off), added to `f` and `torque` (`3 nall` doubles each),
 /// with the corrections complete on ghosts; the contact memory advanced
-/// over `dt` when `update` is not 0 (a step, not a set-up). The virial
+/// over `dt` when `update` is not 0 (a step, not a set-up); with `renew`
+/// not 0 (the list was rebuilt) the memory keeps only the listed contacts.
+/// The virial
 /// goes to `tally` (null: not summed). On a stop (BPM_ERR_STOPPED) writes
 /// why to `message`.
 ///
@@ -464,7 +531,7 @@ pub unsafe extern "C" fn bpm_granular_corrections(
 /// As [`bpm_granular_corrections`]; `history` writable.
 #[no_mangle]
 pub unsafe extern "C" fn bpm_granular_forces(
-    style: *const GranularStyle,
+    style: *mut GranularStyle,
     atoms: *const RawAtoms,
     inum: i64,
     ilist: *const i32,
@@ -476,13 +543,14 @@ pub unsafe extern "C" fn bpm_granular_forces(
     torque: *mut f64,
     dt: f64,
     update: i32,
+    renew: i32,
     step: i64,
     tally: *mut Tally,
     message: *mut c_char,
     len: i64,
 ) -> i32 {
     guard(|| {
-        let (Some(style), Some(atoms)) = (style.as_ref(), atoms.as_ref()) else {
+        let (Some(style), Some(atoms)) = (style.as_mut(), atoms.as_ref()) else {
             return BPM_ERR_NULL;
         };
         let atoms = match atoms.view() {
@@ -528,6 +596,7 @@ pub unsafe extern "C" fn bpm_granular_forces(
             torque,
             dt,
             update != 0,
+            renew != 0,
             step,
         ) {
             Ok(t) => {
@@ -547,6 +616,18 @@ pub unsafe extern "C" fn bpm_granular_forces(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn face_distances_of_a_tilted_box() {
+        // Orthogonal: the edges.
+        assert_eq!(
+            face_distances(&[2.0, 3.0, 4.0, 0.0, 0.0, 0.0]),
+            [2.0, 3.0, 4.0]
+        );
+        // Tilted by xy = yprd: the x faces come closer by sqrt(2).
+        let d = face_distances(&[2.0, 2.0, 4.0, 0.0, 0.0, 2.0]);
+        assert!((d[0] - 2.0 / 2f64.sqrt()).abs() < 1e-15 && d[1] == 2.0 && d[2] == 4.0);
+    }
 
     #[test]
     fn coefficients_parse_with_every_option_and_bad_ones_are_named() {

@@ -277,6 +277,8 @@ pub struct GranularList {
     grouped: Vec<Entry>,
     points: Vec<ContactPoint>,
     deltas: Vec<f64>,
+    /// The memory rows before a pass that renews them.
+    previous: Vec<f64>,
 }
 
 impl GranularList {
@@ -292,6 +294,7 @@ impl GranularList {
             grouped: Vec::new(),
             points: Vec::new(),
             deltas: Vec::new(),
+            previous: Vec::new(),
         }
     }
 
@@ -413,11 +416,14 @@ impl GranularList {
     /// Pass 2: the contact forces of the listed pairs, with the
     /// corrections of pass 1 (`corrections` complete on ghosts too),
     /// added to `f` and `torque` of owned atoms (newton off); `history`
-    /// advanced over `dt` when `update` (a step, not a set-up).
+    /// advanced over `dt` when `update` (a step, not a set-up). With
+    /// `renew` (the list was rebuilt) the memory keeps only the contacts
+    /// of this list, as the native engine's store does at a rebuild: a
+    /// partner deleted or moved away by hand leaves no stale spring.
     /// Returns the virial of the forces.
     #[allow(clippy::too_many_arguments)]
     pub fn forces<'n>(
-        &self,
+        &mut self,
         atoms: &ListAtoms,
         rows: impl Iterator<Item = (usize, &'n [i32])>,
         corrections: &[f64],
@@ -426,6 +432,47 @@ impl GranularList {
         torque: &mut [[f64; 3]],
         dt: f64,
         update: bool,
+        renew: bool,
+        step: i64,
+    ) -> Result<Tally, ListError> {
+        let hist = Layout::history(self.slots);
+        // Read from the rows as they were, write into emptied ones.
+        let mut previous = std::mem::take(&mut self.previous);
+        previous.clear();
+        if renew {
+            previous.extend_from_slice(history);
+            for a in 0..atoms.n_owned {
+                history[a * hist.stride()] = 0.0;
+            }
+        }
+        let result = self.forces_from(
+            atoms,
+            rows,
+            corrections,
+            if renew { &previous } else { &[] },
+            history,
+            f,
+            torque,
+            (dt, update),
+            step,
+        );
+        self.previous = previous;
+        result
+    }
+
+    /// [`Self::forces`] reading the memory from `previous` when it is not
+    /// empty.
+    #[allow(clippy::too_many_arguments)]
+    fn forces_from<'n>(
+        &self,
+        atoms: &ListAtoms,
+        rows: impl Iterator<Item = (usize, &'n [i32])>,
+        corrections: &[f64],
+        previous: &[f64],
+        history: &mut [f64],
+        f: &mut [[f64; 3]],
+        torque: &mut [[f64; 3]],
+        (dt, update): (f64, bool),
         step: i64,
     ) -> Result<Tally, ListError> {
         let (hist, corr) = (Layout::history(self.slots), Layout::corrections(self.slots));
@@ -471,8 +518,13 @@ impl GranularList {
                     }
                     continue;
                 }
+                let source = if previous.is_empty() {
+                    &*history
+                } else {
+                    previous
+                };
                 let mut h = hist
-                    .get(history, i, tj)
+                    .get(source, i, tj)
                     .map_or_else(ContactHistory::default, ContactHistory::from_values);
                 let ContactForce {
                     force,
@@ -638,12 +690,13 @@ mod tests {
         };
         let x = [[0.0, 0.0, 0.0], [0.95, 0.01, 0.0], [1.9, 0.0, 0.03]];
         let zero = [[0.0; 3]; 3];
+        let v = [[0.01, 0.02, 0.0], [-0.01, 0.0, 0.01], [0.0, -0.02, 0.0]];
         let radius = [0.5; 3];
         let mass = [1.0; 3];
         let tag = [10, 20, 30];
         let atoms = ListAtoms {
             x: &x,
-            v: &zero,
+            v: &v,
             omega: &zero,
             radius: &radius,
             mass: &mass,
@@ -673,6 +726,7 @@ mod tests {
             &mut t,
             1e-3,
             true,
+            true,
             0,
         )
         .unwrap();
@@ -682,6 +736,35 @@ mod tests {
         assert!(f01 > 0.0 && f21 > 0.0);
         assert_eq!(hist.get(&history, 1, 10.0).unwrap()[7], f01);
         assert_eq!(hist.get(&history, 1, 30.0).unwrap()[7], f21);
+        // The middle sphere keeps each contact from its own side.
+        let from_0 = ContactHistory::from_values(hist.get(&history, 0, 20.0).unwrap());
+        let from_1 = ContactHistory::from_values(hist.get(&history, 1, 10.0).unwrap());
+        assert!(from_0.tangential != [0.0; 3]);
+        assert_eq!(from_1, from_0.mirrored());
+        // A stale entry (a partner no longer listed) survives a pass
+        // without a rebuild and is dropped by one that follows a rebuild.
+        assert!(hist.put(&mut history, 0, 99.0, &[1.0; HISTORY_VALUES]));
+        let saved = history.clone();
+        for renew in [false, true] {
+            let mut h = saved.clone();
+            let (mut f, mut t) = (vec![[0.0; 3]; 3], vec![[0.0; 3]; 3]);
+            list.forces(
+                &atoms,
+                rows(),
+                &corrections,
+                &mut h,
+                &mut f,
+                &mut t,
+                0.0,
+                false,
+                renew,
+                0,
+            )
+            .unwrap();
+            assert_eq!(hist.get(&h, 0, 99.0).is_some(), !renew);
+            assert_eq!(hist.get(&h, 0, 20.0), hist.get(&saved, 0, 20.0));
+        }
+        hist.remove(&mut history, 0, 99.0);
         // Second evaluation: the middle sphere's two contacts correct each
         // other as surface_corrections says.
         list.corrections(&atoms, rows(), &history, &mut corrections, 1)
@@ -717,10 +800,11 @@ mod tests {
             &mut t,
             1e-3,
             true,
+            false,
             1,
         )
         .unwrap();
-        let s = |i: usize| sphere(zero[i], zero[i], radius[i]);
+        let s = |i: usize| sphere(v[i], zero[i], radius[i]);
         let mut s0 = s(0);
         s0.mass = 1.0;
         let mut s1 = s(1);
@@ -739,11 +823,22 @@ mod tests {
         let plain = granular_contact(&coeffs, &del(0, 1), &s0, &s1, &mut h.clone(), 1e-3, true);
         assert!(c01.force[0] < 1.05 * plain.force[0] && c01.force[0] < plain.force[0]);
         // A one-slot row cannot hold the middle sphere's two contacts.
-        let small = GranularList::new(coeffs, Some(closure), 1);
+        let mut small = GranularList::new(coeffs, Some(closure), 1);
         let mut h1 = vec![0.0; 3 * Layout::history(1).stride()];
         let c1 = vec![0.0; 3 * Layout::corrections(1).stride()];
         let err = small
-            .forces(&atoms, rows(), &c1, &mut h1, &mut f, &mut t, 1e-3, true, 0)
+            .forces(
+                &atoms,
+                rows(),
+                &c1,
+                &mut h1,
+                &mut f,
+                &mut t,
+                1e-3,
+                true,
+                true,
+                0,
+            )
             .unwrap_err();
         assert_eq!(err, ListError::RowFull { atom: 20, slots: 1 });
     }
