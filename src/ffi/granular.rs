@@ -439,6 +439,32 @@ pub struct RawSummary {
     pub switched_off: i64,
 }
 
+/// The atoms and the list rows of a pass, checked: rows of owned atoms
+/// only (newton off: the memory is theirs), indices below `nall`.
+///
+/// # Safety
+/// As [`bpm_granular_corrections`].
+unsafe fn pass_inputs<'a>(
+    atoms: &'a RawAtoms,
+    inum: i64,
+    ilist: *const i32,
+    numneigh: *const i32,
+    firstneigh: *const *const i32,
+) -> Result<(ListAtoms<'a>, impl Iterator<Item = (usize, &'a [i32])> + 'a), i32> {
+    let atoms = atoms.view()?;
+    let nall = atoms.x.len();
+    let inum = counts(&[inum]).map(|c| c[0]).ok_or(BPM_ERR_NULL)?;
+    if inum > 0 && (ilist.is_null() || numneigh.is_null() || firstneigh.is_null()) {
+        return Err(BPM_ERR_NULL);
+    }
+    let ilist = list(ilist, inum);
+    if ilist.iter().any(|&i| i as usize >= atoms.n_owned) {
+        return Err(BPM_ERR_INDEX);
+    }
+    let rows = half_list(ilist, numneigh, firstneigh, nall)?;
+    Ok((atoms, rows))
+}
+
 /// Pass 1: the corrections of every owned atom's contacts into
 /// `corrections` (`nall` rows of `1 + 2 slots` doubles; owned rows
 /// written), from the contact memory `history` (`nlocal` rows of `1 + 9
@@ -468,29 +494,15 @@ pub unsafe extern "C" fn bpm_granular_corrections(
         let (Some(style), Some(atoms)) = (style.as_mut(), atoms.as_ref()) else {
             return BPM_ERR_NULL;
         };
-        let atoms = match atoms.view() {
-            Ok(a) => a,
+        let (atoms, rows_in) = match pass_inputs(atoms, inum, ilist, numneigh, firstneigh) {
+            Ok(inputs) => inputs,
             Err(status) => return status,
         };
         let nall = atoms.x.len();
-        let Some(inum) = counts(&[inum]).map(|c| c[0]) else {
-            return BPM_ERR_NULL;
-        };
         let slots = style.coeffs.slots;
-        if nall > 0 && (history.is_null() || corrections.is_null())
-            || (inum > 0 && (ilist.is_null() || numneigh.is_null() || firstneigh.is_null()))
-        {
+        if nall > 0 && (history.is_null() || corrections.is_null()) {
             return BPM_ERR_NULL;
         }
-        let ilist = list(ilist, inum);
-        // Rows belong to owned atoms (newton off): the memory is theirs.
-        if ilist.iter().any(|&i| i as usize >= atoms.n_owned) {
-            return BPM_ERR_INDEX;
-        }
-        let rows_in = match half_list(ilist, numneigh, firstneigh, nall) {
-            Ok(r) => r,
-            Err(status) => return status,
-        };
         let history = list(history, atoms.n_owned * Layout::history(slots).stride());
         let corrections = if nall == 0 {
             &mut []
@@ -553,30 +565,17 @@ pub unsafe extern "C" fn bpm_granular_forces(
         let (Some(style), Some(atoms)) = (style.as_mut(), atoms.as_ref()) else {
             return BPM_ERR_NULL;
         };
-        let atoms = match atoms.view() {
-            Ok(a) => a,
+        let (atoms, rows_in) = match pass_inputs(atoms, inum, ilist, numneigh, firstneigh) {
+            Ok(inputs) => inputs,
             Err(status) => return status,
         };
         let nall = atoms.x.len();
-        let Some(inum) = counts(&[inum]).map(|c| c[0]) else {
-            return BPM_ERR_NULL;
-        };
         let slots = style.coeffs.slots;
         if nall > 0
             && (history.is_null() || corrections.is_null() || f.is_null() || torque.is_null())
-            || (inum > 0 && (ilist.is_null() || numneigh.is_null() || firstneigh.is_null()))
         {
             return BPM_ERR_NULL;
         }
-        let ilist = list(ilist, inum);
-        // Rows belong to owned atoms (newton off): the memory is theirs.
-        if ilist.iter().any(|&i| i as usize >= atoms.n_owned) {
-            return BPM_ERR_INDEX;
-        }
-        let rows_in = match half_list(ilist, numneigh, firstneigh, nall) {
-            Ok(r) => r,
-            Err(status) => return status,
-        };
         let (history, f, torque) = if nall == 0 {
             (&mut [][..], &mut [][..], &mut [][..])
         } else {

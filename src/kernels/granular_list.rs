@@ -27,7 +27,9 @@
 #![allow(clippy::needless_range_loop)]
 
 use super::granular::{corrected_granular_contact, ContactForce, ContactHistory, GranularCoeffs};
-use super::multicontact::{pair_contact_points, surface_corrections, Closure, ContactPoint};
+use super::multicontact::{
+    group_by_sphere, pair_contact_points, surface_corrections, Closure, ContactPoint,
+};
 use super::{HalfSpace, Ownership, Sphere, Tally, NEIGHMASK};
 
 /// Values per contact in the memory: `xi` (3), rolling (3), twist and the
@@ -384,33 +386,19 @@ impl GranularList {
         Ok(summary)
     }
 
-    /// Groups the entries by atom (a counting sort, stable).
+    /// Groups the entries by atom.
     fn group(&mut self, n: usize) {
-        self.offsets.clear();
-        self.offsets.resize(n + 1, 0);
-        for e in &self.entries {
-            self.offsets[e.atom as usize + 1] += 1;
-        }
-        for a in 0..n {
-            self.offsets[a + 1] += self.offsets[a];
-        }
-        self.grouped.clear();
-        self.grouped.extend_from_slice(&self.entries);
-        self.points.clear();
-        self.points.extend(self.entries.iter().map(|e| e.point));
+        group_by_sphere(
+            &self.entries,
+            n,
+            |e| e.atom as usize,
+            |e| e.point,
+            &mut self.offsets,
+            &mut self.grouped,
+            &mut self.points,
+        );
         self.deltas.clear();
         self.deltas.resize(self.entries.len(), 0.0);
-        // `offsets[a]` serves as atom a's cursor, then is restored.
-        for e in &self.entries {
-            let slot = &mut self.offsets[e.atom as usize];
-            self.grouped[*slot] = *e;
-            self.points[*slot] = e.point;
-            *slot += 1;
-        }
-        for a in (1..=n).rev() {
-            self.offsets[a] = self.offsets[a - 1];
-        }
-        self.offsets[0] = 0;
     }
 
     /// Pass 2: the contact forces of the listed pairs, with the

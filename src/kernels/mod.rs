@@ -40,8 +40,8 @@ pub use granular_list::{
 };
 pub use isa::Isa;
 pub use multicontact::{
-    pair_contact_points, surface_corrections, Closure, ContactPoint, HalfSpace, MprSwitch, MprTest,
-    COINCIDENT_POINTS, NEGLIGIBLE, POINT_FLOOR,
+    group_by_sphere, pair_contact_points, surface_corrections, Closure, ContactPoint, HalfSpace,
+    MprSwitch, MprTest, COINCIDENT_POINTS, NEGLIGIBLE, POINT_FLOOR,
 };
 pub use pair::{pair_energy, pair_force_magnitude, pair_forces, PairCoeffs, PairInputs};
 pub use tally::{Ownership, Tally};

@@ -196,6 +196,45 @@ pub fn pair_contact_points(
     ]
 }
 
+/// Sorts `entries` by sphere (`sphere_of`, below `n`) into `grouped`,
+/// keeping their order within a sphere (a counting sort): sphere `i`'s
+/// entries are `grouped[offsets[i]..offsets[i + 1]]`, their points in
+/// `points` likewise, for [`surface_corrections`]. Reuses the buffers.
+pub fn group_by_sphere<E: Copy>(
+    entries: &[E],
+    n: usize,
+    sphere_of: impl Fn(&E) -> usize,
+    point_of: impl Fn(&E) -> ContactPoint,
+    offsets: &mut Vec<usize>,
+    grouped: &mut Vec<E>,
+    points: &mut Vec<ContactPoint>,
+) {
+    offsets.clear();
+    offsets.resize(n + 1, 0);
+    for e in entries {
+        offsets[sphere_of(e) + 1] += 1;
+    }
+    for i in 0..n {
+        offsets[i + 1] += offsets[i];
+    }
+    // Placeholders, each overwritten below.
+    grouped.clear();
+    grouped.extend_from_slice(entries);
+    points.clear();
+    points.extend(entries.iter().map(&point_of));
+    // `offsets[i]` serves as sphere i's cursor, then is restored.
+    for e in entries {
+        let slot = &mut offsets[sphere_of(e)];
+        grouped[*slot] = *e;
+        points[*slot] = point_of(e);
+        *slot += 1;
+    }
+    for i in (1..=n).rev() {
+        offsets[i] = offsets[i - 1];
+    }
+    offsets[0] = 0;
+}
+
 /// The radius correction `Delta_c` of each of one sphere's `contacts`
 /// (radius `radius`), written to `corrections` (same length): the
 /// displacements from every other contact that carried a force, combined

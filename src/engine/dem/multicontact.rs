@@ -19,8 +19,8 @@ use super::super::neighbor::NeighbourList;
 use super::super::simbox::MinimumImage;
 use super::wall::ActiveGranularWall;
 use crate::kernels::{
-    pair_contact_points, surface_corrections, Closure, ContactHistory, ContactPoint,
-    GranularMaterial, HalfSpace, MprSwitch, MprTest,
+    group_by_sphere, pair_contact_points, surface_corrections, Closure, ContactHistory,
+    ContactPoint, GranularMaterial, HalfSpace, MprSwitch, MprTest,
 };
 use serde::{Deserialize, Serialize};
 
@@ -310,33 +310,18 @@ impl ClosurePass {
         }
     }
 
-    /// Groups the entries by sphere (a counting sort, stable).
+    /// Groups the entries by sphere.
     fn group(&mut self, n: usize) {
-        self.offsets.clear();
-        self.offsets.resize(n + 1, 0);
-        for e in &self.entries {
-            self.offsets[e.sphere as usize + 1] += 1;
-        }
-        for i in 0..n {
-            self.offsets[i + 1] += self.offsets[i];
-        }
-        // Placeholders, each overwritten below.
-        self.grouped.clear();
-        self.grouped.extend_from_slice(&self.entries);
-        self.points.clear();
-        self.points.extend(self.entries.iter().map(|e| e.point));
+        group_by_sphere(
+            &self.entries,
+            n,
+            |e| e.sphere as usize,
+            |e| e.point,
+            &mut self.offsets,
+            &mut self.grouped,
+            &mut self.points,
+        );
         self.deltas.resize(self.entries.len(), 0.0);
-        // `offsets[i]` serves as sphere i's cursor, then is restored.
-        for e in &self.entries {
-            let slot = &mut self.offsets[e.sphere as usize];
-            self.grouped[*slot] = *e;
-            self.points[*slot] = e.point;
-            *slot += 1;
-        }
-        for i in (1..=n).rev() {
-            self.offsets[i] = self.offsets[i - 1];
-        }
-        self.offsets[0] = 0;
     }
 
     /// The extremes of the corrections, the first contact beyond reach
