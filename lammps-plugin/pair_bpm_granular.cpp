@@ -7,6 +7,7 @@
 #include "comm.h"
 #include "domain.h"
 #include "error.h"
+#include "fix.h"
 #include "force.h"
 #include "memory.h"
 #include "modify.h"
@@ -118,6 +119,15 @@ void PairBPMGranular::init_style()
   if (!comm->ghost_velocity)
     error->all(FLERR, std::string("pair_style bpm/granular needs ghost velocities: add 'comm_modify vel yes'"));
   ensure_contacts();
+  // The closure counts walls as contacts in the native engine; LAMMPS's
+  // granular walls tell this style nothing of theirs.
+  if (bpm_granular_has_closure(style) && comm->me == 0)
+    for (int i = 0; i < modify->nfix; i++)
+      if (utils::strmatch(modify->fix[i]->style, "^wall/gran"))
+        error->warning(FLERR, std::string("pair_style bpm/granular: fix ") + modify->fix[i]->id +
+                                  " (" + modify->fix[i]->style +
+                                  ") is not a contact of the multi-contact closure: its spheres' "
+                                  "corrections leave the wall's load out");
   double local = 0.0;
   for (int i = 0; i < atom->nlocal; i++) local = std::fmax(local, atom->radius[i]);
   MPI_Allreduce(&local, &max_radius, 1, MPI_DOUBLE, MPI_MAX, world);

@@ -306,6 +306,20 @@ fn bad_input_of_the_granular_style_gets_a_clear_lammps_error() {
             "{tag}: crashed:\n{err}"
         );
     }
+    // LAMMPS's own granular wall runs, but its load is not in the closure:
+    // a warning says so.
+    let walled = dem_script(
+        &[(
+            "boundary        ${boundary}",
+            "boundary        p p f".into(),
+        )],
+        "fix wall all wall/gran hooke 1000 NULL 50 NULL 0.5 0 zplane -5 NULL\nrun 0\n",
+    );
+    let out = run_script(&scene, "walled", &walled).unwrap();
+    assert!(
+        out.contains("fix wall (wall/gran) is not a contact of the multi-contact closure"),
+        "{out}"
+    );
     let atomic = "units lj\natom_style atomic\nnewton off\nregion b block 0 5 0 5 0 5\ncreate_box 1 b\ncreate_atoms 1 single 1 1 1\nmass 1 1\ncomm_modify vel yes\npair_style bpm/granular\npair_coeff * * hertz/material 100 0.5 0.25 damping tsuji tangential mindlin NULL 1 0.3\nrun 0\n";
     let err = run_script(&scene, "atomic", atomic).unwrap_err();
     assert!(err.contains("atom_style sphere"), "{err}");

@@ -82,8 +82,13 @@ pub fn parse_coeffs(words: &[&str]) -> Result<GranularStyleCoeffs, String> {
     };
     let mut multicontact = None;
     let mut slots = DEFAULT_SLOTS;
+    let mut seen: Vec<&str> = Vec::new();
     while let Some(word) = w.peek() {
         w.at += 1;
+        if seen.contains(&word) {
+            return Err(format!("`{word}` is given twice"));
+        }
+        seen.push(word);
         match word {
             "rolling" => {
                 w.expect("sds")?;
@@ -658,6 +663,7 @@ mod tests {
             ("hertz/material 1000 0.5 0.3 damping tsuji tangential mindlin NULL 1 0.5 multicontact 0.8 reach 0", "reach"),
             ("hertz/material 1000 0.5 0.3 damping tsuji tangential mindlin NULL 1 0.5 slots 0", "slots"),
             ("hertz/material 1000 0.5 0.3 damping tsuji tangential mindlin NULL 1 0.5 bogus", "bogus"),
+            ("hertz/material 1000 0.5 0.3 damping tsuji tangential mindlin NULL 1 0.5 slots 8 slots 9", "twice"),
         ] {
             let err = parse_coeffs(&bad.split_whitespace().collect::<Vec<_>>()).unwrap_err();
             assert!(err.contains(says), "{bad}: {err}");

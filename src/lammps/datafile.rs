@@ -271,6 +271,19 @@ mod tests {
     #[test]
     fn the_closure_coefficients_round_trip_through_the_plugin_parser() {
         let material = crate::verify::dem_check_material(true);
+        let other = GranularMaterial {
+            damping: NormalDamping::CoeffRestitution,
+            twisting: Twisting::Sds(crate::kernels::SpringDashpotSlider {
+                stiffness: 2.0,
+                damping: 0.25,
+                friction: 0.125,
+            }),
+            ..material
+        };
+        let words = dem_pair_coeff(&other, Some(&MultiContact::standard(0.5)), true);
+        let parsed =
+            crate::ffi::parse_coeffs(&words.split_whitespace().collect::<Vec<_>>()).unwrap();
+        assert_eq!(parsed.material, other);
         for mc in [
             MultiContact::standard(0.82),
             MultiContact {
