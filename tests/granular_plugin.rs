@@ -309,10 +309,7 @@ fn bad_input_of_the_granular_style_gets_a_clear_lammps_error() {
     // LAMMPS's own granular wall runs, but its load is not in the closure:
     // a warning says so.
     let walled = dem_script(
-        &[(
-            "boundary        ${boundary}",
-            "boundary        p p f".into(),
-        )],
+        &[("boundary        ${boundary}", "boundary        p p f")],
         "fix wall all wall/gran hooke 1000 NULL 50 NULL 0.5 0 zplane -5 NULL\nrun 0\n",
     );
     let out = run_script(&scene, "walled", &walled).unwrap();
