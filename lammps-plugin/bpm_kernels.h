@@ -147,9 +147,9 @@ int bpm_granular_corrections(bpm_granular *style, const bpm_granular_atoms *atom
                              char *message, int64_t len);
 /* Stops (BPM_ERR_STOPPED, why in message) when a pair of periodic faces
  * (h: LAMMPS's shape matrix, 6 doubles; periodic: 3 flags) is not more
- * than twice the cutoff apart. */
-int bpm_granular_check_box(const bpm_granular *style, double max_radius, const double *h,
-                           const int32_t *periodic, int64_t step, char *message, int64_t len);
+ * than twice the neighbour-list range (cutoff + skin) apart. */
+int bpm_granular_check_box(double range, const double *h, const int32_t *periodic, int64_t step,
+                           char *message, int64_t len);
 /* Pass 2: forces and torques on owned atoms, memory rows advanced when
  * update != 0 and renewed (only listed contacts kept) when renew != 0;
  * virial to tally if not NULL. */

@@ -114,6 +114,8 @@ void PairBPMGranular::init_style()
   if (force->newton_pair)
     error->all(FLERR, std::string("pair_style bpm/granular needs newton off for pairs (each rank "
                                   "computes the pairs of its atoms and their closure): 'newton off'"));
+  if (domain->dimension != 3)
+    error->all(FLERR, std::string("pair_style bpm/granular is for 3-d spheres"));
   if (!atom->tag_enable)
     error->all(FLERR, std::string("pair_style bpm/granular needs atom IDs: contacts are kept by partner ID"));
   if (!comm->ghost_velocity)
@@ -158,7 +160,8 @@ void PairBPMGranular::compute(int eflag, int vflag)
                            tags.data(), nall, nlocal};
   double *corrections = contacts->correction_rows(nall);
   char message[1024];
-  int status = bpm_granular_check_box(style, max_radius, domain->h, domain->periodicity,
+  // One image of each partner in the list: two would share a contact row.
+  int status = bpm_granular_check_box(neighbor->cutneighmax, domain->h, domain->periodicity,
                                       update->ntimestep, message, sizeof(message));
   if (status != BPM_OK) stop("box", status, message);
   pvector[0] = pvector[1] = 0.0;

@@ -286,7 +286,17 @@ fn bad_input_of_the_granular_style_gets_a_clear_lammps_error() {
                 coeff,
                 format!("pair_coeff * * {material} multicontact 0.8 reach 1"),
             )],
-            "twice the pair cutoff",
+            "twice the neighbour-list range",
+        ),
+        (
+            // The pair cutoff alone would fit, but with this skin the list
+            // could hold two images of one partner.
+            "skin_window",
+            vec![(
+                "neighbor        ${skin} bin",
+                "neighbor        1.7 bin".into(),
+            )],
+            "twice the neighbour-list range",
         ),
         ("no_coeff", vec![(coeff, "".into())], "oeffs are not set"),
     ];

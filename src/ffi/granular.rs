@@ -104,6 +104,12 @@ pub fn parse_coeffs(words: &[&str]) -> Result<GranularStyleCoeffs, String> {
             "multicontact" => {
                 let mut m = MultiContact::standard(w.number("the prefactor gamma")?);
                 loop {
+                    if let Some(word @ ("mpr" | "switch" | "test" | "reach")) = w.peek() {
+                        if seen.contains(&word) {
+                            return Err(format!("`{word}` is given twice"));
+                        }
+                        seen.push(word);
+                    }
                     match w.peek() {
                         Some("mpr") => {
                             w.at += 1;
@@ -331,19 +337,20 @@ pub unsafe extern "C" fn bpm_granular_has_closure(style: *const GranularStyle) -
         .is_some_and(|s| s.coeffs.multicontact.is_some()) as i32
 }
 
-/// Checks that the box's periodic faces are more than twice the pair
-/// cutoff for spheres up to `max_radius` apart (`h`: LAMMPS's shape
-/// matrix `[xprd, yprd, zprd, yz, xz, xy]`; `periodic`: 3 flags), as the
-/// native engine does every step: a closer pair of faces would show an
-/// atom two images of one partner, which share a contact row. Writes why
-/// to `message` and returns BPM_ERR_STOPPED if not.
+/// Checks that the box's periodic faces are more than twice the
+/// neighbour-list range `range` (the pair cutoff plus the skin) apart
+/// (`h`: LAMMPS's shape matrix `[xprd, yprd, zprd, yz, xz, xy]`;
+/// `periodic`: 3 flags). Closer faces would let the list hold two images
+/// of one partner, one touching and one apart, which share a contact row
+/// by ID. (The native engine, which takes the nearest image, needs only
+/// twice the cutoff.) Writes why to `message` and returns BPM_ERR_STOPPED
+/// if not.
 ///
 /// # Safety
-/// `style` null or live; `h` 6 doubles, `periodic` 3 ints; `message` `len` bytes.
+/// `h` 6 doubles, `periodic` 3 ints; `message` `len` bytes.
 #[no_mangle]
 pub unsafe extern "C" fn bpm_granular_check_box(
-    style: *const GranularStyle,
-    max_radius: f64,
+    range: f64,
     h: *const f64,
     periodic: *const i32,
     step: i64,
@@ -354,17 +361,15 @@ pub unsafe extern "C" fn bpm_granular_check_box(
         if h.is_null() || periodic.is_null() {
             return BPM_ERR_NULL;
         }
-        let cutoff = bpm_granular_cutoff(style, max_radius);
-        if cutoff < 0.0 {
-            return BPM_ERR_NULL;
-        }
         let faces = face_distances(list(h, 6));
         let periodic = list(periodic, 3);
-        match (0..3).find(|&d| periodic[d] != 0 && cutoff >= 0.5 * faces[d]) {
+        // A NaN range or face fails the check too.
+        let clear = |d: usize| range < 0.5 * faces[d];
+        match (0..3).find(|&d| periodic[d] != 0 && !clear(d)) {
             None => BPM_OK,
             Some(d) => {
                 let text = format!(
-                    "at step {step} the box's periodic faces normal to dimension {d} are {:.4} apart, no more than twice the pair cutoff {cutoff:.4} (the closure's reach included): an atom would meet two images of one partner. Use more atoms (a larger box), or compress or shear less",
+                    "at step {step} the box's periodic faces normal to dimension {d} are {:.4} apart, no more than twice the neighbour-list range {range:.4} (the pair cutoff with the closure's reach, plus the skin): the list could hold two images of one partner. Use more atoms (a larger box), a smaller skin, or compress or shear less",
                     faces[d]
                 );
                 write_message(&text, message, len);
@@ -631,6 +636,12 @@ mod tests {
         // Tilted by xy = yprd: the x faces come closer by sqrt(2).
         let d = face_distances(&[2.0, 2.0, 4.0, 0.0, 0.0, 2.0]);
         assert!((d[0] - 2.0 / 2f64.sqrt()).abs() < 1e-15 && d[1] == 2.0 && d[2] == 4.0);
+        // Tilted by yz = zprd: the y faces come closer by sqrt(2), the x
+        // faces stay; by xz = zprd: the x faces come closer.
+        let d = face_distances(&[2.0, 3.0, 3.0, 3.0, 0.0, 0.0]);
+        assert!(d[0] == 2.0 && (d[1] - 3.0 / 2f64.sqrt()).abs() < 1e-15 && d[2] == 3.0);
+        let d = face_distances(&[3.0, 2.0, 3.0, 0.0, 3.0, 0.0]);
+        assert!((d[0] - 3.0 / 2f64.sqrt()).abs() < 1e-15 && d[1] == 2.0 && d[2] == 3.0);
     }
 
     #[test]
@@ -664,6 +675,7 @@ mod tests {
             ("hertz/material 1000 0.5 0.3 damping tsuji tangential mindlin NULL 1 0.5 slots 0", "slots"),
             ("hertz/material 1000 0.5 0.3 damping tsuji tangential mindlin NULL 1 0.5 bogus", "bogus"),
             ("hertz/material 1000 0.5 0.3 damping tsuji tangential mindlin NULL 1 0.5 slots 8 slots 9", "twice"),
+            ("hertz/material 1000 0.5 0.3 damping tsuji tangential mindlin NULL 1 0.5 multicontact 0.8 reach 0.2 reach 0.3", "twice"),
         ] {
             let err = parse_coeffs(&bad.split_whitespace().collect::<Vec<_>>()).unwrap_err();
             assert!(err.contains(says), "{bad}: {err}");

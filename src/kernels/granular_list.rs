@@ -750,7 +750,14 @@ mod tests {
             )
             .unwrap();
             assert_eq!(hist.get(&h, 0, 99.0).is_some(), !renew);
-            assert_eq!(hist.get(&h, 0, 20.0), hist.get(&saved, 0, 20.0));
+            // Both sides of each listed contact are kept.
+            for (atom, partner) in [(0, 20.0), (1, 10.0), (1, 30.0), (2, 20.0)] {
+                assert_eq!(
+                    hist.get(&h, atom, partner),
+                    hist.get(&saved, atom, partner),
+                    "renew {renew}: atom {atom}, partner {partner}"
+                );
+            }
         }
         hist.remove(&mut history, 0, 99.0);
         // Second evaluation: the middle sphere's two contacts correct each

@@ -20,7 +20,7 @@ pub struct CrossCheckOptions {
     /// MPI rank counts of the LAMMPS runs.
     pub ranks: Vec<usize>,
     /// LAMMPS's newton setting (scenes with the multi-contact closure run
-    /// with it off whatever it says).
+    /// with it off whatever it says; the report records the one used).
     pub newton: bool,
     /// Where the report and the LAMMPS files go.
     #[serde(skip)]
@@ -95,7 +95,11 @@ pub fn run_cross_check(
         time_ratios.push((ranks, lammps.seconds / native.seconds));
     }
     let report = CrossCheckReport {
-        options: opts.clone(),
+        // The setting the runs used.
+        options: CrossCheckOptions {
+            newton,
+            ..opts.clone()
+        },
         seed: scene.seed,
         description: scene.description.clone(),
         verdicts,
