@@ -118,6 +118,11 @@ fn dem_script(edits: &[(&str, &str)], tail: &str) -> String {
 
 /// Runs `script` (named `tag`) on the spheres of `scene` with one rank.
 fn run_script(scene: &Scene, tag: &str, script: &str) -> Result<String, String> {
+    run_script_on(scene, tag, script, 1)
+}
+
+/// [`run_script`] on `ranks` MPI ranks.
+fn run_script_on(scene: &Scene, tag: &str, script: &str, ranks: usize) -> Result<String, String> {
     let path = workdir().join(format!("{tag}.in"));
     std::fs::write(&path, script).unwrap();
     run_lmp_bpm(
@@ -125,7 +130,7 @@ fn run_script(scene: &Scene, tag: &str, script: &str) -> Result<String, String> 
         scene,
         path.to_str().unwrap(),
         false,
-        1,
+        ranks,
         &workdir(),
         tag,
         &[],
@@ -191,28 +196,41 @@ fn a_restart_keeps_the_contact_memory_and_the_closure() {
             write(name)
         )
     };
-    run_script(&scene, "restart-read", &resume("resumed", false)).unwrap();
-    let (a, b) = (read_rows(&dump("continuous")), read_rows(&dump("resumed")));
-    assert_eq!(a.len(), 64);
-    assert_eq!(a.len(), b.len());
     let cols = |rows: &[Vec<f64>], from: usize| -> Vec<[f64; 3]> {
         rows.iter()
             .map(|r| [r[from], r[from + 1], r[from + 2]])
             .collect()
     };
-    let dx = cols(&a, 1)
-        .iter()
-        .zip(&cols(&b, 1))
-        .map(|(p, q)| common::dist(p, q))
-        .fold(0.0, f64::max);
-    let df = max_relative_deviation(&cols(&b, 4), &cols(&a, 4));
-    let dt = max_relative_deviation(&cols(&b, 7), &cols(&a, 7));
-    assert!(
-        dx <= tolerance("restart positions")
-            && df <= tolerance("restart forces")
-            && dt <= tolerance("restart forces"),
-        "after restart: positions differ by {dx:e} d, forces by {df:e}, torques by {dt:e}"
-    );
+    let a = read_rows(&dump("continuous"));
+    assert_eq!(a.len(), 64);
+    // Resumed on the rank that wrote it, and on two ranks: then each rank
+    // receives the rows of the atoms it owns.
+    for ranks in [1, 2] {
+        let name = format!("resumed-np{ranks}");
+        run_script_on(
+            &scene,
+            &format!("restart-read-np{ranks}"),
+            &resume(&name, false),
+            ranks,
+        )
+        .unwrap();
+        let b = read_rows(&dump(&name));
+        assert_eq!(a.len(), b.len());
+        let dx = cols(&a, 1)
+            .iter()
+            .zip(&cols(&b, 1))
+            .map(|(p, q)| common::dist(p, q))
+            .fold(0.0, f64::max);
+        let df = max_relative_deviation(&cols(&b, 4), &cols(&a, 4));
+        let dt = max_relative_deviation(&cols(&b, 7), &cols(&a, 7));
+        println!("restart on {ranks} rank(s): positions {dx:e} d, forces {df:e}, torques {dt:e}");
+        assert!(
+            dx <= tolerance("restart positions")
+                && df <= tolerance("restart forces")
+                && dt <= tolerance("restart forces"),
+            "after restart on {ranks} rank(s): positions differ by {dx:e} d, forces by {df:e}, torques by {dt:e}"
+        );
+    }
     // Without the memory (fix removed after reading), the springs restart
     // unloaded and the run goes elsewhere.
     run_script(&scene, "restart-forget", &resume("forgot", true)).unwrap();
