@@ -32,6 +32,7 @@ fn main() {
         "fix_bpm_reference.cpp",
         "pair_bpm_granular.cpp",
         "fix_bpm_contacts.cpp",
+        "fix_bpm_granular_wall.cpp",
         "bpm_plugin.cpp",
     ];
     let mut build = cc::Build::new();
@@ -57,6 +58,7 @@ fn main() {
         "fix_bpm_reference.h",
         "pair_bpm_granular.h",
         "fix_bpm_contacts.h",
+        "fix_bpm_granular_wall.h",
         "fault_message.h",
     ] {
         println!("cargo:rerun-if-changed=lammps-plugin/{h}");

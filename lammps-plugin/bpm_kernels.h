@@ -159,6 +159,36 @@ int bpm_granular_forces(bpm_granular *style, const bpm_granular_atoms *atoms, in
                         double *history, double *f, double *torque, double dt, int32_t update,
                         int32_t renew, int64_t step, bpm_tally *tally, char *message, int64_t len);
 
+/* fix bpm/granular/wall: a flat wall whose contacts the pair style computes
+ * in both passes, kept in the same rows under the partner ID -number. Its
+ * material is parsed from the words of pair_coeff's material (no
+ * multicontact, no slots); NULL on bad input, with why in message. */
+typedef struct bpm_granular_wall_material bpm_granular_wall_material;
+bpm_granular_wall_material *bpm_granular_wall_material_create(int32_t nwords,
+                                                              const char *const *words,
+                                                              char *message, int64_t len);
+void bpm_granular_wall_material_destroy(bpm_granular_wall_material *material);
+
+/* One wall at a force evaluation: the plane x[axis] = position moving at
+ * velocity, its atoms on side +1 (above) or -1 (below); fresh != 0 when it
+ * was (re)defined since the last evaluation (its friction springs restart). */
+typedef struct {
+  int64_t number;
+  int32_t axis, side;
+  double position, velocity;
+  int32_t fresh;
+  const bpm_granular_wall_material *material;
+} bpm_granular_wall;
+
+/* Sets the walls of the coming passes (before pass 1), restarting fresh
+ * walls' springs in the nlocal memory rows; BPM_ERR_STOPPED with why in
+ * message for bad walls. */
+int bpm_granular_set_walls(bpm_granular *style, const bpm_granular_wall *walls, int64_t nwalls,
+                           double *history, int64_t nlocal, char *message, int64_t len);
+/* After pass 2: the normal force on each of the nwalls walls from this
+ * rank's atoms (positive when pushed). */
+int bpm_granular_wall_forces(const bpm_granular *style, double *out, int64_t nwalls);
+
 #ifdef __cplusplus
 }
 #endif

@@ -6,6 +6,7 @@
 
 #include "bond_bpm_multibody.h"
 #include "fix_bpm_contacts.h"
+#include "fix_bpm_granular_wall.h"
 #include "fix_bpm_reference.h"
 #include "pair_bpm_contact.h"
 #include "pair_bpm_granular.h"
@@ -44,6 +45,11 @@ static Fix *contacts_creator(LAMMPS *lmp, int narg, char **arg)
   return new FixBPMContacts(lmp, narg, arg);
 }
 
+static Fix *wall_creator(LAMMPS *lmp, int narg, char **arg)
+{
+  return new FixBPMGranularWall(lmp, narg, arg);
+}
+
 extern "C" void bpm_register_styles(void *handle)
 {
   auto lmp = static_cast<LAMMPS *>(handle);
@@ -52,6 +58,7 @@ extern "C" void bpm_register_styles(void *handle)
   (*lmp->force->pair_map)["bpm/granular"] = &granular_creator;
   (*lmp->modify->fix_map)["BPM/REFERENCE"] = &fix_creator;
   (*lmp->modify->fix_map)["BPM/CONTACTS"] = &contacts_creator;
+  (*lmp->modify->fix_map)["bpm/granular/wall"] = &wall_creator;
 }
 
 /* lmp-bpm: LAMMPS's own main with our styles registered. */
@@ -105,6 +112,10 @@ extern "C" void lammpsplugin_init(void *lmp, void *handle, void *regfunc)
   plugin.name = "BPM/CONTACTS";
   plugin.info = "contact rows of pair_style bpm/granular (internal)";
   plugin.creator.v2 = (lammpsplugin_factory2 *) &contacts_creator;
+  register_plugin(&plugin, lmp);
+  plugin.name = "bpm/granular/wall";
+  plugin.info = "flat wall of pair_style bpm/granular (a contact of the closure)";
+  plugin.creator.v2 = (lammpsplugin_factory2 *) &wall_creator;
   register_plugin(&plugin, lmp);
 }
 #endif

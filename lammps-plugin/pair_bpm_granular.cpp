@@ -2,6 +2,7 @@
 
 #include "pair_bpm_granular.h"
 #include "fix_bpm_contacts.h"
+#include "fix_bpm_granular_wall.h"
 
 #include "atom.h"
 #include "comm.h"
@@ -121,15 +122,19 @@ void PairBPMGranular::init_style()
   if (!comm->ghost_velocity)
     error->all(FLERR, std::string("pair_style bpm/granular needs ghost velocities: add 'comm_modify vel yes'"));
   ensure_contacts();
-  // The closure counts walls as contacts in the native engine; LAMMPS's
-  // granular walls tell this style nothing of theirs.
+  walls.clear();
+  for (int i = 0; i < modify->nfix; i++)
+    if (strcmp(modify->fix[i]->style, "bpm/granular/wall") == 0)
+      walls.push_back(dynamic_cast<FixBPMGranularWall *>(modify->fix[i]));
+  // The closure counts walls as contacts; LAMMPS's own granular walls tell
+  // this style nothing of theirs (fix bpm/granular/wall does).
   if (bpm_granular_has_closure(style) && comm->me == 0)
     for (int i = 0; i < modify->nfix; i++)
       if (utils::strmatch(modify->fix[i]->style, "^wall/gran"))
         error->warning(FLERR, std::string("pair_style bpm/granular: fix ") + modify->fix[i]->id +
                                   " (" + modify->fix[i]->style +
                                   ") is not a contact of the multi-contact closure: its spheres' "
-                                  "corrections leave the wall's load out");
+                                  "corrections leave the wall's load out (use fix bpm/granular/wall)");
   double local = 0.0;
   for (int i = 0; i < atom->nlocal; i++) local = std::fmax(local, atom->radius[i]);
   MPI_Allreduce(&local, &max_radius, 1, MPI_DOUBLE, MPI_MAX, world);
@@ -146,6 +151,22 @@ void PairBPMGranular::stop(const char *pass, int status, const char *message)
   if (status == BPM_ERR_STOPPED) error->one(FLERR, std::string("pair_style bpm/granular: ") + message);
   error->one(FLERR, std::string("pair_style bpm/granular: ") + pass + " kernel failed with status " +
                         std::to_string(status));
+}
+
+// The walls now, handed to the kernels before pass 1 (a fresh wall's
+// springs restart there).
+void PairBPMGranular::set_walls()
+{
+  wall_state.clear();
+  for (auto *w : walls) {
+    if (!w) error->all(FLERR, std::string("pair_style bpm/granular: a fix bpm/granular/wall is not of this plugin"));
+    wall_state.push_back(w->current());
+  }
+  char message[1024];
+  int status = bpm_granular_set_walls(style, wall_state.data(), (int64_t) wall_state.size(),
+                                      contacts->memory_rows(), atom->nlocal, message, sizeof(message));
+  if (status != BPM_OK) stop("walls", status, message);
+  for (auto *w : walls) w->taken();
 }
 
 void PairBPMGranular::compute(int eflag, int vflag)
@@ -165,6 +186,7 @@ void PairBPMGranular::compute(int eflag, int vflag)
                                       update->ntimestep, message, sizeof(message));
   if (status != BPM_OK) stop("box", status, message);
   pvector[0] = pvector[1] = 0.0;
+  set_walls();
   if (bpm_granular_has_closure(style)) {
     bpm_granular_summary summary{};
     status = bpm_granular_corrections(style, &atoms, list->inum, list->ilist, list->numneigh,
@@ -187,6 +209,10 @@ void PairBPMGranular::compute(int eflag, int vflag)
                                neighbor->ago == 0, update->ntimestep,
                                vflag_global ? &tally : nullptr, message, sizeof(message));
   if (status != BPM_OK) stop("forces", status, message);
+  wall_forces.assign(walls.size(), 0.0);
+  status = bpm_granular_wall_forces(style, wall_forces.data(), (int64_t) wall_forces.size());
+  if (status != BPM_OK) stop("wall forces", status, message);
+  for (size_t w = 0; w < walls.size(); w++) walls[w]->set_local_force(wall_forces[w]);
   if (vflag_global)
     for (int k = 0; k < 6; k++) virial[k] += tally.virial[k];
 }

@@ -7,7 +7,7 @@ mod common;
 
 use bpm::engine::MultiContact;
 use bpm::scene::Scene;
-use bpm::verify::scenes::{dem_trajectory, DemLoading};
+use bpm::verify::scenes::{dem_trajectory, with_release, DemLoading};
 use bpm::verify::tolerances::tolerance;
 use bpm::verify::{compare_runs, max_relative_deviation, run_lmp_bpm, run_native, LammpsLauncher};
 use std::path::{Path, PathBuf};
@@ -61,8 +61,18 @@ fn the_closure_in_lammps_follows_the_native_engine_and_changes_the_stress() {
             MultiContact::standard(0.82),
             2,
         ),
+        (
+            false,
+            DemLoading::Walls,
+            MultiContact::advanced(0.81, 0.015),
+            2,
+        ),
     ] {
-        let scene = closure_scene(rt, loading, 800, mc);
+        let mut scene = closure_scene(rt, loading, 800, mc);
+        if loading == DemLoading::Walls {
+            // The walls defined anew halfway: springs restart, loads kept.
+            scene = with_release(scene);
+        }
         let tag = format!("{}-{ranks}", loading.name());
         let native = run_native(&scene, &tag, 1).unwrap();
         let lammps = launcher.run(&scene, &tag, ranks, false).unwrap();
@@ -80,11 +90,17 @@ fn the_closure_in_lammps_follows_the_native_engine_and_changes_the_stress() {
                 d.at_step
             );
         }
-        let largest = last(&lammps.stages, "mc_largest_correction");
+        let largest = lammps.stages[0].column("mc_largest_correction").unwrap();
         // The first evaluation has no loads remembered, so no corrections.
         assert_eq!(largest[0], 0.0);
         assert!(largest[1..].iter().all(|&c| c > 0.01), "{largest:?}");
-        if mc.max_penetration_ratio.is_some() {
+        if loading == DemLoading::Walls {
+            // The walls' forces are compared, and the upper one presses.
+            assert!(deviations.iter().any(|d| d.observable == "wall forces"));
+            let force = last(&lammps.stages, "granular_wall1_force");
+            assert!(force.iter().any(|&f| f > 1.0), "{force:?}");
+        }
+        if mc.max_penetration_ratio.is_some() && loading == DemLoading::Compress {
             let switched = last(&lammps.stages, "mc_switched_off");
             assert!(switched.iter().any(|&s| s > 0.0), "{switched:?}");
         }
@@ -343,6 +359,86 @@ fn bad_input_of_the_granular_style_gets_a_clear_lammps_error() {
     let out = run_script(&scene, "walled", &walled).unwrap();
     assert!(
         out.contains("fix wall (wall/gran) is not a contact of the multi-contact closure"),
+        "{out}"
+    );
+    // The plugin's wall: bad definitions, and an atom behind its plane.
+    let closed = (
+        "boundary        ${boundary}",
+        "boundary        p p f".to_string(),
+    );
+    let wall = |args: &str| format!("fix w all bpm/granular/wall {args} {material}\n");
+    let wall_cases: Vec<Case> = vec![
+        (
+            "wall_number",
+            vec![closed.clone()],
+            "the number must be at least 1",
+        ),
+        ("wall_axis", vec![closed.clone()], "expected x, y or z"),
+        (
+            "wall_side",
+            vec![closed.clone()],
+            "expected lo (atoms above the plane)",
+        ),
+        (
+            "wall_material",
+            vec![closed.clone()],
+            "belongs to pair_coeff",
+        ),
+        ("wall_group", vec![closed.clone()], "use group all"),
+        ("wall_twice", vec![closed.clone()], "share a number"),
+        ("wall_periodic", vec![], "periodic along z"),
+        (
+            "wall_pair",
+            vec![
+                closed.clone(),
+                ("pair_style      ${pair}", "pair_style granular".into()),
+                (coeff, format!("pair_coeff * * {material}")),
+            ],
+            "needs pair_style bpm/granular",
+        ),
+        (
+            "wall_through",
+            vec![closed],
+            "reached the plane of fix bpm/granular/wall number 1",
+        ),
+    ];
+    for (tag, edits, expected) in wall_cases {
+        let fix = match tag {
+            "wall_number" => wall("0 z lo -5 0"),
+            "wall_axis" => wall("1 q lo -5 0"),
+            "wall_side" => wall("1 z up -5 0"),
+            "wall_material" => wall("1 z lo -5 0").replace("\n", " multicontact 0.8\n"),
+            "wall_group" => format!(
+                "group one id 1\n{}",
+                wall("1 z lo -5 0").replace(" all ", " one ")
+            ),
+            "wall_twice" => wall("1 z lo -5 0") + &wall("1 z hi 50 0").replace("fix w ", "fix w2 "),
+            "wall_through" => wall("1 z lo 3 0"),
+            _ => wall("1 z lo -5 0"),
+        };
+        let edits: Vec<(&str, &str)> = edits.iter().map(|(a, b)| (*a, b.as_str())).collect();
+        let script = dem_script(&edits, &format!("{fix}run 0\n"));
+        let err = match run_script(&scene, tag, &script) {
+            Ok(out) => panic!("{tag}: LAMMPS accepted bad input:\n{out}"),
+            Err(e) => e,
+        };
+        assert!(
+            err.contains(expected),
+            "{tag}: expected `{expected}` in:\n{err}"
+        );
+    }
+    // A wall clear of the atoms: no force on it, its position reported.
+    let clear = dem_script(
+        &[("boundary        ${boundary}", "boundary        p p f")],
+        &format!(
+            "{}thermo_style custom step f_w[1] f_w[2]\nrun 0\n",
+            wall("1 z lo -5 0")
+        ),
+    );
+    let out = run_script(&scene, "wall_clear", &clear).unwrap();
+    assert!(
+        out.lines()
+            .any(|l| l.split_whitespace().collect::<Vec<_>>() == ["0", "0", "-5"]),
         "{out}"
     );
     let atomic = "units lj\natom_style atomic\nnewton off\nregion b block 0 5 0 5 0 5\ncreate_box 1 b\ncreate_atoms 1 single 1 1 1\nmass 1 1\ncomm_modify vel yes\npair_style bpm/granular\npair_coeff * * hertz/material 100 0.5 0.25 damping tsuji tangential mindlin NULL 1 0.3\nrun 0\n";

@@ -107,73 +107,100 @@ fn pair_damping_differs_from_upstream_by_its_smoothing_factor_only() {
 }
 
 /// The plugin's `pair_style bpm/granular` in the modern LAMMPS (loaded
-/// with `plugin load`, its 2022+ communication calls) on two ranks: the
-/// pressure and the closure's largest correction every 100 steps of a
+/// with `plugin load`, its 2022+ communication calls) on two ranks, as
+/// Debian's LAMMPS in `bpm check`: the pressure and the closure's largest
+/// correction every 100 steps equal the native engine's, for a
 /// Lees-Edwards shear with the standard closure and rolling and twisting
-/// friction equal the native engine's, as Debian's LAMMPS does in `bpm
-/// check`.
+/// friction, and for the advanced closure between two of the plugin's
+/// walls (`fix bpm/granular/wall`), whose force on the upper wall is
+/// compared too.
 #[test]
 fn the_closure_in_the_modern_lammps_follows_the_native_engine() {
     use bpm::engine::MultiContact;
     use bpm::verify::scenes::{dem_trajectory, DemLoading};
     let lmp = modern();
     let dir = workdir("closure");
-    let mut scene = dem_trajectory(2, true, DemLoading::LeesEdwards, 600);
-    scene.force_field.multicontact = Some(MultiContact::standard(0.82));
-    let native = bpm::verify::run_native(&scene, "closure", 1).unwrap();
-    let driver = bpm::lammps::write_driver(&scene, &dir, "closure", false).unwrap();
-    // The driver as the harness writes it, with a thermo line every 100
-    // steps of the values compared.
-    let text = driver.text().replacen(
-        "run             600",
-        "thermo_style    custom step press c_bpm_mc[1] temp\nthermo          100\nthermo_modify   format float %.17g norm no\nrun             600",
-        1,
-    );
-    assert_ne!(text, driver.text(), "no run line found");
-    let input = dir.join("modern.in");
-    std::fs::write(
-        &input,
-        format!("plugin load {}\n{text}", lmp.plugin.display()),
-    )
-    .unwrap();
-    let work = bpm::verify::Work {
-        particles: 64,
-        steps: 600,
-    };
-    let out = lmp.run(&input, &[], 2, work).unwrap();
-    let thermo: Vec<[f64; 3]> = out
-        .lines()
-        .filter_map(|l| {
-            let w: Vec<f64> = l
-                .split_whitespace()
-                .map(|w| w.parse().ok())
-                .collect::<Option<_>>()?;
-            // `temp`: the stage's end sets thermo_modify temp.
-            (w.len() == 4 && w[0] % 100.0 == 0.0).then(|| [w[0], w[1], w[2]])
-        })
-        .collect();
-    assert_eq!(thermo.len(), 7, "thermo rows:\n{out}");
-    let stage = &native.stages[0];
-    let (steps, pressure, largest) = (
-        stage.column("step").unwrap(),
-        stage.column("pressure").unwrap(),
-        stage.column("mc_largest_correction").unwrap(),
-    );
-    let scale = pressure.iter().fold(0.0f64, |m, p| m.max(p.abs()));
-    for [step, p, c] in thermo {
-        let k = steps.iter().position(|&s| s == step).unwrap();
-        assert!(
-            (p - pressure[k]).abs() <= tolerance("trajectory stress") * scale,
-            "step {step}: pressure {p} against native {}",
-            pressure[k]
+    for (loading, closure) in [
+        (DemLoading::LeesEdwards, MultiContact::standard(0.82)),
+        (DemLoading::Walls, MultiContact::advanced(0.81, 0.015)),
+    ] {
+        let mut scene = dem_trajectory(2, true, loading, 600);
+        scene.force_field.multicontact = Some(closure);
+        let tag = loading.name();
+        let native = bpm::verify::run_native(&scene, tag, 1).unwrap();
+        let driver = bpm::lammps::write_driver(&scene, &dir, tag, false).unwrap();
+        // The driver as the harness writes it, with a thermo line every
+        // 100 steps of the values compared (and the temperature, which the
+        // Lees-Edwards stage's end sets, or the upper wall's force).
+        let walls = loading == DemLoading::Walls;
+        let fourth = if walls { "f_bpm_gwall1[1]" } else { "temp" };
+        let text = driver.text().replacen(
+            "run             600",
+            &format!("thermo_style    custom step press c_bpm_mc[1] {fourth}\nthermo          100\nthermo_modify   format float %.17g norm no\nrun             600"),
+            1,
         );
-        assert!(
-            (c - largest[k]).abs()
-                <= tolerance("trajectory multi-contact corrections") * largest[k],
-            "step {step}: largest correction {c} against native {}",
-            largest[k]
+        assert_ne!(text, driver.text(), "no run line found");
+        let input = dir.join(format!("modern-{tag}.in"));
+        std::fs::write(
+            &input,
+            format!("plugin load {}\n{text}", lmp.plugin.display()),
+        )
+        .unwrap();
+        let work = bpm::verify::Work {
+            particles: 64,
+            steps: 600,
+        };
+        let out = lmp.run(&input, &[], 2, work).unwrap();
+        let thermo: Vec<[f64; 4]> = out
+            .lines()
+            .filter_map(|l| {
+                let w: Vec<f64> = l
+                    .split_whitespace()
+                    .map(|w| w.parse().ok())
+                    .collect::<Option<_>>()?;
+                (w.len() == 4 && w[0] % 100.0 == 0.0).then(|| [w[0], w[1], w[2], w[3]])
+            })
+            .collect();
+        assert_eq!(thermo.len(), 7, "{tag}: thermo rows:\n{out}");
+        let stage = &native.stages[0];
+        let column = |name: &str| stage.column(name).unwrap();
+        let (steps, pressure, largest) = (
+            column("step"),
+            column("pressure"),
+            column("mc_largest_correction"),
         );
+        let wall = if walls {
+            column("granular_wall1_force")
+        } else {
+            Vec::new()
+        };
+        let peak = |v: &[f64]| v.iter().fold(0.0f64, |m, p| m.max(p.abs()));
+        let scale = peak(&pressure);
+        for [step, p, c, fourth] in thermo {
+            let k = steps.iter().position(|&s| s == step).unwrap();
+            assert!(
+                (p - pressure[k]).abs() <= tolerance("trajectory stress") * scale,
+                "{tag} step {step}: pressure {p} against native {}",
+                pressure[k]
+            );
+            assert!(
+                (c - largest[k]).abs()
+                    <= tolerance("trajectory multi-contact corrections") * largest[k],
+                "{tag} step {step}: largest correction {c} against native {}",
+                largest[k]
+            );
+            if walls {
+                assert!(
+                    (fourth - wall[k]).abs() <= tolerance("trajectory wall forces") * peak(&wall),
+                    "{tag} step {step}: upper wall force {fourth} against native {}",
+                    wall[k]
+                );
+            }
+        }
+        assert!(largest.iter().any(|&c| c > 0.01), "{tag}: {largest:?}");
+        if walls {
+            assert!(peak(&wall) > 1.0, "{tag}: {wall:?}");
+        }
     }
-    assert!(largest.iter().any(|&c| c > 0.01));
     let _ = std::fs::remove_dir_all(&dir);
 }

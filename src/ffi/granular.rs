@@ -13,7 +13,7 @@ use super::{
 use crate::engine::MultiContact;
 use crate::kernels::{
     GranularCoeffs, GranularList, GranularMaterial, HalfSpace, Layout, ListAtoms, ListClosure,
-    MprSwitch, MprTest, NormalDamping, SpringDashpotSlider, Tally, Twisting,
+    ListWall, MprSwitch, MprTest, NormalDamping, SpringDashpotSlider, Tally, Twisting,
 };
 use crate::scene::validate::{check_granular, check_multicontact};
 use std::ffi::{c_char, CStr};
@@ -50,6 +50,19 @@ pub struct GranularStyleCoeffs {
 /// the harness writes it), then the closure. Every value is checked as a
 /// scene's would be.
 pub fn parse_coeffs(words: &[&str]) -> Result<GranularStyleCoeffs, String> {
+    parse(words, false)
+}
+
+/// Parses the material words of `fix bpm/granular/wall` (after its
+/// number, axis, side, position and velocity): those of
+/// [`parse_coeffs`] without `multicontact` and `slots`, which are the
+/// pair style's. Checked as a scene's wall material would be.
+pub fn parse_wall_material(words: &[&str]) -> Result<GranularMaterial, String> {
+    parse(words, true).map(|c| c.material)
+}
+
+/// [`parse_coeffs`], or with `wall` [`parse_wall_material`].
+fn parse(words: &[&str], wall: bool) -> Result<GranularStyleCoeffs, String> {
     let mut w = Words { words, at: 0 };
     w.expect("hertz/material")?;
     let youngs_modulus = w.number("E")?;
@@ -89,6 +102,11 @@ pub fn parse_coeffs(words: &[&str]) -> Result<GranularStyleCoeffs, String> {
             return Err(format!("`{word}` is given twice"));
         }
         seen.push(word);
+        if wall && matches!(word, "multicontact" | "slots") {
+            return Err(format!(
+                "`{word}` belongs to pair_coeff of pair_style bpm/granular, not to a wall (the closure counts the wall as a contact of its atoms)"
+            ));
+        }
         match word {
             "rolling" => {
                 w.expect("sds")?;
@@ -250,6 +268,26 @@ unsafe fn write_message(message: &str, buf: *mut c_char, len: i64) {
     *buf.add(n) = 0;
 }
 
+/// The `nwords` C strings of `words`, copied.
+///
+/// # Safety
+/// `words` is null or holds `nwords` pointers, each null or to a
+/// NUL-terminated string.
+unsafe fn owned_words(nwords: i32, words: *const *const c_char) -> Result<Vec<String>, String> {
+    if nwords < 0 || (nwords > 0 && words.is_null()) {
+        return Err("no words given".to_string());
+    }
+    let mut owned = Vec::with_capacity(nwords as usize);
+    for k in 0..nwords as usize {
+        let p = *words.add(k);
+        if p.is_null() {
+            return Err(format!("word {k} is null"));
+        }
+        owned.push(CStr::from_ptr(p).to_string_lossy().into_owned());
+    }
+    Ok(owned)
+}
+
 /// Parses the `nwords` words of `pair_coeff * *` ([`parse_coeffs`]) into
 /// a new handle; on bad input returns null and writes why to `message`.
 ///
@@ -263,17 +301,7 @@ pub unsafe extern "C" fn bpm_granular_create(
     len: i64,
 ) -> *mut GranularStyle {
     let parsed = std::panic::catch_unwind(|| {
-        if nwords < 0 || (nwords > 0 && words.is_null()) {
-            return Err("no words given".to_string());
-        }
-        let mut owned = Vec::with_capacity(nwords as usize);
-        for k in 0..nwords as usize {
-            let p = *words.add(k);
-            if p.is_null() {
-                return Err(format!("word {k} is null"));
-            }
-            owned.push(CStr::from_ptr(p).to_string_lossy().into_owned());
-        }
+        let owned = owned_words(nwords, words)?;
         let refs: Vec<&str> = owned.iter().map(String::as_str).collect();
         parse_coeffs(&refs)
     });
@@ -619,6 +647,161 @@ pub unsafe extern "C" fn bpm_granular_forces(
                 BPM_ERR_STOPPED
             }
         }
+    })
+}
+
+/// The material of a `fix bpm/granular/wall`: parses the `nwords` words
+/// ([`parse_wall_material`]) into a new handle; on bad input returns null
+/// and writes why to `message`.
+///
+/// # Safety
+/// `words` holds `nwords` NUL-terminated strings; `message` `len` bytes.
+#[no_mangle]
+pub unsafe extern "C" fn bpm_granular_wall_material_create(
+    nwords: i32,
+    words: *const *const c_char,
+    message: *mut c_char,
+    len: i64,
+) -> *mut GranularMaterial {
+    let parsed = std::panic::catch_unwind(|| {
+        let owned = owned_words(nwords, words)?;
+        let refs: Vec<&str> = owned.iter().map(String::as_str).collect();
+        parse_wall_material(&refs)
+    });
+    match parsed {
+        Ok(Ok(material)) => Box::into_raw(Box::new(material)),
+        Ok(Err(reason)) => {
+            write_message(&reason, message, len);
+            std::ptr::null_mut()
+        }
+        Err(_) => {
+            write_message("internal error in the kernels (a bug)", message, len);
+            std::ptr::null_mut()
+        }
+    }
+}
+
+/// Frees a wall material (null: nothing).
+///
+/// # Safety
+/// `material` is null or from [`bpm_granular_wall_material_create`], not
+/// freed before.
+#[no_mangle]
+pub unsafe extern "C" fn bpm_granular_wall_material_destroy(material: *mut GranularMaterial) {
+    if !material.is_null() {
+        drop(Box::from_raw(material));
+    }
+}
+
+/// A flat wall at one force evaluation (`bpm_granular_wall`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug)]
+pub struct RawWall {
+    /// The wall's number, >= 1: its contacts are kept under `-number`.
+    pub number: i64,
+    /// Axis normal to the plane: 0, 1 or 2.
+    pub axis: i32,
+    /// +1 when the atoms are above the plane, -1 below.
+    pub side: i32,
+    /// The plane's position now.
+    pub position: f64,
+    /// Its speed along the axis.
+    pub velocity: f64,
+    /// Not 0 when the wall was (re)defined since the last evaluation.
+    pub fresh: i32,
+    /// Its material, from [`bpm_granular_wall_material_create`].
+    pub material: *const GranularMaterial,
+}
+
+/// Sets the `nwalls` walls of the coming passes ([`GranularList::set_walls`]):
+/// their coefficients mix each wall's material with the spheres'; fresh
+/// walls restart the friction springs of the contacts in `history`
+/// (`nlocal` memory rows). On bad walls (a number below 1 or shared, an
+/// axis not 0 to 2, a side not +1 or -1) returns BPM_ERR_STOPPED with why
+/// in `message`.
+///
+/// # Safety
+/// `walls` holds `nwalls` walls with live materials; `history` `nlocal`
+/// rows; `message` `len` bytes.
+#[no_mangle]
+pub unsafe extern "C" fn bpm_granular_set_walls(
+    style: *mut GranularStyle,
+    walls: *const RawWall,
+    nwalls: i64,
+    history: *mut f64,
+    nlocal: i64,
+    message: *mut c_char,
+    len: i64,
+) -> i32 {
+    guard(|| {
+        let Some(style) = style.as_mut() else {
+            return BPM_ERR_NULL;
+        };
+        let Some([nwalls, nlocal]) = counts(&[nwalls, nlocal]).map(|c| [c[0], c[1]]) else {
+            return BPM_ERR_NULL;
+        };
+        if (nwalls > 0 && walls.is_null()) || (nlocal > 0 && history.is_null()) {
+            return BPM_ERR_NULL;
+        }
+        let raw = list(walls, nwalls);
+        let mut set = Vec::with_capacity(nwalls);
+        for w in raw {
+            let Some(material) = w.material.as_ref() else {
+                return BPM_ERR_NULL;
+            };
+            set.push(ListWall {
+                number: w.number,
+                axis: usize::try_from(w.axis).unwrap_or(usize::MAX),
+                sign: w.side as f64,
+                position: w.position,
+                velocity: w.velocity,
+                coeffs: GranularCoeffs::between(&style.coeffs.material, material),
+            });
+        }
+        let fresh: Vec<bool> = raw.iter().map(|w| w.fresh != 0).collect();
+        let stride = Layout::history(style.coeffs.slots).stride();
+        let history = if nlocal == 0 {
+            &mut []
+        } else {
+            slice::from_raw_parts_mut(history, nlocal * stride)
+        };
+        match style.list.set_walls(&set, &fresh, history, nlocal) {
+            Ok(()) => BPM_OK,
+            Err(e) => {
+                write_message(&e.to_string(), message, len);
+                BPM_ERR_STOPPED
+            }
+        }
+    })
+}
+
+/// Copies to `out` (`nwalls` doubles, as many as were set) the normal
+/// force on each wall from this rank's atoms in the last forces pass
+/// (positive when pushed).
+///
+/// # Safety
+/// `out` holds `nwalls` doubles.
+#[no_mangle]
+pub unsafe extern "C" fn bpm_granular_wall_forces(
+    style: *const GranularStyle,
+    out: *mut f64,
+    nwalls: i64,
+) -> i32 {
+    guard(|| {
+        let Some(style) = style.as_ref() else {
+            return BPM_ERR_NULL;
+        };
+        let forces = style.list.wall_forces();
+        if nwalls != forces.len() as i64 {
+            return BPM_ERR_INDEX;
+        }
+        if !forces.is_empty() {
+            if out.is_null() {
+                return BPM_ERR_NULL;
+            }
+            slice::from_raw_parts_mut(out, forces.len()).copy_from_slice(forces);
+        }
+        BPM_OK
     })
 }
 

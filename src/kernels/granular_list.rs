@@ -22,11 +22,20 @@
 //! 2. [`GranularList::forces`]: each listed pair with both sides'
 //!    corrections (a ghost's from its copied row), its force and torques
 //!    on owned atoms, the memory updated.
+//!
+//! **Flat walls** (`fix bpm/granular/wall`, [`GranularList::set_walls`])
+//! are contacts of their atoms in both passes, as in the native engine:
+//! each is kept in the same rows under the partner key `-number`, its
+//! correction comes from pass 1 with the atom's other contacts, and its
+//! force from [`granular_wall_contact`] in pass 2.
 
 // Atom indices address several per-atom arrays at once.
 #![allow(clippy::needless_range_loop)]
 
-use super::granular::{corrected_granular_contact, ContactForce, ContactHistory, GranularCoeffs};
+use super::granular::{
+    corrected_granular_contact, granular_wall_contact, ContactForce, ContactHistory,
+    GranularCoeffs, WallTouch,
+};
 use super::multicontact::{
     group_by_sphere, pair_contact_points, surface_corrections, Closure, ContactPoint,
 };
@@ -188,6 +197,45 @@ pub enum ListError {
         /// The time step.
         step: i64,
     },
+    /// An atom's centre reached a wall's plane.
+    #[error("atom {atom} reached the plane of fix bpm/granular/wall number {wall} at step {step}: it overlapped the wall by its whole radius (the wall moved too fast, pressed too hard for its stiffness, or the time step is too long; or the atom started on the wrong side: check the wall's position and side)")]
+    ThroughWall {
+        /// The atom's ID.
+        atom: i64,
+        /// The wall's number.
+        wall: i64,
+        /// The time step.
+        step: i64,
+    },
+    /// An atom's correction at a wall exceeds the closure's reach.
+    #[error("the multi-contact correction of atom {atom} at fix bpm/granular/wall number {wall} is {ratio:.3} of its radius at step {step}, beyond the closure's reach {reach}: raise `reach` (or lower the prefactor, or use the advanced closure, whose ratio bounds each term)")]
+    WallBeyondReach {
+        /// The atom's ID.
+        atom: i64,
+        /// The wall's number.
+        wall: i64,
+        /// Correction over radius.
+        ratio: f64,
+        /// The closure's reach.
+        reach: f64,
+        /// The time step.
+        step: i64,
+    },
+    /// A wall's force came out NaN or infinite.
+    #[error("the contact force between atom {atom} and fix bpm/granular/wall number {wall} is not finite at step {step} (overlap {overlap:.4}): the run has blown up; reduce the timestep")]
+    NonFiniteWall {
+        /// The atom's ID.
+        atom: i64,
+        /// The wall's number.
+        wall: i64,
+        /// The overlap.
+        overlap: f64,
+        /// The time step.
+        step: i64,
+    },
+    /// Two walls share a number, or a wall's axis is not 0, 1 or 2.
+    #[error("{0}")]
+    BadWalls(&'static str),
     /// A force came out NaN or infinite.
     #[error("the contact force between atoms {atom} and {partner} is not finite at step {step} (overlap {overlap:.4}): the run has blown up; reduce the timestep")]
     NonFinite {
@@ -246,6 +294,41 @@ impl ListAtoms<'_> {
     }
 }
 
+/// A flat wall as the passes see it: the plane `x[axis] = position`
+/// moving along its normal at `velocity`, with its atoms on the side
+/// `sign` points to (+1: above the plane), of the contact coefficients
+/// `coeffs` (its material mixed with the spheres'). Its contacts are kept
+/// in the atoms' rows under the partner key `-number`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ListWall {
+    /// The wall's number, >= 1.
+    pub number: i64,
+    /// Axis normal to the plane: 0, 1 or 2.
+    pub axis: usize,
+    /// +1 when the atoms are on the +axis side, -1 otherwise.
+    pub sign: f64,
+    /// The plane's position now.
+    pub position: f64,
+    /// The plane's speed along the axis.
+    pub velocity: f64,
+    /// The sphere-wall contact coefficients.
+    pub coeffs: GranularCoeffs,
+}
+
+impl ListWall {
+    /// The partner key of the wall's contacts in the rows: negative, so
+    /// it is no atom ID.
+    fn key(&self) -> f64 {
+        -(self.number as f64)
+    }
+
+    /// Distance of `x`'s centre from the plane, positive on the atoms'
+    /// side.
+    fn distance(&self, x: &[f64; 3]) -> f64 {
+        self.sign * (x[self.axis] - self.position)
+    }
+}
+
 /// What pass 1 found over this rank's atoms.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct CorrectionSummary {
@@ -281,6 +364,11 @@ pub struct GranularList {
     deltas: Vec<f64>,
     /// The memory rows before a pass that renews them.
     previous: Vec<f64>,
+    /// The walls of the coming passes.
+    walls: Vec<ListWall>,
+    /// Per wall, the normal force on it from this rank's atoms in the
+    /// last forces pass (positive when pushed).
+    wall_forces: Vec<f64>,
 }
 
 impl GranularList {
@@ -297,7 +385,70 @@ impl GranularList {
             points: Vec::new(),
             deltas: Vec::new(),
             previous: Vec::new(),
+            walls: Vec::new(),
+            wall_forces: Vec::new(),
         }
+    }
+
+    /// Sets the walls of the coming passes. A wall marked `fresh` was
+    /// (re)defined since the last evaluation, as a LAMMPS script defines
+    /// its walls anew each stage: its friction springs restart unloaded,
+    /// as the native engine's walls do at each stage. Only the normal
+    /// force an owned atom's entry carried is kept, for the closure's
+    /// first pass, when a wall of the same number, axis and side was set
+    /// at the last evaluation (the native engine keeps a wall's load
+    /// under the same condition); otherwise the entry is forgotten.
+    pub fn set_walls(
+        &mut self,
+        walls: &[ListWall],
+        fresh: &[bool],
+        history: &mut [f64],
+        n_owned: usize,
+    ) -> Result<(), ListError> {
+        for (k, w) in walls.iter().enumerate() {
+            if w.number < 1 || w.axis > 2 || w.sign.abs() != 1.0 {
+                return Err(ListError::BadWalls(
+                    "a wall needs a number >= 1, an axis 0, 1 or 2 and a side +1 or -1",
+                ));
+            }
+            if walls[..k].iter().any(|o| o.number == w.number) {
+                return Err(ListError::BadWalls(
+                    "two fix bpm/granular/wall share a number: each wall's contacts are kept under its own",
+                ));
+            }
+        }
+        let hist = Layout::history(self.slots);
+        for (w, _) in walls.iter().zip(fresh).filter(|(_, &f)| f) {
+            let kept = self
+                .walls
+                .iter()
+                .any(|o| o.number == w.number && o.axis == w.axis && o.sign == w.sign);
+            for a in 0..n_owned {
+                let Some(values) = hist.get(history, a, w.key()) else {
+                    continue;
+                };
+                if kept {
+                    let load = ContactHistory {
+                        normal_force: ContactHistory::from_values(values).normal_force,
+                        ..ContactHistory::default()
+                    };
+                    hist.put(history, a, w.key(), &load.to_values());
+                } else {
+                    hist.remove(history, a, w.key());
+                }
+            }
+        }
+        self.walls.clear();
+        self.walls.extend_from_slice(walls);
+        self.wall_forces.clear();
+        self.wall_forces.resize(walls.len(), 0.0);
+        Ok(())
+    }
+
+    /// Per wall of [`Self::set_walls`], the normal force on it from this
+    /// rank's atoms in the last forces pass (positive when pushed).
+    pub fn wall_forces(&self) -> &[f64] {
+        &self.wall_forces
     }
 
     /// Pass 1: the corrections of every owned atom's contacts into
@@ -348,6 +499,25 @@ impl GranularList {
                         point: pj,
                     });
                 }
+            }
+        }
+        for wall in &self.walls {
+            for a in 0..n {
+                let distance = wall.distance(&x[a]);
+                if distance <= 0.0 || distance >= reach_factor * radius[a] {
+                    continue;
+                }
+                // On the wall's plane: a rigid wall does not give way.
+                let mut point = [0.0; 3];
+                point[wall.axis] = -wall.sign * distance;
+                let force = hist
+                    .get(history, a, wall.key())
+                    .map_or(0.0, |v| v[HISTORY_VALUES - 1]);
+                self.entries.push(Entry {
+                    atom: a as u32,
+                    partner: wall.key(),
+                    point: ContactPoint::new(point, force, radius[a]),
+                });
             }
         }
         self.group(n);
@@ -433,18 +603,22 @@ impl GranularList {
                 history[a * hist.stride()] = 0.0;
             }
         }
+        let mut wall_forces = std::mem::take(&mut self.wall_forces);
+        wall_forces.clear();
+        wall_forces.resize(self.walls.len(), 0.0);
         let result = self.forces_from(
             atoms,
             rows,
             corrections,
             if renew { &previous } else { &[] },
             history,
-            f,
-            torque,
+            (f, torque),
+            &mut wall_forces,
             (dt, update),
             step,
         );
         self.previous = previous;
+        self.wall_forces = wall_forces;
         result
     }
 
@@ -458,8 +632,8 @@ impl GranularList {
         corrections: &[f64],
         previous: &[f64],
         history: &mut [f64],
-        f: &mut [[f64; 3]],
-        torque: &mut [[f64; 3]],
+        (f, torque): (&mut [[f64; 3]], &mut [[f64; 3]]),
+        wall_forces: &mut [f64],
         (dt, update): (f64, bool),
         step: i64,
     ) -> Result<Tally, ListError> {
@@ -559,7 +733,114 @@ impl GranularList {
                 tally.add_vector(fraction, &del, &force);
             }
         }
+        for (wall, load) in self.walls.iter().zip(wall_forces) {
+            *load = self.wall_forces_on(
+                atoms,
+                wall,
+                corrections,
+                previous,
+                history,
+                (f, torque),
+                (dt, update),
+                step,
+            )?;
+        }
         Ok(tally)
+    }
+
+    /// The contacts of `wall` with the owned atoms (the native engine's
+    /// `ActiveGranularWall::apply`): forces and torques added to `f` and
+    /// `torque`, the memory advanced as in [`Self::forces_from`]. Returns
+    /// the normal force on the wall (positive when pushed).
+    #[allow(clippy::too_many_arguments)]
+    fn wall_forces_on(
+        &self,
+        atoms: &ListAtoms,
+        wall: &ListWall,
+        corrections: &[f64],
+        previous: &[f64],
+        history: &mut [f64],
+        (f, torque): (&mut [[f64; 3]], &mut [[f64; 3]]),
+        (dt, update): (f64, bool),
+        step: i64,
+    ) -> Result<f64, ListError> {
+        let (hist, corr) = (Layout::history(self.slots), Layout::corrections(self.slots));
+        let (key, axis) = (wall.key(), wall.axis);
+        let mut normal = [0.0; 3];
+        normal[axis] = wall.sign;
+        let mut velocity = [0.0; 3];
+        velocity[axis] = wall.velocity;
+        let mut load = 0.0;
+        for a in 0..atoms.n_owned {
+            let radius = atoms.radius[a];
+            let distance = wall.distance(&atoms.x[a]);
+            let correction = match self.closure {
+                None => 0.0,
+                Some(c) => {
+                    let moved = corr.get(corrections, a, key).map_or(0.0, |v| v[0]);
+                    if moved > c.reach * radius {
+                        return Err(ListError::WallBeyondReach {
+                            atom: atoms.tag[a],
+                            wall: wall.number,
+                            ratio: moved / radius,
+                            reach: c.reach,
+                            step,
+                        });
+                    }
+                    moved
+                }
+            };
+            let surface = radius + correction;
+            // A surface moved past the centre is pass 1's error; it is no
+            // contact here.
+            if surface <= 0.0 || distance >= surface {
+                hist.remove(history, a, key);
+                continue;
+            }
+            if distance <= 0.0 {
+                return Err(ListError::ThroughWall {
+                    atom: atoms.tag[a],
+                    wall: wall.number,
+                    step,
+                });
+            }
+            let source = if previous.is_empty() {
+                &*history
+            } else {
+                previous
+            };
+            let mut h = hist
+                .get(source, a, key)
+                .map_or_else(ContactHistory::default, ContactHistory::from_values);
+            let touch = WallTouch {
+                distance,
+                normal,
+                velocity,
+                correction,
+            };
+            let out =
+                granular_wall_contact(&wall.coeffs, &touch, &atoms.sphere(a), &mut h, dt, update);
+            if !out.force.iter().all(|c| c.is_finite()) {
+                return Err(ListError::NonFiniteWall {
+                    atom: atoms.tag[a],
+                    wall: wall.number,
+                    overlap: surface - distance,
+                    step,
+                });
+            }
+            if !hist.put(history, a, key, &h.to_values()) {
+                return Err(ListError::RowFull {
+                    atom: atoms.tag[a],
+                    slots: self.slots,
+                });
+            }
+            for d in 0..3 {
+                f[a][d] += out.force[d];
+                torque[a][d] += out.torque_i[d];
+            }
+            load += wall.sign * out.force[axis];
+        }
+        Ok(load)
     }
 }
 
@@ -567,6 +848,7 @@ impl GranularList {
 mod tests {
     use super::*;
     use crate::kernels::{granular_contact, GranularMaterial, NormalDamping, SpringDashpotSlider};
+    use crate::kernels::{ContactPoint, WallTouch};
     use crate::kernels::{MprSwitch, MprTest, Twisting};
 
     fn material() -> GranularMaterial {
@@ -637,6 +919,228 @@ mod tests {
             }
             assert!(tally > 0.0);
         }
+    }
+
+    /// A wall below atom 10 (x lo wall at z = 0), atom 20 pressing it
+    /// down: pass 1 gives atom 10 corrections from both of its contacts,
+    /// the wall's among them, as `surface_corrections` does; pass 2 gives
+    /// it the wall's force of `granular_wall_contact` with its correction
+    /// there, and reports the load on the wall.
+    #[test]
+    fn a_wall_is_a_contact_of_the_closure_in_both_passes() {
+        let m = material();
+        let coeffs = GranularCoeffs::of(&m);
+        let closure = ListClosure {
+            closure: Closure::Standard,
+            half_space: HalfSpace::new(0.82, m.youngs_modulus, m.poisson_ratio),
+            reach: 0.25,
+        };
+        let wall_material = GranularMaterial {
+            youngs_modulus: 1e4,
+            ..m
+        };
+        let wall = ListWall {
+            number: 1,
+            axis: 2,
+            sign: 1.0,
+            position: 0.0,
+            velocity: -0.01,
+            coeffs: GranularCoeffs::between(&m, &wall_material),
+        };
+        let x = [[0.0, 0.0, 0.46], [0.02, 0.01, 1.41]];
+        let v = [[0.01, 0.0, -0.02], [0.0, 0.01, -0.03]];
+        let omega = [[0.1, -0.2, 0.05], [0.0; 3]];
+        let (radius, mass, tag) = ([0.5; 2], [1.0; 2], [10, 20]);
+        let atoms = ListAtoms {
+            x: &x,
+            v: &v,
+            omega: &omega,
+            radius: &radius,
+            mass: &mass,
+            tag: &tag,
+            n_owned: 2,
+        };
+        let slots = 4;
+        let (hist, corr) = (Layout::history(slots), Layout::corrections(slots));
+        let mut list = GranularList::new(coeffs, Some(closure), slots);
+        let mut history = vec![0.0; 2 * hist.stride()];
+        let mut corrections = vec![0.0; 2 * corr.stride()];
+        let rows = || [(1usize, &[0i32][..])].into_iter();
+        list.set_walls(&[wall], &[true], &mut history, 2).unwrap();
+        let step = |list: &mut GranularList, history: &mut Vec<f64>, corrections: &mut Vec<f64>| {
+            list.corrections(&atoms, rows(), history, corrections, 0)
+                .unwrap();
+            let (mut f, mut t) = (vec![[0.0; 3]; 2], vec![[0.0; 3]; 2]);
+            list.forces(
+                &atoms,
+                rows(),
+                corrections,
+                history,
+                &mut f,
+                &mut t,
+                1e-3,
+                true,
+                false,
+                0,
+            )
+            .unwrap();
+            (f, t)
+        };
+        // No loads remembered: no corrections; the wall's contact is the
+        // plain one.
+        let before = hist.get(&history, 0, -1.0).is_none();
+        let (f, t) = step(&mut list, &mut history, &mut corrections);
+        assert!(before && corrections[0] == 0.0);
+        let sphere0 = Sphere {
+            v: v[0],
+            omega: omega[0],
+            radius: 0.5,
+            mass: 1.0,
+        };
+        let touch = |correction| WallTouch {
+            distance: 0.46,
+            normal: [0.0, 0.0, 1.0],
+            velocity: [0.0, 0.0, -0.01],
+            correction,
+        };
+        let mut h = ContactHistory::default();
+        let plain = granular_wall_contact(&wall.coeffs, &touch(0.0), &sphere0, &mut h, 1e-3, true);
+        assert!(plain.force[2] > 0.0);
+        assert_eq!(list.wall_forces(), &[plain.force[2]]);
+        assert_eq!(hist.get(&history, 0, -1.0), Some(&h.to_values()[..]));
+        assert!(t[0] != [0.0; 3] && f[1][2] > 0.0);
+        // Second evaluation: atom 10's two loads correct each other.
+        let wall_load = h.normal_force;
+        let pair_load = hist.get(&history, 0, 20.0).unwrap()[7];
+        let del = super::super::sub(&x[1], &x[0]);
+        let r = super::super::dot(&del, &del).sqrt();
+        let [_, from_pair] = pair_contact_points(&del, r, 0.5, 0.5, pair_load);
+        let from_wall = ContactPoint::new([0.0, 0.0, -0.46], wall_load, 0.5);
+        let mut expect = [0.0; 2];
+        surface_corrections(
+            &closure.half_space,
+            &closure.closure,
+            0.5,
+            &[from_pair, from_wall],
+            &mut expect,
+        );
+        assert!(expect.iter().all(|&d| d > 0.0), "{expect:?}");
+        let (f2, _) = step(&mut list, &mut history, &mut corrections);
+        assert_eq!(corr.get(&corrections, 0, 20.0).unwrap()[0], expect[0]);
+        assert_eq!(corr.get(&corrections, 0, -1.0).unwrap()[0], expect[1]);
+        let corrected = granular_wall_contact(
+            &wall.coeffs,
+            &touch(expect[1]),
+            &sphere0,
+            &mut h,
+            1e-3,
+            true,
+        );
+        assert_eq!(list.wall_forces(), &[corrected.force[2]]);
+        assert!(corrected.force[2] > plain.force[2] && f2[0][2] > f[0][2]);
+        // An atom moved through the plane stops the pass, naming it.
+        let mut through = x;
+        through[0][2] = -0.01;
+        let atoms = ListAtoms {
+            x: &through,
+            ..atoms
+        };
+        let (mut f, mut t) = (vec![[0.0; 3]; 2], vec![[0.0; 3]; 2]);
+        let err = list
+            .forces(
+                &atoms,
+                rows(),
+                &corrections,
+                &mut history,
+                &mut f,
+                &mut t,
+                1e-3,
+                true,
+                false,
+                7,
+            )
+            .unwrap_err();
+        assert_eq!(
+            err,
+            ListError::ThroughWall {
+                atom: 10,
+                wall: 1,
+                step: 7
+            }
+        );
+    }
+
+    /// A wall defined anew restarts its springs and keeps its load if it
+    /// has the number, axis and side of a wall at the last evaluation;
+    /// otherwise its entries are forgotten. Walls sharing a number are
+    /// refused.
+    #[test]
+    fn a_wall_defined_anew_keeps_only_its_load() {
+        let m = material();
+        let wall = |number, sign| ListWall {
+            number,
+            axis: 2,
+            sign,
+            position: 0.0,
+            velocity: 0.0,
+            coeffs: GranularCoeffs::of(&m),
+        };
+        let slots = 2;
+        let hist = Layout::history(slots);
+        let loaded = ContactHistory {
+            tangential: [1e-3, 2e-3, 0.0],
+            rolling: [0.0, 1e-3, 0.0],
+            twist: 0.1,
+            normal_force: 4.0,
+        };
+        let mut list = GranularList::new(GranularCoeffs::of(&m), None, slots);
+        let mut history = vec![0.0; hist.stride()];
+        list.set_walls(
+            &[wall(1, 1.0), wall(2, -1.0)],
+            &[true, true],
+            &mut history,
+            1,
+        )
+        .unwrap();
+        for key in [-1.0, -2.0] {
+            assert!(hist.put(&mut history, 0, key, &loaded.to_values()));
+        }
+        // Not fresh: untouched.
+        let kept = history.clone();
+        list.set_walls(
+            &[wall(1, 1.0), wall(2, -1.0)],
+            &[false, false],
+            &mut history,
+            1,
+        )
+        .unwrap();
+        assert_eq!(history, kept);
+        // Wall 1 anew on the same side; wall 2 anew on the other side.
+        list.set_walls(
+            &[wall(1, 1.0), wall(2, 1.0)],
+            &[true, true],
+            &mut history,
+            1,
+        )
+        .unwrap();
+        let load = ContactHistory {
+            normal_force: 4.0,
+            ..ContactHistory::default()
+        };
+        assert_eq!(hist.get(&history, 0, -1.0), Some(&load.to_values()[..]));
+        assert_eq!(hist.get(&history, 0, -2.0), None);
+        let err = list
+            .set_walls(
+                &[wall(3, 1.0), wall(3, -1.0)],
+                &[true, true],
+                &mut history,
+                1,
+            )
+            .unwrap_err();
+        assert!(err.to_string().contains("share a number"), "{err}");
+        assert!(list
+            .set_walls(&[wall(0, 1.0)], &[true], &mut history, 1)
+            .is_err());
     }
 
     #[test]

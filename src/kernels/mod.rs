@@ -36,7 +36,8 @@ pub use granular::{
     Sphere, SpringDashpotSlider, Twisting, WallTouch,
 };
 pub use granular_list::{
-    CorrectionSummary, GranularList, Layout, ListAtoms, ListClosure, ListError, HISTORY_VALUES,
+    CorrectionSummary, GranularList, Layout, ListAtoms, ListClosure, ListError, ListWall,
+    HISTORY_VALUES,
 };
 pub use isa::Isa;
 pub use multicontact::{

@@ -161,22 +161,18 @@ fn check_supported(index: usize, stage: &StageSpec, scene: &Scene) -> Result<(),
             .is_some_and(|m| m.damping == NormalDamping::CoeffRestitution)
     };
     let closure = uses_closure(scene);
-    // The plugin's pair style has the restitution form; LAMMPS's does not.
-    if (!closure
+    // The plugin's pair style and walls have the restitution form;
+    // LAMMPS's do not.
+    if !closure
         && (restitution_form(&scene.force_field)
-            || stage.force_field.as_ref().is_some_and(restitution_form)))
-        || stage
-            .granular_walls
-            .iter()
-            .any(|w| w.material.damping == NormalDamping::CoeffRestitution)
+            || stage.force_field.as_ref().is_some_and(restitution_form)
+            || stage
+                .granular_walls
+                .iter()
+                .any(|w| w.material.damping == NormalDamping::CoeffRestitution))
     {
         return Err(unsupported(
             "the restitution form of the DEM damping (LAMMPS 29Sep2021 has only `damping tsuji`)",
-        ));
-    }
-    if closure && !stage.granular_walls.is_empty() {
-        return Err(unsupported(
-            "granular walls with the multi-contact closure (the closure counts walls as contacts, and LAMMPS's fix wall/gran tells the pair style nothing of its contacts)",
         ));
     }
     if !dem && type_masses(scene).is_none() {
@@ -275,7 +271,14 @@ struct ExternalCommands {
     end: Vec<String>,
 }
 
-fn external_commands(stage: &StageSpec, spheres: Option<&GranularMaterial>) -> ExternalCommands {
+/// With `closure`, granular walls are `fix bpm/granular/wall`
+/// (`bpm_granular_wall.in`), contacts of the plugin's pair style;
+/// otherwise LAMMPS's `fix wall/gran/region` (`granular_wall.in`).
+fn external_commands(
+    stage: &StageSpec,
+    spheres: Option<&GranularMaterial>,
+    closure: bool,
+) -> ExternalCommands {
     let mut begin = Vec::new();
     let mut end = Vec::new();
     let mut energies = vec!["0".to_string()];
@@ -302,6 +305,29 @@ fn external_commands(stage: &StageSpec, spheres: Option<&GranularMaterial>) -> E
     }
     for (w, wall) in stage.granular_walls.iter().enumerate() {
         let Some(spheres) = spheres else { break };
+        if closure {
+            let axis = ["x", "y", "z"][wall.axis.min(2)];
+            let side = match wall.side {
+                WallSide::Lo => "lo",
+                WallSide::Hi => "hi",
+            };
+            for (name, value) in [
+                ("wall", w.to_string()),
+                // The wall's contacts are kept under its number: the same
+                // place in the list each stage keeps its load.
+                ("wall_number", (w + 1).to_string()),
+                ("axis", axis.to_string()),
+                ("side", side.to_string()),
+                ("wall_start", g(wall.position)),
+                ("wall_velocity", g(wall.velocity)),
+                ("wall_material", dem_pair_coeff(&wall.material, None, true)),
+            ] {
+                begin.push(format!("variable        {name} string \"{value}\""));
+            }
+            begin.push("include         ${inputs}/bpm_granular_wall.in".into());
+            end.push(format!("unfix           bpm_gwall{w}"));
+            continue;
+        }
         let c = ActiveGranularWall::new(wall, spheres);
         let (sign, normal) = match wall.side {
             WallSide::Lo => (1, 1.0),
@@ -507,7 +533,7 @@ pub fn write_driver(
         {
             spheres = Some(m);
         }
-        let external = external_commands(stage, spheres);
+        let external = external_commands(stage, spheres, uses_closure(scene));
         lines.extend(external.variables.into_iter().map(DriverLine::Command));
         if let Some(ff) = &stage.force_field {
             closure_on = ff.multicontact.is_some();

@@ -28,6 +28,7 @@ templates![
     "restart_read.in",
     "restart_write.in",
     "granular_wall.in",
+    "bpm_granular_wall.in",
     "setup.in",
     "setup_dem.in",
     "single_point.in",

@@ -6,7 +6,7 @@ use super::compare::{compaction_deviation, compare_runs, deviation_series};
 use super::engines::{run_native, HarnessError, LammpsLauncher};
 use super::scenes::{
     as_trajectory, contact_solid, dem_lattice, dem_trajectory, grain_pair, grain_squeeze,
-    small_compaction, DemLoading,
+    small_compaction, with_release, DemLoading,
 };
 use super::single_point::{
     lammps_single_point, max_relative_deviation, native_single_point, SinglePointError,
@@ -393,12 +393,15 @@ pub fn run_check(opts: &CheckOptions) -> Result<CheckReport> {
     // bpm/granular, which needs newton off: the advanced closure with an MPR
     // low enough to switch contacts off; the standard one with rolling and
     // twisting friction, whose memory the style carries through list
-    // rebuilds that swap a pair's order and across ranks.
+    // rebuilds that swap a pair's order and across ranks; both between
+    // the plugin's walls (fix bpm/granular/wall), contacts of the closure.
     let closures: Vec<(Scene, String, usize)> = [
         (false, DemLoading::Compress, 1),
         (true, DemLoading::Compress, 1),
         (false, DemLoading::LeesEdwards, 2),
         (true, DemLoading::LeesEdwards, 2),
+        (false, DemLoading::Walls, 2),
+        (true, DemLoading::Walls, 1),
     ]
     .into_iter()
     .map(|(rt, loading, ranks)| {
@@ -413,7 +416,12 @@ pub fn run_check(opts: &CheckOptions) -> Result<CheckReport> {
             (MultiContact::advanced(0.81, 0.015), "advanced")
         };
         scene.force_field.multicontact = Some(closure);
-        let name = format!("{} {name} {}", dem_name(rt), loading.name());
+        let mut name = format!("{} {name} {}", dem_name(rt), loading.name());
+        if loading == DemLoading::Walls {
+            // Two stages: the walls defined anew between them.
+            scene = with_release(scene);
+            name += "+release";
+        }
         (scene, name, ranks)
     })
     .collect();

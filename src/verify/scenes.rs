@@ -409,6 +409,24 @@ pub fn dem_trajectory(seed: u64, rolling_twisting: bool, loading: DemLoading, st
     scene
 }
 
+/// A walled scene's one stage split in two halves: the second,
+/// `release`, redefines every wall where the first left it, moving the
+/// other way. Its first evaluation is where a stage's walls restart their
+/// friction springs and keep their load (for the multi-contact closure).
+pub fn with_release(mut scene: Scene) -> Scene {
+    let mut squeeze = scene.stages.remove(0);
+    squeeze.steps /= 2;
+    let elapsed = squeeze.steps as f64 * squeeze.dt;
+    let mut release = squeeze.clone();
+    release.name = "release".into();
+    for wall in &mut release.granular_walls {
+        wall.position = wall.position_at(elapsed);
+        wall.velocity = -wall.velocity;
+    }
+    scene.stages = vec![squeeze, release];
+    scene
+}
+
 /// Closes the lattice's box in z, with room beyond its faces, and puts
 /// the spheres between the two granular walls of [`DemLoading::Walls`].
 fn between_walls(scene: &mut Scene, stage: &mut StageSpec) {

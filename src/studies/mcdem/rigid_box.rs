@@ -319,7 +319,8 @@ pub fn table(report: &BoxReport) -> String {
     out
 }
 
-/// Writes `rigid_box.json` and `rigid_box.svg` into `dir`.
+/// Writes `rigid_box.json`, `rigid_box.svg` and each run's scene
+/// (`scenes/<arrangement>-<law>.json`) into `dir`.
 pub fn write_report(report: &BoxReport, dir: &Path) -> Result<(), BoxError> {
     std::fs::create_dir_all(dir).map_err(FileError::on("creating", dir))?;
     let json = dir.join("rigid_box.json");
@@ -359,5 +360,25 @@ pub fn write_report(report: &BoxReport, dir: &Path) -> Result<(), BoxError> {
         }
     }
     write_svg(&dir.join("rigid_box.svg"), &panels)?;
+    // Each run's scene, for `bpm cross-check` (a few kB each).
+    let hydrogel = Hydrogel::table_1(report.options.diameter);
+    let scenes = dir.join("scenes");
+    std::fs::create_dir_all(&scenes).map_err(FileError::on("creating", &scenes))?;
+    for arrangement in [Arrangement::Single, Arrangement::Bcc] {
+        for variant in &report.variants {
+            let law = variant
+                .name
+                .split(' ')
+                .next()
+                .unwrap_or("law")
+                .to_lowercase();
+            let shape = arrangement.name().split(' ').next().unwrap_or("box");
+            let path = scenes.join(format!("{shape}-{law}.json"));
+            let text =
+                serde_json::to_string(&scene(arrangement, variant, &report.options, &hydrogel))
+                    .expect("a scene serialises");
+            std::fs::write(&path, text).map_err(FileError::on("writing", &path))?;
+        }
+    }
     Ok(())
 }

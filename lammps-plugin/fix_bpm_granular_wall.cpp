@@ -1,0 +1,94 @@
+#include "fmt_compat.h"
+
+#include "fix_bpm_granular_wall.h"
+
+#include "domain.h"
+#include "error.h"
+#include "force.h"
+#include "update.h"
+#include "utils.h"
+
+#include <string>
+#include <vector>
+
+using namespace LAMMPS_NS;
+
+static const char *const USAGE =
+    "fix ID all bpm/granular/wall number x|y|z lo|hi position velocity hertz/material ...";
+
+FixBPMGranularWall::FixBPMGranularWall(LAMMPS *lmp, int narg, char **arg) :
+    Fix(lmp, narg, arg), material(nullptr), fresh(1), local_force(0.0), total_force(0.0), summed(1)
+{
+  if (narg < 9) error->all(FLERR, std::string("Illegal fix bpm/granular/wall command: ") + USAGE);
+  if (igroup != 0)
+    error->all(FLERR, std::string("fix bpm/granular/wall acts on every atom: use group all (") + USAGE + ")");
+  number = utils::bnumeric(FLERR, arg[3], false, lmp);
+  if (number < 1) error->all(FLERR, std::string("fix bpm/granular/wall: the number must be at least 1"));
+  std::string a = arg[4], s = arg[5];
+  if (a != "x" && a != "y" && a != "z")
+    error->all(FLERR, "fix bpm/granular/wall: axis `" + a + "`: expected x, y or z");
+  axis = a[0] - 'x';
+  if (s != "lo" && s != "hi")
+    error->all(FLERR, "fix bpm/granular/wall: side `" + s +
+                          "`: expected lo (atoms above the plane) or hi (below)");
+  side = s == "lo" ? 1 : -1;
+  start = utils::numeric(FLERR, arg[6], false, lmp);
+  velocity = utils::numeric(FLERR, arg[7], false, lmp);
+  std::vector<const char *> words(arg + 8, arg + narg);
+  char message[1024];
+  material = bpm_granular_wall_material_create((int32_t) words.size(), words.data(), message,
+                                               sizeof(message));
+  if (!material) error->all(FLERR, std::string("fix bpm/granular/wall: ") + message);
+  time_origin = update->ntimestep;
+  vector_flag = 1;
+  size_vector = 2;
+  global_freq = 1;
+  extlist = new int[2]{1, 0};    // the force is extensive, the position not
+  extvector = -1;
+}
+
+FixBPMGranularWall::~FixBPMGranularWall()
+{
+  bpm_granular_wall_material_destroy(material);
+  delete[] extlist;
+}
+
+int FixBPMGranularWall::setmask()
+{
+  return 0;    // the pair style computes the wall's forces
+}
+
+void FixBPMGranularWall::init()
+{
+  if (!force->pair_match("bpm/granular", 1))
+    error->all(FLERR, std::string("fix bpm/granular/wall needs pair_style bpm/granular, which computes its contacts"));
+  if (domain->periodicity[axis])
+    error->all(FLERR, std::string("fix bpm/granular/wall: the box is periodic along ") + "xyz"[axis] +
+                          ": a wall needs a closed dimension (boundary f, s or m there)");
+}
+
+double FixBPMGranularWall::position() const
+{
+  return start + velocity * (double) (update->ntimestep - time_origin) * update->dt;
+}
+
+bpm_granular_wall FixBPMGranularWall::current() const
+{
+  return bpm_granular_wall{number, axis, side, position(), velocity, fresh, material};
+}
+
+void FixBPMGranularWall::set_local_force(double force)
+{
+  local_force = force;
+  summed = 0;
+}
+
+double FixBPMGranularWall::compute_vector(int n)
+{
+  if (n == 1) return position();
+  if (!summed) {
+    MPI_Allreduce(&local_force, &total_force, 1, MPI_DOUBLE, MPI_SUM, world);
+    summed = 1;
+  }
+  return total_force;
+}
