@@ -185,6 +185,9 @@ typedef struct {
  * message for bad walls. */
 int bpm_granular_set_walls(bpm_granular *style, const bpm_granular_wall *walls, int64_t nwalls,
                            double *history, int64_t nlocal, char *message, int64_t len);
+/* A handle made anew (a later pair_coeff) takes over the walls the old one
+ * saw last, so walls defined anew keep their loads. */
+int bpm_granular_inherit_walls(bpm_granular *to, const bpm_granular *from);
 /* After pass 2: the normal force on each of the nwalls walls from this
  * rank's atoms (positive when pushed). */
 int bpm_granular_wall_forces(const bpm_granular *style, double *out, int64_t nwalls);

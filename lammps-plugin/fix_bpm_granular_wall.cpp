@@ -40,6 +40,8 @@ FixBPMGranularWall::FixBPMGranularWall(LAMMPS *lmp, int narg, char **arg) :
                                                sizeof(message));
   if (!material) error->all(FLERR, std::string("fix bpm/granular/wall: ") + message);
   time_origin = update->ntimestep;
+  dt_origin = update->dt;
+  time_depend = 1;    // LAMMPS refuses reset_timestep while the plane moves with the step
   vector_flag = 1;
   size_vector = 2;
   global_freq = 1;
@@ -62,6 +64,9 @@ void FixBPMGranularWall::init()
 {
   if (!force->pair_match("bpm/granular", 1))
     error->all(FLERR, std::string("fix bpm/granular/wall needs pair_style bpm/granular, which computes its contacts"));
+  // LAMMPS calls reset_dt() only once a run has been made: a timestep set
+  // between the fix and the first run takes effect here.
+  if (update->dt != dt_origin) reset_dt();
   if (domain->periodicity[axis])
     error->all(FLERR, std::string("fix bpm/granular/wall: the box is periodic along ") + "xyz"[axis] +
                           ": a wall needs a closed dimension (boundary f, s or m there)");
@@ -69,7 +74,15 @@ void FixBPMGranularWall::init()
 
 double FixBPMGranularWall::position() const
 {
-  return start + velocity * (double) (update->ntimestep - time_origin) * update->dt;
+  return start + velocity * (double) (update->ntimestep - time_origin) * dt_origin;
+}
+
+// A new timestep: the plane goes on from where it is.
+void FixBPMGranularWall::reset_dt()
+{
+  start = position();
+  time_origin = update->ntimestep;
+  dt_origin = update->dt;
 }
 
 bpm_granular_wall FixBPMGranularWall::current() const

@@ -23,6 +23,7 @@ class FixBPMGranularWall : public Fix {
   int setmask() override;
   void init() override;
   double compute_vector(int) override;
+  void reset_dt() override;
 
   // The wall now; `fresh` until the pair style has taken it once.
   bpm_granular_wall current() const;
@@ -35,7 +36,8 @@ class FixBPMGranularWall : public Fix {
   int64_t number;
   int axis, side;
   double start, velocity;
-  bigint time_origin;
+  bigint time_origin;    // the step at which the plane was at `start`
+  double dt_origin;      // the timestep since then
   int fresh;
   double local_force, total_force;
   int summed;

@@ -84,6 +84,7 @@ void PairBPMGranular::create_style()
   char message[1024];
   bpm_granular *created = bpm_granular_create((int32_t) ptrs.size(), ptrs.data(), message, sizeof(message));
   if (!created) error->all(FLERR, std::string("pair_coeff for pair_style bpm/granular: ") + message);
+  bpm_granular_inherit_walls(created, style);
   bpm_granular_destroy(style);
   style = created;
 }
@@ -122,10 +123,6 @@ void PairBPMGranular::init_style()
   if (!comm->ghost_velocity)
     error->all(FLERR, std::string("pair_style bpm/granular needs ghost velocities: add 'comm_modify vel yes'"));
   ensure_contacts();
-  walls.clear();
-  for (int i = 0; i < modify->nfix; i++)
-    if (strcmp(modify->fix[i]->style, "bpm/granular/wall") == 0)
-      walls.push_back(dynamic_cast<FixBPMGranularWall *>(modify->fix[i]));
   // The closure counts walls as contacts; LAMMPS's own granular walls tell
   // this style nothing of theirs (fix bpm/granular/wall does).
   if (bpm_granular_has_closure(style) && comm->me == 0)
@@ -157,6 +154,12 @@ void PairBPMGranular::stop(const char *pass, int status, const char *message)
 // springs restart there).
 void PairBPMGranular::set_walls()
 {
+  // Found anew at each evaluation: `run N every M` may redefine walls
+  // without an init.
+  walls.clear();
+  for (int i = 0; i < modify->nfix; i++)
+    if (strcmp(modify->fix[i]->style, "bpm/granular/wall") == 0)
+      walls.push_back(dynamic_cast<FixBPMGranularWall *>(modify->fix[i]));
   wall_state.clear();
   for (auto *w : walls) {
     if (!w) error->all(FLERR, std::string("pair_style bpm/granular: a fix bpm/granular/wall is not of this plugin"));

@@ -30,7 +30,7 @@ class PairBPMGranular : public Pair {
   std::vector<std::string> words;    // pair_coeff after "* *", for restarts
   std::vector<int64_t> tags;
   class FixBPMContacts *contacts;
-  std::vector<class FixBPMGranularWall *> walls;    // fix bpm/granular/wall, found at init
+  std::vector<class FixBPMGranularWall *> walls;    // fix bpm/granular/wall, found each evaluation
   std::vector<bpm_granular_wall> wall_state;
   std::vector<double> wall_forces;
   double max_radius;

@@ -387,6 +387,8 @@ fn bad_input_of_the_granular_style_gets_a_clear_lammps_error() {
         ("wall_group", vec![closed.clone()], "use group all"),
         ("wall_twice", vec![closed.clone()], "share a number"),
         ("wall_periodic", vec![], "periodic along z"),
+        // The plane moves with the step count.
+        ("wall_reset", vec![closed.clone()], "time-dependent fix"),
         (
             "wall_pair",
             vec![
@@ -414,6 +416,7 @@ fn bad_input_of_the_granular_style_gets_a_clear_lammps_error() {
             ),
             "wall_twice" => wall("1 z lo -5 0") + &wall("1 z hi 50 0").replace("fix w ", "fix w2 "),
             "wall_through" => wall("1 z lo 3 0"),
+            "wall_reset" => wall("1 z lo -5 0") + "reset_timestep 10\n",
             _ => wall("1 z lo -5 0"),
         };
         let edits: Vec<(&str, &str)> = edits.iter().map(|(a, b)| (*a, b.as_str())).collect();

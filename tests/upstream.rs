@@ -117,7 +117,7 @@ fn pair_damping_differs_from_upstream_by_its_smoothing_factor_only() {
 #[test]
 fn the_closure_in_the_modern_lammps_follows_the_native_engine() {
     use bpm::engine::MultiContact;
-    use bpm::verify::scenes::{dem_trajectory, DemLoading};
+    use bpm::verify::scenes::{dem_trajectory, with_release, DemLoading};
     let lmp = modern();
     let dir = workdir("closure");
     for (loading, closure) in [
@@ -126,20 +126,29 @@ fn the_closure_in_the_modern_lammps_follows_the_native_engine() {
     ] {
         let mut scene = dem_trajectory(2, true, loading, 600);
         scene.force_field.multicontact = Some(closure);
+        let walls = loading == DemLoading::Walls;
+        if walls {
+            // Two stages of 300 steps: the walls and the style made anew.
+            scene = with_release(scene);
+        }
         let tag = loading.name();
         let native = bpm::verify::run_native(&scene, tag, 1).unwrap();
         let driver = bpm::lammps::write_driver(&scene, &dir, tag, false).unwrap();
         // The driver as the harness writes it, with a thermo line every
-        // 100 steps of the values compared (and the temperature, which the
-        // Lees-Edwards stage's end sets, or the upper wall's force).
-        let walls = loading == DemLoading::Walls;
+        // 100 steps of each stage of the values compared (and the
+        // temperature, which the Lees-Edwards stage's end sets, or the
+        // upper wall's force).
         let fourth = if walls { "f_bpm_gwall1[1]" } else { "temp" };
-        let text = driver.text().replacen(
-            "run             600",
-            &format!("thermo_style    custom step press c_bpm_mc[1] {fourth}\nthermo          100\nthermo_modify   format float %.17g norm no\nrun             600"),
-            1,
+        let run = format!("run             {}", scene.stages[0].steps);
+        let text = driver.text().replace(
+            &run,
+            &format!("thermo_style    custom step press c_bpm_mc[1] {fourth}\nthermo          100\nthermo_modify   format float %.17g norm no\n{run}"),
         );
-        assert_ne!(text, driver.text(), "no run line found");
+        assert_eq!(
+            text.matches("thermo          100").count(),
+            scene.stages.len(),
+            "one run line per stage"
+        );
         let input = dir.join(format!("modern-{tag}.in"));
         std::fs::write(
             &input,
@@ -161,39 +170,56 @@ fn the_closure_in_the_modern_lammps_follows_the_native_engine() {
                 (w.len() == 4 && w[0] % 100.0 == 0.0).then(|| [w[0], w[1], w[2], w[3]])
             })
             .collect();
-        assert_eq!(thermo.len(), 7, "{tag}: thermo rows:\n{out}");
-        let stage = &native.stages[0];
-        let column = |name: &str| stage.column(name).unwrap();
-        let (steps, pressure, largest) = (
-            column("step"),
-            column("pressure"),
-            column("mc_largest_correction"),
+        // Each stage's thermo counts from 0 (its reset_timestep), the
+        // native rows from the scene's start.
+        let rows_per_stage = 600 / 100 / scene.stages.len() + 1;
+        assert_eq!(
+            thermo.len(),
+            rows_per_stage * scene.stages.len(),
+            "{tag}: thermo rows:\n{out}"
         );
+        let column = |name: &str| -> Vec<f64> {
+            native
+                .stages
+                .iter()
+                .flat_map(|s| s.column(name).unwrap())
+                .collect()
+        };
+        // The native value of `name` at `step` of `stage`.
+        let at = |stage: usize, step: f64, name: &str| -> f64 {
+            let s = &native.stages[stage];
+            let steps = s.column("step").unwrap();
+            let k = steps.iter().position(|&x| x == steps[0] + step).unwrap();
+            s.column(name).unwrap()[k]
+        };
+        let peak = |v: &[f64]| v.iter().fold(0.0f64, |m, p| m.max(p.abs()));
+        let (pressure, largest) = (column("pressure"), column("mc_largest_correction"));
         let wall = if walls {
             column("granular_wall1_force")
         } else {
             Vec::new()
         };
-        let peak = |v: &[f64]| v.iter().fold(0.0f64, |m, p| m.max(p.abs()));
         let scale = peak(&pressure);
-        for [step, p, c, fourth] in thermo {
-            let k = steps.iter().position(|&s| s == step).unwrap();
-            assert!(
-                (p - pressure[k]).abs() <= tolerance("trajectory stress") * scale,
-                "{tag} step {step}: pressure {p} against native {}",
-                pressure[k]
+        for (row, [step, p, c, fourth]) in thermo.into_iter().enumerate() {
+            let stage = row / rows_per_stage;
+            let (native_p, native_c) = (
+                at(stage, step, "pressure"),
+                at(stage, step, "mc_largest_correction"),
             );
             assert!(
-                (c - largest[k]).abs()
-                    <= tolerance("trajectory multi-contact corrections") * largest[k],
-                "{tag} step {step}: largest correction {c} against native {}",
-                largest[k]
+                (p - native_p).abs() <= tolerance("trajectory stress") * scale,
+                "{tag} stage {stage} step {step}: pressure {p} against native {native_p}"
+            );
+            assert!(
+                (c - native_c).abs()
+                    <= tolerance("trajectory multi-contact corrections") * native_c,
+                "{tag} stage {stage} step {step}: largest correction {c} against native {native_c}"
             );
             if walls {
+                let native_w = at(stage, step, "granular_wall1_force");
                 assert!(
-                    (fourth - wall[k]).abs() <= tolerance("trajectory wall forces") * peak(&wall),
-                    "{tag} step {step}: upper wall force {fourth} against native {}",
-                    wall[k]
+                    (fourth - native_w).abs() <= tolerance("trajectory wall forces") * peak(&wall),
+                    "{tag} stage {stage} step {step}: upper wall force {fourth} against native {native_w}"
                 );
             }
         }

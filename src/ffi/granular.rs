@@ -176,13 +176,21 @@ fn parse(words: &[&str], wall: bool) -> Result<GranularStyleCoeffs, String> {
                 slots = n as usize;
             }
             other => {
-                return Err(format!(
-                    "unknown keyword `{other}` (expected rolling, twisting, multicontact or slots)"
-                ))
+                let expected = if wall {
+                    "rolling or twisting"
+                } else {
+                    "rolling, twisting, multicontact or slots"
+                };
+                return Err(format!("unknown keyword `{other}` (expected {expected})"));
             }
         }
     }
-    check_granular("pair_coeff", &material).map_err(|e| e.to_string())?;
+    let context = if wall {
+        "fix bpm/granular/wall"
+    } else {
+        "pair_coeff"
+    };
+    check_granular(context, &material).map_err(|e| e.to_string())?;
     if let Some(m) = &multicontact {
         check_multicontact("pair_coeff multicontact", m).map_err(|e| e.to_string())?;
     }
@@ -772,6 +780,25 @@ pub unsafe extern "C" fn bpm_granular_set_walls(
                 BPM_ERR_STOPPED
             }
         }
+    })
+}
+
+/// Hands the walls `from` set last over to `to` (a handle made anew by a
+/// later `pair_coeff`), so that walls defined anew keep their loads
+/// ([`GranularList::inherit_walls`]). Nulls: nothing.
+///
+/// # Safety
+/// Each is null or a live handle, not the same one.
+#[no_mangle]
+pub unsafe extern "C" fn bpm_granular_inherit_walls(
+    to: *mut GranularStyle,
+    from: *const GranularStyle,
+) -> i32 {
+    guard(|| {
+        if let (Some(to), Some(from)) = (to.as_mut(), from.as_ref()) {
+            to.list.inherit_walls(&from.list);
+        }
+        BPM_OK
     })
 }
 

@@ -445,6 +445,15 @@ impl GranularList {
         Ok(())
     }
 
+    /// Takes over the walls `other` set last, as if they had been set on
+    /// this one: a style made anew (LAMMPS's `pair_coeff` of a later
+    /// stage) then keeps the loads of walls defined anew, as the native
+    /// engine does across a change of force field.
+    pub fn inherit_walls(&mut self, other: &GranularList) {
+        self.walls.clone_from(&other.walls);
+        self.wall_forces.clone_from(&other.wall_forces);
+    }
+
     /// Per wall of [`Self::set_walls`], the normal force on it from this
     /// rank's atoms in the last forces pass (positive when pushed).
     pub fn wall_forces(&self) -> &[f64] {
@@ -1038,6 +1047,55 @@ mod tests {
         );
         assert_eq!(list.wall_forces(), &[corrected.force[2]]);
         assert!(corrected.force[2] > plain.force[2] && f2[0][2] > f[0][2]);
+        // A pass after a rebuild keeps the wall's contact (a set-up pass:
+        // nothing advances).
+        let mut renewed = history.clone();
+        let (mut f, mut t) = (vec![[0.0; 3]; 2], vec![[0.0; 3]; 2]);
+        list.forces(
+            &atoms,
+            rows(),
+            &corrections,
+            &mut renewed,
+            &mut f,
+            &mut t,
+            0.0,
+            false,
+            true,
+            3,
+        )
+        .unwrap();
+        assert_eq!(
+            hist.get(&renewed, 0, -1.0),
+            hist.get(&history, 0, -1.0),
+            "{renewed:?}"
+        );
+        // A correction at the wall beyond the reach stops the pass.
+        let mut far = corrections.clone();
+        assert!(corr.put(&mut far, 0, -1.0, &[0.2]));
+        let err = list
+            .forces(
+                &atoms,
+                rows(),
+                &far,
+                &mut renewed,
+                &mut f,
+                &mut t,
+                0.0,
+                false,
+                false,
+                5,
+            )
+            .unwrap_err();
+        assert_eq!(
+            err,
+            ListError::WallBeyondReach {
+                atom: 10,
+                wall: 1,
+                ratio: 0.4,
+                reach: 0.25,
+                step: 5
+            }
+        );
         // An atom moved through the plane stops the pass, naming it.
         let mut through = x;
         through[0][2] = -0.01;

@@ -22,6 +22,12 @@ pub struct CrossCheckOptions {
     /// LAMMPS's newton setting (scenes with the multi-contact closure run
     /// with it off whatever it says; the report records the one used).
     pub newton: bool,
+    /// Run only the scene's first this many steps (later stages dropped,
+    /// the last one kept cut short): trajectories of many touching,
+    /// rearranging spheres drift apart from round-off, and agree to
+    /// round-off only so long.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub steps: Option<u64>,
     /// Where the report and the LAMMPS files go.
     #[serde(skip)]
     pub out_dir: PathBuf,
@@ -53,6 +59,31 @@ impl CrossCheckReport {
     }
 }
 
+/// The first `steps` steps of `scene`: the stages they reach, the last
+/// one cut short.
+pub fn first_steps(scene: &Scene, steps: u64) -> Result<Scene, InvalidOption> {
+    let total: u64 = scene.stages.iter().map(|s| s.steps).sum();
+    if steps == 0 || steps > total {
+        return Err(InvalidOption::new(
+            "--steps",
+            format!("give 1 to the scene's {total} steps"),
+        ));
+    }
+    let mut cut = scene.clone();
+    let mut left = steps;
+    cut.stages.clear();
+    for stage in &scene.stages {
+        if left == 0 {
+            break;
+        }
+        let mut stage = stage.clone();
+        stage.steps = stage.steps.min(left);
+        left -= stage.steps;
+        cut.stages.push(stage);
+    }
+    Ok(cut)
+}
+
 /// Runs `scene` (read from `opts.scene`) through both engines and writes
 /// `cross_check.json` into `opts.out_dir`.
 pub fn run_cross_check(
@@ -62,6 +93,14 @@ pub fn run_cross_check(
     if opts.ranks.is_empty() || opts.ranks.iter().any(|&r| r == 0 || r > 64) {
         return Err(InvalidOption::new("--ranks", "give rank counts from 1 to 64").into());
     }
+    let cut;
+    let scene = match opts.steps {
+        None => scene,
+        Some(steps) => {
+            cut = first_steps(scene, steps)?;
+            &cut
+        }
+    };
     let work = opts.out_dir.join("lammps");
     std::fs::create_dir_all(&work).map_err(FileError::on("creating", &work))?;
     let launcher = LammpsLauncher {
@@ -109,4 +148,29 @@ pub fn run_cross_check(
     let text = serde_json::to_string_pretty(&report).expect("the report serialises");
     std::fs::write(&path, text).map_err(FileError::on("writing", &path))?;
     Ok(report)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scene::StageSpec;
+    use crate::verify::scenes::dem_lattice;
+
+    #[test]
+    fn the_first_steps_keep_the_stages_they_reach_and_cut_the_last() {
+        let mut scene = dem_lattice(1, false);
+        scene.stages = vec![
+            StageSpec::hold("a", 100, 0.01),
+            StageSpec::hold("b", 50, 0.01),
+            StageSpec::hold("c", 10, 0.01),
+        ];
+        let steps = |s: &Scene| s.stages.iter().map(|s| s.steps).collect::<Vec<_>>();
+        assert_eq!(steps(&first_steps(&scene, 120).unwrap()), [100, 20]);
+        assert_eq!(steps(&first_steps(&scene, 100).unwrap()), [100]);
+        assert_eq!(steps(&first_steps(&scene, 160).unwrap()), [100, 50, 10]);
+        for bad in [0, 161] {
+            let err = first_steps(&scene, bad).unwrap_err().to_string();
+            assert!(err.contains("--steps") && err.contains("160"), "{err}");
+        }
+    }
 }

@@ -413,12 +413,15 @@ pub fn dem_trajectory(seed: u64, rolling_twisting: bool, loading: DemLoading, st
 /// `release`, redefines every wall where the first left it, moving the
 /// other way. Its first evaluation is where a stage's walls restart their
 /// friction springs and keep their load (for the multi-contact closure).
+/// It sets the scene's force field again (in LAMMPS a `pair_coeff`, which
+/// makes the pair style's kernels anew), which changes nothing.
 pub fn with_release(mut scene: Scene) -> Scene {
     let mut squeeze = scene.stages.remove(0);
     squeeze.steps /= 2;
     let elapsed = squeeze.steps as f64 * squeeze.dt;
     let mut release = squeeze.clone();
     release.name = "release".into();
+    release.force_field = Some(scene.force_field.clone());
     for wall in &mut release.granular_walls {
         wall.position = wall.position_at(elapsed);
         wall.velocity = -wall.velocity;
