@@ -34,18 +34,8 @@ fn main() -> anyhow::Result<()> {
         .nth(1)
         .ok_or_else(|| anyhow::anyhow!("usage: closure_divergence SCENE.json"))?;
     let (scene, _) = read_scene(std::path::Path::new(&path))?;
-    let exe = std::env::current_exe()?;
-    let bpm = exe
-        .parent()
-        .and_then(|p| p.parent())
-        .map(|p| p.join("bpm"))
-        .ok_or_else(|| anyhow::anyhow!("cannot locate the bpm binary"))?;
-    let dir = std::env::temp_dir().join(format!("bpm-closure-divergence-{}", std::process::id()));
-    std::fs::create_dir_all(&dir)?;
-    let launcher = LammpsLauncher {
-        bpm,
-        dir: dir.clone(),
-    };
+    let launcher = LammpsLauncher::for_example("closure-divergence")?;
+    let dir = launcher.dir.clone();
     let native = run_native(&scene, "native", 1)?;
     let lammps = launcher.run(&scene, "lammps", 1, false)?;
     let mut nudged = scene.clone();

@@ -16,18 +16,8 @@ use bpm::verify::{compare_runs, dem_trajectory, run_native, DemLoading, LammpsLa
 
 fn main() -> anyhow::Result<()> {
     let steps: u64 = std::env::args().nth(1).map_or(Ok(20_000), |s| s.parse())?;
-    let exe = std::env::current_exe()?;
-    let bpm = exe
-        .parent()
-        .and_then(|p| p.parent())
-        .map(|p| p.join("bpm"))
-        .ok_or_else(|| anyhow::anyhow!("cannot locate the bpm binary"))?;
-    let dir = std::env::temp_dir().join(format!("bpm-dem-divergence-{}", std::process::id()));
-    std::fs::create_dir_all(&dir)?;
-    let launcher = LammpsLauncher {
-        bpm,
-        dir: dir.clone(),
-    };
+    let launcher = LammpsLauncher::for_example("dem-divergence")?;
+    let dir = launcher.dir.clone();
     println!(
         "{:<12} {:<8} {:>8} {:>12} {:>12}",
         "loading", "friction", "steps", "stress dev", "position dev"

@@ -13,18 +13,8 @@ use bpm::verify::{
 
 fn main() -> anyhow::Result<()> {
     let steps: u64 = std::env::args().nth(1).map_or(Ok(20_000), |s| s.parse())?;
-    let exe = std::env::current_exe()?;
-    let bpm = exe
-        .parent()
-        .and_then(|p| p.parent())
-        .map(|p| p.join("bpm"))
-        .ok_or_else(|| anyhow::anyhow!("cannot locate the bpm binary"))?;
-    let dir = std::env::temp_dir().join(format!("bpm-divergence-{}", std::process::id()));
-    std::fs::create_dir_all(&dir)?;
-    let launcher = LammpsLauncher {
-        bpm,
-        dir: dir.clone(),
-    };
+    let launcher = LammpsLauncher::for_example("divergence")?;
+    let dir = launcher.dir.clone();
     let scenes = [
         ("contact solid L=8 a_B=-0.5", contact_solid(8.0, 1, -0.5)?),
         ("grain pair R=3 a_B=0.5", grain_pair(3.0, 1, 0.5)?),

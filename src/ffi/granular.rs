@@ -308,13 +308,30 @@ pub unsafe extern "C" fn bpm_granular_create(
     message: *mut c_char,
     len: i64,
 ) -> *mut GranularStyle {
-    let parsed = std::panic::catch_unwind(|| {
+    parsed_handle(nwords, words, message, len, |w| {
+        parse_coeffs(w).map(GranularStyle::new)
+    })
+}
+
+/// A boxed handle of what `parse` makes of the `nwords` C strings, or null
+/// with why (or that the kernels panicked) written to `message`.
+///
+/// # Safety
+/// As [`owned_words`]; `message` `len` bytes.
+unsafe fn parsed_handle<T>(
+    nwords: i32,
+    words: *const *const c_char,
+    message: *mut c_char,
+    len: i64,
+    parse: impl Fn(&[&str]) -> Result<T, String> + std::panic::UnwindSafe,
+) -> *mut T {
+    let parsed = std::panic::catch_unwind(move || {
         let owned = owned_words(nwords, words)?;
         let refs: Vec<&str> = owned.iter().map(String::as_str).collect();
-        parse_coeffs(&refs)
+        parse(&refs)
     });
     match parsed {
-        Ok(Ok(coeffs)) => Box::into_raw(Box::new(GranularStyle::new(coeffs))),
+        Ok(Ok(made)) => Box::into_raw(Box::new(made)),
         Ok(Err(reason)) => {
             write_message(&reason, message, len);
             std::ptr::null_mut()
@@ -671,22 +688,7 @@ pub unsafe extern "C" fn bpm_granular_wall_material_create(
     message: *mut c_char,
     len: i64,
 ) -> *mut GranularMaterial {
-    let parsed = std::panic::catch_unwind(|| {
-        let owned = owned_words(nwords, words)?;
-        let refs: Vec<&str> = owned.iter().map(String::as_str).collect();
-        parse_wall_material(&refs)
-    });
-    match parsed {
-        Ok(Ok(material)) => Box::into_raw(Box::new(material)),
-        Ok(Err(reason)) => {
-            write_message(&reason, message, len);
-            std::ptr::null_mut()
-        }
-        Err(_) => {
-            write_message("internal error in the kernels (a bug)", message, len);
-            std::ptr::null_mut()
-        }
-    }
+    parsed_handle(nwords, words, message, len, parse_wall_material)
 }
 
 /// Frees a wall material (null: nothing).

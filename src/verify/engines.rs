@@ -88,6 +88,23 @@ pub struct LammpsLauncher {
 }
 
 impl LammpsLauncher {
+    /// A launcher for an example program (`target/<profile>/examples/`):
+    /// the `bpm` built beside it, and a fresh folder `bpm-<name>-<pid>`
+    /// in the temporary directory, which the caller removes.
+    pub fn for_example(name: &str) -> std::io::Result<Self> {
+        let exe = std::env::current_exe()?;
+        let bpm = exe
+            .parent()
+            .and_then(|p| p.parent())
+            .map(|p| p.join("bpm"))
+            .ok_or_else(|| {
+                std::io::Error::other("cannot locate the bpm binary beside the example")
+            })?;
+        let dir = std::env::temp_dir().join(format!("bpm-{name}-{}", std::process::id()));
+        std::fs::create_dir_all(&dir)?;
+        Ok(Self { bpm, dir })
+    }
+
     /// Runs `scene` (named `tag`) in LAMMPS on `ranks` MPI ranks, within
     /// the time limit of its particles and steps ([`Work::time_limit`]).
     pub fn run(
