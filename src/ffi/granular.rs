@@ -13,7 +13,7 @@ use super::{
 use crate::engine::MultiContact;
 use crate::kernels::{
     GranularCoeffs, GranularList, GranularMaterial, HalfSpace, Layout, ListAtoms, ListClosure,
-    ListWall, MprSwitch, MprTest, NormalDamping, SpringDashpotSlider, Tally, Twisting,
+    ListWall, MprSwitch, MprTest, NormalDamping, SpringDashpotSlider, Tally, Twisting, WallPlane,
 };
 use crate::scene::validate::{check_granular, check_multicontact};
 use std::ffi::{c_char, CStr};
@@ -249,6 +249,10 @@ impl<'a> Words<'a> {
 pub struct GranularStyle {
     coeffs: GranularStyleCoeffs,
     list: GranularList,
+    /// The walls of the current evaluation and whether each is fresh,
+    /// kept to reuse their memory.
+    walls: Vec<ListWall>,
+    fresh: Vec<bool>,
 }
 
 impl GranularStyle {
@@ -261,7 +265,12 @@ impl GranularStyle {
             reach: mc.reach,
         });
         let list = GranularList::new(GranularCoeffs::of(m), closure, coeffs.slots);
-        Self { coeffs, list }
+        Self {
+            coeffs,
+            list,
+            walls: Vec::new(),
+            fresh: Vec::new(),
+        }
     }
 }
 
@@ -753,29 +762,36 @@ pub unsafe extern "C" fn bpm_granular_set_walls(
         if (nwalls > 0 && walls.is_null()) || (nlocal > 0 && history.is_null()) {
             return BPM_ERR_NULL;
         }
-        let raw = list(walls, nwalls);
-        let mut set = Vec::with_capacity(nwalls);
-        for w in raw {
+        // Buffers of the handle: no allocation per step.
+        let (set, fresh) = (&mut style.walls, &mut style.fresh);
+        set.clear();
+        fresh.clear();
+        for w in list(walls, nwalls) {
             let Some(material) = w.material.as_ref() else {
                 return BPM_ERR_NULL;
             };
             set.push(ListWall {
                 number: w.number,
-                axis: usize::try_from(w.axis).unwrap_or(usize::MAX),
-                sign: w.side as f64,
-                position: w.position,
-                velocity: w.velocity,
+                plane: WallPlane {
+                    axis: usize::try_from(w.axis).unwrap_or(usize::MAX),
+                    sign: w.side as f64,
+                    position: w.position,
+                    velocity: w.velocity,
+                },
                 coeffs: GranularCoeffs::between(&style.coeffs.material, material),
             });
+            fresh.push(w.fresh != 0);
         }
-        let fresh: Vec<bool> = raw.iter().map(|w| w.fresh != 0).collect();
         let stride = Layout::history(style.coeffs.slots).stride();
         let history = if nlocal == 0 {
             &mut []
         } else {
             slice::from_raw_parts_mut(history, nlocal * stride)
         };
-        match style.list.set_walls(&set, &fresh, history, nlocal) {
+        match style
+            .list
+            .set_walls(&style.walls, &style.fresh, history, nlocal)
+        {
             Ok(()) => BPM_OK,
             Err(e) => {
                 write_message(&e.to_string(), message, len);

@@ -400,6 +400,62 @@ pub fn corrected_granular_contact(
     contact_law(c, &contact, history, dt, update)
 }
 
+/// A flat wall's plane at one evaluation: normal to `axis`, at
+/// `position`, moving along its normal at `velocity`, its spheres on the
+/// side `sign` points to. Both engines place their walls by it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct WallPlane {
+    /// Axis normal to the plane: 0, 1 or 2.
+    pub axis: usize,
+    /// +1 when the spheres are on the +axis side (a `lo` wall), else -1.
+    pub sign: f64,
+    /// The plane's position along the axis.
+    pub position: f64,
+    /// Its speed along the axis (d / tau).
+    pub velocity: f64,
+}
+
+impl WallPlane {
+    /// Distance of a centre at `x` from the plane, positive on the
+    /// spheres' side.
+    #[inline]
+    pub fn distance(&self, x: &[f64; 3]) -> f64 {
+        self.sign * (x[self.axis] - self.position)
+    }
+
+    /// The point of the plane nearest a centre `distance` from it,
+    /// relative to that centre (a rigid wall's contact point).
+    #[inline]
+    pub fn contact_point(&self, distance: f64) -> [f64; 3] {
+        let mut point = [0.0; 3];
+        point[self.axis] = -self.sign * distance;
+        point
+    }
+
+    /// The wall's touch on a sphere whose centre is `distance` from it and
+    /// whose surface there moved out by `correction`.
+    #[inline]
+    pub fn touch(&self, distance: f64, correction: f64) -> WallTouch {
+        let mut normal = [0.0; 3];
+        normal[self.axis] = self.sign;
+        let mut velocity = [0.0; 3];
+        velocity[self.axis] = self.velocity;
+        WallTouch {
+            distance,
+            normal,
+            velocity,
+            correction,
+        }
+    }
+
+    /// The normal component of `force` on a sphere, as the load on the
+    /// wall (positive when the sphere pushes it).
+    #[inline]
+    pub fn load(&self, force: &[f64; 3]) -> f64 {
+        self.sign * force[self.axis]
+    }
+}
+
 /// Where a flat wall touches a sphere.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct WallTouch {

@@ -34,7 +34,7 @@
 
 use super::granular::{
     corrected_granular_contact, granular_wall_contact, ContactForce, ContactHistory,
-    GranularCoeffs, WallTouch,
+    GranularCoeffs, WallPlane,
 };
 use super::multicontact::{
     group_by_sphere, pair_contact_points, surface_corrections, Closure, ContactPoint,
@@ -90,6 +90,14 @@ impl Layout {
     fn get<'d>(&self, data: &'d [f64], atom: usize, tag: f64) -> Option<&'d [f64]> {
         self.find(data, atom, tag)
             .map(|o| &data[o + 1..o + self.width])
+    }
+
+    /// The normal force the contact memory (rows of [`Layout::history`])
+    /// holds for `atom`'s partner `tag`, 0 if none.
+    #[inline]
+    fn load(&self, data: &[f64], atom: usize, tag: f64) -> f64 {
+        self.get(data, atom, tag)
+            .map_or(0.0, |v| v[HISTORY_VALUES - 1])
     }
 
     /// Stores `values` for `atom`'s partner `tag`; false if the row is full.
@@ -294,23 +302,15 @@ impl ListAtoms<'_> {
     }
 }
 
-/// A flat wall as the passes see it: the plane `x[axis] = position`
-/// moving along its normal at `velocity`, with its atoms on the side
-/// `sign` points to (+1: above the plane), of the contact coefficients
-/// `coeffs` (its material mixed with the spheres'). Its contacts are kept
-/// in the atoms' rows under the partner key `-number`.
+/// A flat wall as the passes see it: its plane now, and the contact
+/// coefficients `coeffs` (its material mixed with the spheres'). Its
+/// contacts are kept in the atoms' rows under the partner key `-number`.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ListWall {
     /// The wall's number, >= 1.
     pub number: i64,
-    /// Axis normal to the plane: 0, 1 or 2.
-    pub axis: usize,
-    /// +1 when the atoms are on the +axis side, -1 otherwise.
-    pub sign: f64,
-    /// The plane's position now.
-    pub position: f64,
-    /// The plane's speed along the axis.
-    pub velocity: f64,
+    /// The plane.
+    pub plane: WallPlane,
     /// The sphere-wall contact coefficients.
     pub coeffs: GranularCoeffs,
 }
@@ -320,12 +320,6 @@ impl ListWall {
     /// it is no atom ID.
     fn key(&self) -> f64 {
         -(self.number as f64)
-    }
-
-    /// Distance of `x`'s centre from the plane, positive on the atoms'
-    /// side.
-    fn distance(&self, x: &[f64; 3]) -> f64 {
-        self.sign * (x[self.axis] - self.position)
     }
 }
 
@@ -406,7 +400,7 @@ impl GranularList {
         n_owned: usize,
     ) -> Result<(), ListError> {
         for (k, w) in walls.iter().enumerate() {
-            if w.number < 1 || w.axis > 2 || w.sign.abs() != 1.0 {
+            if w.number < 1 || w.plane.axis > 2 || w.plane.sign.abs() != 1.0 {
                 return Err(ListError::BadWalls(
                     "a wall needs a number >= 1, an axis 0, 1 or 2 and a side +1 or -1",
                 ));
@@ -419,10 +413,9 @@ impl GranularList {
         }
         let hist = Layout::history(self.slots);
         for (w, _) in walls.iter().zip(fresh).filter(|(_, &f)| f) {
-            let kept = self
-                .walls
-                .iter()
-                .any(|o| o.number == w.number && o.axis == w.axis && o.sign == w.sign);
+            let kept = self.walls.iter().any(|o| {
+                o.number == w.number && o.plane.axis == w.plane.axis && o.plane.sign == w.plane.sign
+            });
             for a in 0..n_owned {
                 let Some(values) = hist.get(history, a, w.key()) else {
                     continue;
@@ -492,9 +485,7 @@ impl GranularList {
                 if r >= reach_factor * (radius[i] + radius[j]) {
                     continue;
                 }
-                let force = hist
-                    .get(history, i, tag[j] as f64)
-                    .map_or(0.0, |v| v[HISTORY_VALUES - 1]);
+                let force = hist.load(history, i, tag[j] as f64);
                 let [pi, pj] = pair_contact_points(&del, r, radius[i], radius[j], force);
                 self.entries.push(Entry {
                     atom: i as u32,
@@ -512,20 +503,16 @@ impl GranularList {
         }
         for wall in &self.walls {
             for a in 0..n {
-                let distance = wall.distance(&x[a]);
+                let distance = wall.plane.distance(&x[a]);
                 if distance <= 0.0 || distance >= reach_factor * radius[a] {
                     continue;
                 }
                 // On the wall's plane: a rigid wall does not give way.
-                let mut point = [0.0; 3];
-                point[wall.axis] = -wall.sign * distance;
-                let force = hist
-                    .get(history, a, wall.key())
-                    .map_or(0.0, |v| v[HISTORY_VALUES - 1]);
+                let point = wall.plane.contact_point(distance);
                 self.entries.push(Entry {
                     atom: a as u32,
                     partner: wall.key(),
-                    point: ContactPoint::new(point, force, radius[a]),
+                    point: ContactPoint::new(point, hist.load(history, a, wall.key()), radius[a]),
                 });
             }
         }
@@ -774,15 +761,11 @@ impl GranularList {
         step: i64,
     ) -> Result<f64, ListError> {
         let (hist, corr) = (Layout::history(self.slots), Layout::corrections(self.slots));
-        let (key, axis) = (wall.key(), wall.axis);
-        let mut normal = [0.0; 3];
-        normal[axis] = wall.sign;
-        let mut velocity = [0.0; 3];
-        velocity[axis] = wall.velocity;
+        let (key, plane) = (wall.key(), wall.plane);
         let mut load = 0.0;
         for a in 0..atoms.n_owned {
             let radius = atoms.radius[a];
-            let distance = wall.distance(&atoms.x[a]);
+            let distance = plane.distance(&atoms.x[a]);
             let correction = match self.closure {
                 None => 0.0,
                 Some(c) => {
@@ -821,12 +804,7 @@ impl GranularList {
             let mut h = hist
                 .get(source, a, key)
                 .map_or_else(ContactHistory::default, ContactHistory::from_values);
-            let touch = WallTouch {
-                distance,
-                normal,
-                velocity,
-                correction,
-            };
+            let touch = plane.touch(distance, correction);
             let out =
                 granular_wall_contact(&wall.coeffs, &touch, &atoms.sphere(a), &mut h, dt, update);
             if !out.force.iter().all(|c| c.is_finite()) {
@@ -847,7 +825,7 @@ impl GranularList {
                 f[a][d] += out.force[d];
                 torque[a][d] += out.torque_i[d];
             }
-            load += wall.sign * out.force[axis];
+            load += plane.load(&out.force);
         }
         Ok(load)
     }
@@ -950,10 +928,12 @@ mod tests {
         };
         let wall = ListWall {
             number: 1,
-            axis: 2,
-            sign: 1.0,
-            position: 0.0,
-            velocity: -0.01,
+            plane: WallPlane {
+                axis: 2,
+                sign: 1.0,
+                position: 0.0,
+                velocity: -0.01,
+            },
             coeffs: GranularCoeffs::between(&m, &wall_material),
         };
         let x = [[0.0, 0.0, 0.46], [0.02, 0.01, 1.41]];
@@ -1137,10 +1117,12 @@ mod tests {
         let m = material();
         let wall = |number, sign| ListWall {
             number,
-            axis: 2,
-            sign,
-            position: 0.0,
-            velocity: 0.0,
+            plane: WallPlane {
+                axis: 2,
+                sign,
+                position: 0.0,
+                velocity: 0.0,
+            },
             coeffs: GranularCoeffs::of(&m),
         };
         let slots = 2;

@@ -33,7 +33,7 @@ pub use geometry::{Separation, Unwrapped};
 pub use granular::{
     corrected_granular_contact, granular_contact, granular_wall_contact, restitution_prefactor,
     tsuji_prefactor, ContactForce, ContactHistory, GranularCoeffs, GranularMaterial, NormalDamping,
-    Sphere, SpringDashpotSlider, Twisting, WallTouch,
+    Sphere, SpringDashpotSlider, Twisting, WallPlane, WallTouch,
 };
 pub use granular_list::{
     CorrectionSummary, GranularList, Layout, ListAtoms, ListClosure, ListError, ListWall,

@@ -217,15 +217,14 @@ impl ClosurePass {
         let reach_factor = 1.0 + self.settings.reach;
         self.collect(sep, input.neighbours, x, radius, pair_history, reach_factor);
         for (w, (wall, history)) in walls.iter().zip(wall_history).enumerate() {
-            let (axis, sign, plane) = wall.plane(input.elapsed);
+            let plane = wall.plane(input.elapsed);
             for i in 0..n {
-                let distance = sign * (x[i][axis] - plane);
+                let distance = plane.distance(&x[i]);
                 if distance <= 0.0 || distance >= reach_factor * radius[i] {
                     continue;
                 }
                 // On the wall's plane: a rigid wall does not give way.
-                let mut point = [0.0; 3];
-                point[axis] = -sign * distance;
+                let point = plane.contact_point(distance);
                 self.entries.push(Entry {
                     sphere: i as u32,
                     side: Side::Wall(w as u32),

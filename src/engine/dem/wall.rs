@@ -6,7 +6,7 @@
 use super::super::external::{WallContact, WallSide};
 use super::super::model::ForceInput;
 use crate::kernels::{
-    granular_wall_contact, ContactHistory, GranularCoeffs, GranularMaterial, Sphere, WallTouch,
+    granular_wall_contact, ContactHistory, GranularCoeffs, GranularMaterial, Sphere, WallPlane,
 };
 use serde::{Deserialize, Serialize};
 
@@ -70,11 +70,15 @@ impl ActiveGranularWall {
         &self.coeffs
     }
 
-    /// The wall's normal axis, the side its spheres are on (+1 for `lo`,
-    /// -1 for `hi`) and its position after `elapsed` time.
-    pub fn plane(&self, elapsed: f64) -> (usize, f64, f64) {
+    /// The wall's plane after `elapsed` time.
+    pub fn plane(&self, elapsed: f64) -> WallPlane {
         let w = &self.wall;
-        (w.axis, w.sign(), w.position_at(elapsed))
+        WallPlane {
+            axis: w.axis,
+            sign: w.sign(),
+            position: w.position_at(elapsed),
+            velocity: w.velocity,
+        }
     }
 
     /// Adds the wall's forces and torques on the spheres of `input`
@@ -93,16 +97,12 @@ impl ActiveGranularWall {
         history: &mut [ContactHistory],
         corrections: Option<&[f64]>,
     ) -> WallContact {
-        let (axis, sign, plane) = self.plane(input.elapsed);
-        let mut normal = [0.0; 3];
-        normal[axis] = sign;
-        let mut velocity = [0.0; 3];
-        velocity[axis] = self.wall.velocity;
+        let plane = self.plane(input.elapsed);
         let (step, update) = (input.step_dt.unwrap_or(0.0), input.step_dt.is_some());
         let mut contact = WallContact::default();
         let (x, radius) = (input.x, input.radius);
         for i in 0..x.len() {
-            let distance = sign * (x[i][axis] - plane);
+            let distance = plane.distance(&x[i]);
             let correction = corrections.map_or(0.0, |c| c[i]);
             let surface = radius[i] + correction;
             // A surface moved past the centre is caught by the closure's
@@ -121,12 +121,7 @@ impl ActiveGranularWall {
                 radius: radius[i],
                 mass: input.mass[i],
             };
-            let touch = WallTouch {
-                distance,
-                normal,
-                velocity,
-                correction,
-            };
+            let touch = plane.touch(distance, correction);
             let out =
                 granular_wall_contact(&self.coeffs, &touch, &sphere, &mut history[i], step, update);
             for (fd, force) in f[i].iter_mut().zip(out.force) {
@@ -137,7 +132,7 @@ impl ActiveGranularWall {
                     *td += moment;
                 }
             }
-            contact.force += sign * out.force[axis];
+            contact.force += plane.load(&out.force);
         }
         contact
     }
