@@ -253,9 +253,10 @@ fn grain_builds_exports_and_imports_through_the_command_line() {
     assert!(err.contains("ylo yhi"), "{err}");
 }
 
-/// `bpm bench` on a small solid: every section runs, ends with the goals
-/// table, and the JSON holds the cases, the Debian LAMMPS timings and the
-/// goals with their verdicts.
+/// `bpm bench` on a small solid and a small packing: every section runs,
+/// ends with the goals table, and the JSON holds the cases, the Debian
+/// LAMMPS timings, the compaction workload and the goals with their
+/// verdicts.
 #[test]
 fn bench_prints_every_goal_and_writes_them_as_json() {
     let out = tmp("bench/bench.json");
@@ -268,6 +269,12 @@ fn bench_prints_every_goal_and_writes_them_as_json() {
             "20",
             "--replicas",
             "1,2",
+            "--packing-grains",
+            "13",
+            "--packing-radius",
+            "1.5",
+            "--packing-steps",
+            "20",
             "-o",
         ])
         .arg(&out)
@@ -285,6 +292,9 @@ fn bench_prints_every_goal_and_writes_them_as_json() {
         "plugin loop time / upstream",
         "plugin bond time / Debian bond_style harmonic",
         "sizes timed on 1 and 2 threads",
+        "packing: native speed-up over upstream LAMMPS",
+        "packing: compaction stages",
+        "packing: 2-thread speed-up",
     ] {
         assert!(
             stdout.contains(&format!("goal: {figure}")),
@@ -305,4 +315,11 @@ fn bench_prints_every_goal_and_writes_them_as_json() {
     assert_eq!(debian.len(), 7);
     assert!(debian.iter().all(|t| t["bond_ns"].as_f64().unwrap() > 0.0));
     assert!(out.with_extension("svg").is_file());
+    let packing = report["packing"]["cases"].as_array().unwrap();
+    assert_eq!(packing.len(), 4, "2 a_B x 2 thread counts");
+    assert!(packing
+        .iter()
+        .all(|c| c["ns_per_particle_step"].as_f64().unwrap() > 0.0
+            && !c["name"].as_str().unwrap().contains("stopped")));
+    assert_eq!(report["packing_workload"]["grains"], 13);
 }

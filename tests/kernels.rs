@@ -615,3 +615,227 @@ fn blocked_bond_kernel_matches_the_force_law_bond_by_bond_on_every_instruction_s
         );
     }
 }
+
+/// A box, positions, bonds, reference lengths and velocities.
+type Network = (
+    bpm::engine::SimBox,
+    Vec<[f64; 3]>,
+    Vec<BondEntry>,
+    Vec<f64>,
+    Vec<[f64; 3]>,
+);
+
+/// A periodic box whose minimum image differs from the plain difference for
+/// bonds across its faces: `(box, bonded positions, bonds, r0, velocities)`.
+fn periodic_network(seed: u64) -> Network {
+    let l = 6.0;
+    let simbox = bpm::engine::SimBox {
+        lo: [0.0; 3],
+        lengths: [l; 3],
+        tilt: [0.0; 3],
+        periodic: [true; 3],
+    };
+    let (x0, _, _) = random_network(260, l, 0.0, seed);
+    let sep = simbox.minimum_image();
+    let mut bonds = Vec::new();
+    let mut r0 = Vec::new();
+    for i in 0..x0.len() {
+        for j in i + 1..x0.len() {
+            let r = sep.distance(&x0[i], &x0[j]);
+            if r < 1.4 && r > 0.3 {
+                bonds.push(BondEntry {
+                    i: i as i32,
+                    j: j as i32,
+                    ty: 1,
+                });
+                r0.push(r);
+            }
+        }
+    }
+    let x: Vec<[f64; 3]> = x0
+        .iter()
+        .zip(random_rows(x0.len(), 0.04, seed + 1))
+        .map(|(p, d)| [p[0] + d[0], p[1] + d[1], p[2] + d[2]])
+        .collect();
+    let v = random_rows(x.len(), 0.3, seed + 2);
+    (simbox, x, bonds, r0, v)
+}
+
+/// The two-step bond pass (rows, then each particle's sum) against the
+/// scatter kernel on the same bonds, split as the native engine splits
+/// them: bonds whose plain difference is the minimum image first, the rest
+/// after. Forces, volumes and tallies are equal bit for bit, for every
+/// combination of terms and on every instruction set, since each particle
+/// receives its rows in the order the scatter adds them.
+#[test]
+fn bond_rows_give_the_scatter_kernels_forces_bit_for_bit() {
+    let (simbox, x, bonds, r0, v) = periodic_network(51);
+    let sep = simbox.minimum_image();
+    let n = x.len();
+    let plain = |b: &BondEntry| {
+        let (xi, xj) = (&x[b.i as usize], &x[b.j as usize]);
+        sep.delta(xi, xj) == Unwrapped.delta(xi, xj)
+    };
+    let (interior, boundary): (Vec<usize>, Vec<usize>) =
+        (0..bonds.len()).partition(|&b| plain(&bonds[b]));
+    assert!(
+        boundary.len() > 20 && interior.len() % 4 != 0,
+        "{} interior, {} boundary bonds",
+        interior.len(),
+        boundary.len()
+    );
+    let pick = |set: &[usize]| -> (Vec<BondEntry>, Vec<f64>) {
+        (
+            set.iter().map(|&b| bonds[b]).collect(),
+            set.iter().map(|&b| r0[b]).collect(),
+        )
+    };
+    let (bonds_in, r0_in) = pick(&interior);
+    let (bonds_out, r0_out) = pick(&boundary);
+    let order: Vec<usize> = interior.iter().chain(&boundary).copied().collect();
+    let rows = BondRows::new(
+        n,
+        order
+            .iter()
+            .map(|&b| (bonds[b].i as usize, bonds[b].j as usize, r0[b], b)),
+    )
+    .unwrap();
+    let ni = interior.len();
+    let all = Ownership::all(n);
+
+    // Volumes: the scatter's, and the rows'.
+    let mut vol = vec![0.0; n];
+    accumulate_volumes(&Unwrapped, &x, &bonds_in, all, &mut vol);
+    accumulate_volumes(&sep, &x, &bonds_out, all, &mut vol);
+    let mut vol0 = vec![0.0; n];
+    accumulate_reference_volumes(&bonds, &r0, all, &mut vol0);
+    for isa in [Isa::Portable, Isa::Avx2]
+        .into_iter()
+        .filter(|i| i.available())
+    {
+        let mut r3 = vec![0.0; rows.len()];
+        let (a, b) = r3.split_at_mut(ni);
+        row_volumes_on(isa, &Unwrapped, &rows, 0..ni, &x, a);
+        row_volumes_on(isa, &sep, &rows, ni..rows.len(), &x, b);
+        let mut from_rows = vec![f64::NAN; n];
+        gather_volumes(&rows, 0..n, &r3, &mut from_rows);
+        assert_eq!(from_rows, vol, "{isa:?} volumes");
+    }
+
+    let far = bonds
+        .iter()
+        .filter(|b| {
+            let (i, j) = (b.i as usize, b.j as usize);
+            ((vol[i] + vol[j]) / (vol0[i] + vol0[j]) - 1.0).abs() > 1.0 / 32.0
+        })
+        .count();
+    assert!(
+        far > 0 && far < bonds.len() / 2,
+        "{far} of {} volume ratios outside the cube root's series range: want some",
+        bonds.len()
+    );
+    let coeffs = BondCoeffs {
+        k: 1.3,
+        a: -0.55,
+        gamma: 0.8,
+    };
+    for (multibody, damped, tally) in [
+        (true, true, true),
+        (true, false, false),
+        (false, true, true),
+        (false, false, true),
+        (false, false, false),
+    ] {
+        let volumes = multibody.then_some((&vol[..], &vol0[..]));
+        let velocities = damped.then_some(&v[..]);
+        let interior_inputs = BondInputs {
+            x: &x,
+            v: velocities,
+            bonds: &bonds_in,
+            r0: &r0_in,
+            coeffs: std::slice::from_ref(&coeffs),
+            volumes,
+            tally,
+        };
+        let boundary_inputs = BondInputs {
+            bonds: &bonds_out,
+            r0: &r0_out,
+            ..interior_inputs
+        };
+        let mut expected = vec![[0.0; 3]; n];
+        let expected_pass = bond_forces(&Unwrapped, &interior_inputs, all, &mut expected)
+            .merged(&bond_forces(&sep, &boundary_inputs, all, &mut expected));
+        let inputs = RowInputs {
+            x: &x,
+            v: velocities,
+            coeffs,
+            volumes,
+            tally,
+        };
+        for isa in [Isa::Portable, Isa::Avx2]
+            .into_iter()
+            .filter(|i| i.available())
+        {
+            let mut force_rows = vec![[f64::NAN; 4]; rows.len()];
+            let (a, b) = force_rows.split_at_mut(ni);
+            let pass = row_forces_on(isa, &Unwrapped, &rows, 0..ni, &inputs, a)
+                .merged(&row_forces_on(isa, &sep, &rows, ni..rows.len(), &inputs, b));
+            let mut f = vec![[0.0; 3]; n];
+            // In two parts, as two threads would.
+            let (f1, f2) = f.split_at_mut(n / 3);
+            gather_forces_on(isa, &rows, 0..n / 3, &force_rows, f1);
+            gather_forces_on(isa, &rows, n / 3..n, &force_rows, f2);
+            let case = format!("{isa:?}, multibody {multibody}, damped {damped}, tally {tally}");
+            assert_eq!(f, expected, "{case}: forces");
+            assert_eq!(pass.tally, expected_pass.tally, "{case}: tally");
+            assert!(
+                pass.fault.is_none() && expected_pass.fault.is_none(),
+                "{case}"
+            );
+        }
+    }
+}
+
+/// A bond squeezed below the collapse limit in the middle of a block of
+/// rows is reported with its own bond number and atoms, on every
+/// instruction set; a row list with a bad atom is refused.
+#[test]
+fn bond_rows_report_a_collapsed_bond_and_refuse_bad_atoms() {
+    let x: Vec<[f64; 3]> = (0..12).map(|k| [k as f64, 0.0, 0.0]).collect();
+    let mut r0: Vec<f64> = vec![1.0; 11];
+    r0[6] = 10.0;
+    let rows = BondRows::new(12, (0..11).map(|b| (b, b + 1, r0[b], 100 + b))).unwrap();
+    let inputs = RowInputs {
+        x: &x,
+        v: None,
+        coeffs: BondCoeffs {
+            k: 1.0,
+            a: 0.0,
+            gamma: 0.0,
+        },
+        volumes: None,
+        tally: false,
+    };
+    for isa in [Isa::Portable, Isa::Avx2]
+        .into_iter()
+        .filter(|i| i.available())
+    {
+        let mut out = vec![[0.0; 4]; 11];
+        let fault = row_forces_on(isa, &Unwrapped, &rows, 0..11, &inputs, &mut out)
+            .fault
+            .expect("the squeezed bond is a fault");
+        assert_eq!(
+            (fault.kind, fault.i, fault.j, fault.bond),
+            (FaultKind::BondCollapsed, 6, 7, 106),
+            "{isa:?}"
+        );
+    }
+    assert!(matches!(
+        BondRows::new(3, [(0, 3, 1.0, 0)].into_iter()),
+        Err(BondRowsError::BadAtom { .. })
+    ));
+    assert!(matches!(
+        BondRows::new(3, [(1, 1, 1.0, 0)].into_iter()),
+        Err(BondRowsError::BadAtom { .. })
+    ));
+}

@@ -99,6 +99,17 @@ enum Command {
         /// solid alone; 7 gives about 1.2 million particles at --size 14).
         #[arg(long, value_delimiter = ',', default_value = "1,2,4,7")]
         replicas: Vec<usize>,
+        /// Grains of the compaction workload: the packing `bpm compact`
+        /// builds, timed through the protocol's jam (barostat) and
+        /// compression stages and against upstream LAMMPS (0 skips it)
+        #[arg(long, default_value_t = 32)]
+        packing_grains: usize,
+        /// Grain radius R of the compaction workload (d)
+        #[arg(long, default_value_t = 3.0)]
+        packing_radius: f64,
+        /// Steps timed in each stage of the compaction workload
+        #[arg(long, default_value_t = 2000)]
+        packing_steps: u64,
         /// Write the results as JSON too, and the plot beside it (.svg).
         #[arg(short, long)]
         output: Option<PathBuf>,
@@ -1487,6 +1498,9 @@ fn real_main() -> Result<()> {
             seed,
             steps,
             replicas,
+            packing_grains,
+            packing_radius,
+            packing_steps,
             output,
         } => {
             let opts = BenchOptions {
@@ -1494,6 +1508,12 @@ fn real_main() -> Result<()> {
                 seed,
                 steps,
                 replicas,
+                packing: (packing_grains > 0).then_some(bench::PackingWorkload {
+                    grains: packing_grains,
+                    radius: packing_radius,
+                    steps: packing_steps,
+                    seed,
+                }),
             };
             let lmp = std::env::current_exe()?.with_file_name("lmp-bpm");
             let bench = bench::run_bench(
@@ -2249,6 +2269,7 @@ fn real_main() -> Result<()> {
                 seed,
                 steps,
                 replicas: vec![1],
+                packing: None,
             };
             let lmp = std::env::current_exe()?.with_file_name("lmp-bpm");
             let bench = bench::run_bench_lammps(&opts, &lmp, cli.threads, &mut print)?;

@@ -5,6 +5,7 @@
 //! `v += dtfm f`), so both engines round alike.
 
 use super::particles::{Particles, SPHERE_INERTIA};
+use super::team::Team;
 
 /// Which degrees of freedom are integrated.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -29,29 +30,37 @@ impl Integrator {
 
     /// First half step: half kick and drift (and half kick of the angular
     /// velocity).
-    pub fn initial(&self, p: &mut Particles, dt: f64) {
+    pub fn initial(&self, p: &mut Particles, dt: f64, team: &Team) {
         let dtf = 0.5 * dt;
-        for (((x, v), f), &m) in p.x.iter_mut().zip(p.v.iter_mut()).zip(&p.f).zip(&p.mass) {
-            let dtfm = dtf / m;
-            for d in 0..3 {
-                v[d] += dtfm * f[d];
-                x[d] += dt * v[d];
+        let (f, mass) = (&p.f, &p.mass);
+        team.run_split2(&mut p.x, &mut p.v, |range, x, v| {
+            let (f, mass) = (&f[range.clone()], &mass[range]);
+            for (((x, v), f), &m) in x.iter_mut().zip(v.iter_mut()).zip(f).zip(mass) {
+                let dtfm = dtf / m;
+                for d in 0..3 {
+                    v[d] += dtfm * f[d];
+                    x[d] += dt * v[d];
+                }
             }
-        }
+        });
         if *self == Integrator::Rotational {
             kick_rotation(p, dtf);
         }
     }
 
     /// Second half step: half kick (and half kick of the angular velocity).
-    pub fn final_half(&self, p: &mut Particles, dt: f64) {
+    pub fn final_half(&self, p: &mut Particles, dt: f64, team: &Team) {
         let dtf = 0.5 * dt;
-        for ((v, f), &m) in p.v.iter_mut().zip(&p.f).zip(&p.mass) {
-            let dtfm = dtf / m;
-            for d in 0..3 {
-                v[d] += dtfm * f[d];
+        let (f, mass) = (&p.f, &p.mass);
+        team.run_split(&mut p.v, |_, range, v| {
+            let (f, mass) = (&f[range.clone()], &mass[range]);
+            for ((v, f), &m) in v.iter_mut().zip(f).zip(mass) {
+                let dtfm = dtf / m;
+                for d in 0..3 {
+                    v[d] += dtfm * f[d];
+                }
             }
-        }
+        });
         if *self == Integrator::Rotational {
             kick_rotation(p, dtf);
         }
@@ -87,9 +96,10 @@ mod tests {
         p.mass[0] = 2.0;
         p.f[0] = [1.0, 0.0, -4.0];
         let dt = 0.1;
+        let team = Team::new(2);
         for _ in 0..10 {
-            Integrator::Translational.initial(&mut p, dt);
-            Integrator::Translational.final_half(&mut p, dt);
+            Integrator::Translational.initial(&mut p, dt, &team);
+            Integrator::Translational.final_half(&mut p, dt, &team);
         }
         // a = f / m; after t = 1: v = a t, x = a t^2 / 2 (exact for
         // velocity Verlet under a constant force).
@@ -107,9 +117,10 @@ mod tests {
         let integrator = Integrator::for_particles(&p);
         assert_eq!(integrator, Integrator::Rotational);
         let dt = 0.05;
+        let team = Team::new(1);
         for _ in 0..40 {
-            integrator.initial(&mut p, dt);
-            integrator.final_half(&mut p, dt);
+            integrator.initial(&mut p, dt, &team);
+            integrator.final_half(&mut p, dt, &team);
         }
         let omega = &p.rotation.as_ref().unwrap().omega;
         // omega = T t / (0.4 m r^2) after t = 2.

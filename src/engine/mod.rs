@@ -23,6 +23,7 @@ pub mod parallel;
 pub mod particles;
 pub mod simbox;
 pub mod system;
+pub mod team;
 pub mod timers;
 
 pub use bpm::{BondTopology, BpmModel, BpmTerms};
@@ -38,6 +39,7 @@ pub use neighbor::{Exclusions, NeighbourList};
 pub use particles::{Particles, Rotation};
 pub use simbox::{MinimumImage, SimBox};
 pub use system::{StageDrivers, StepReport, System};
+pub use team::Team;
 pub use timers::{Stage, Timers};
 
 /// Failures of a running simulation.

@@ -13,6 +13,7 @@ use super::dem::{ActiveGranularWall, ClosureReport};
 use super::external::WallContact;
 use super::neighbor::{Exclusions, NeighbourList};
 use super::simbox::SimBox;
+use super::team::Team;
 use super::timers::Timers;
 use crate::kernels::{Fault, Tally};
 use std::any::Any;
@@ -74,8 +75,8 @@ pub struct ForceInput<'a> {
     /// How many times positions were wrapped into the box; a change
     /// invalidates anything cached on the stored positions.
     pub wraps: u64,
-    /// Threads of the force passes (1 = serial).
-    pub threads: usize,
+    /// The threads of the force passes (one thread: serial).
+    pub team: &'a Team,
     /// Whether to sum energies and virials in this evaluation.
     pub tally: bool,
     /// Lees-Edwards boundaries, if the box is sheared with them: a pair

@@ -6,6 +6,7 @@
 //! boxes of one or two bins per dimension correct under the minimum image.
 
 use super::simbox::SimBox;
+use super::team::Team;
 use crate::kernels::Separation;
 use nalgebra::{Matrix3, Vector3};
 
@@ -116,7 +117,13 @@ impl NeighbourList {
     /// current ones: a grain that turns or drifts as a whole (a lone grain
     /// between walls does both) keeps its list. When the plain test fails but
     /// the rigid one passes, that rigid image becomes the new reference.
-    pub fn needs_rebuild(&mut self, simbox: &SimBox, x: &[[f64; 3]], skin: f64) -> bool {
+    pub fn needs_rebuild(
+        &mut self,
+        simbox: &SimBox,
+        x: &[[f64; 3]],
+        skin: f64,
+        team: &Team,
+    ) -> bool {
         let Some(old_box) = &self.box_at_build else {
             return true;
         };
@@ -124,7 +131,14 @@ impl NeighbourList {
             return true;
         }
         let drift = simbox.periodic_drift(old_box);
-        if 2.0 * max_displacement(x, &self.x_at_build) + drift <= skin {
+        let reference = &self.x_at_build;
+        let largest = team.map_reduce(
+            x.len(),
+            0.0,
+            |range| max_displacement(&x[range.clone()], &reference[range]),
+            f64::max,
+        );
+        if 2.0 * largest + drift <= skin {
             return false;
         }
         if !self.follow_rigid_motion || simbox.periodic.iter().any(|&p| p) || x.is_empty() {
@@ -421,7 +435,10 @@ mod tests {
         let mut current = x.clone();
         for step in 1..=10 {
             current = turned(&x, 0.02 * step as f64, [0.05 * step as f64, 0.0, -0.1]);
-            assert!(!list.needs_rebuild(&simbox, &current, 0.3), "step {step}");
+            assert!(
+                !list.needs_rebuild(&simbox, &current, 0.3, &Team::new(1)),
+                "step {step}"
+            );
         }
         assert_eq!(list.builds, 1);
         assert!(list.reanchors >= 4, "{} re-anchorings", list.reanchors);
@@ -436,7 +453,7 @@ mod tests {
             ..NeighbourList::default()
         };
         plain.build(&simbox, &x, 1.0, 0.3, None);
-        assert!(plain.needs_rebuild(&simbox, &turned(&x, 0.1, [0.0; 3]), 0.3));
+        assert!(plain.needs_rebuild(&simbox, &turned(&x, 0.1, [0.0; 3]), 0.3, &Team::new(1)));
     }
 
     #[test]
@@ -446,9 +463,9 @@ mod tests {
         list.build(&simbox, &x, 1.0, 0.3, None);
         let mut moved = turned(&x, 0.3, [1.0, 0.0, 0.0]);
         moved[17][2] += 0.16;
-        assert!(list.needs_rebuild(&simbox, &moved, 0.3));
+        assert!(list.needs_rebuild(&simbox, &moved, 0.3, &Team::new(1)));
         moved[17][2] -= 0.02;
-        assert!(!list.needs_rebuild(&simbox, &moved, 0.3));
+        assert!(!list.needs_rebuild(&simbox, &moved, 0.3, &Team::new(1)));
     }
 
     #[test]
@@ -460,6 +477,6 @@ mod tests {
         list.build(&simbox, &x, 1.0, 0.3, None);
         let centre: Vec<[f64; 3]> = x.iter().map(|p| [p[0] - 20.0, p[1] - 20.0, p[2]]).collect();
         let back: Vec<[f64; 3]> = turned(&centre, 0.05, [20.0, 20.0, 0.0]);
-        assert!(list.needs_rebuild(&simbox, &back, 0.3));
+        assert!(list.needs_rebuild(&simbox, &back, 0.3, &Team::new(1)));
     }
 }

@@ -1,60 +1,71 @@
-//! Deterministic chunked scatter-add over threads.
+//! Deterministic chunked scatter-add over a [`Team`].
 //!
 //! Each chunk of a list writes into its own buffer (chunk 0 straight into the
 //! output), then the buffers are summed in chunk order. For a fixed thread
 //! count the result is the same bit for bit on every run.
 
+use super::team::{SharedSlice, Team};
 use crate::kernels::ForcePass;
+
+pub use super::team::chunk_range;
 
 /// Per-thread scratch buffers, kept between steps so no step allocates.
 #[derive(Debug, Default)]
 pub struct Scratch<T> {
+    /// One per chunk; chunk 0's stays empty (it writes into the output).
     buffers: Vec<Vec<T>>,
     passes: Vec<ForcePass>,
 }
 
 impl<T: Copy + Default + Send + Sync + std::ops::AddAssign> Scratch<T> {
-    /// Runs `work(chunk, out)` for `chunks` chunks and adds every chunk's
-    /// contributions into `out`; returns the chunks' sums merged in chunk
-    /// order (the first fault in list order).
-    pub fn scatter<F>(&mut self, chunks: usize, out: &mut [T], work: F) -> ForcePass
+    /// Runs `work(chunk, out)` for each of the team's chunks and adds every
+    /// chunk's contributions into `out`; returns the chunks' sums merged in
+    /// chunk order (the first fault in list order).
+    pub fn scatter<F>(&mut self, team: &Team, out: &mut [T], work: F) -> ForcePass
     where
         F: Fn(usize, &mut [T]) -> ForcePass + Sync,
     {
+        let chunks = team.threads();
         if chunks <= 1 {
             return work(0, out);
         }
-        self.buffers.resize_with(chunks - 1, Vec::new);
-        for buf in &mut self.buffers {
+        self.buffers.resize_with(chunks, Vec::new);
+        for buf in &mut self.buffers[1..] {
             buf.clear();
             buf.resize(out.len(), T::default());
         }
         self.passes.clear();
         self.passes.resize(chunks, ForcePass::default());
-        let (first, rest) = self.passes.split_at_mut(1);
-        let work = &work;
-        rayon::scope(|s| {
-            for ((c, buf), pass) in self.buffers.iter_mut().enumerate().zip(rest.iter_mut()) {
-                s.spawn(move |_| *pass = work(c + 1, buf));
-            }
-            first[0] = work(0, out);
-        });
-        for buf in &self.buffers {
-            for (o, b) in out.iter_mut().zip(buf) {
-                *o += *b;
-            }
+        {
+            let out = SharedSlice::new(out);
+            let buffers = SharedSlice::new(&mut self.buffers);
+            let passes = SharedSlice::new(&mut self.passes);
+            team.run(|c| {
+                // SAFETY: chunk c alone touches passes[c] and buffers[c];
+                // chunk 0 alone touches `out`.
+                let target: &mut [T] = unsafe {
+                    if c == 0 {
+                        out.range(0..out.len())
+                    } else {
+                        buffers.get(c)
+                    }
+                };
+                let pass = work(c, target);
+                unsafe { *passes.get(c) = pass };
+            });
         }
+        let buffers = &self.buffers[1..];
+        team.run_split(out, |_, range, part| {
+            for buf in buffers {
+                for (o, b) in part.iter_mut().zip(&buf[range.clone()]) {
+                    *o += *b;
+                }
+            }
+        });
         self.passes
             .iter()
             .fold(ForcePass::default(), |acc, t| acc.merged(t))
     }
-}
-
-/// Splits `0..len` into `chunks` nearly equal contiguous ranges.
-pub fn chunk_range(len: usize, chunks: usize, c: usize) -> std::ops::Range<usize> {
-    let start = len * c / chunks;
-    let end = len * (c + 1) / chunks;
-    start..end
 }
 
 /// A `[f64; 3]` that can be summed, for force buffers.

@@ -13,6 +13,7 @@ use super::model::{ForceInput, ForceOutput, ModelTally, ParticleModel};
 use super::neighbor::NeighbourList;
 use super::particles::Particles;
 use super::simbox::SimBox;
+use super::team::Team;
 use super::timers::{Stage, Timers};
 use super::EngineError;
 use crate::kernels::{Fault, Separation, Tally};
@@ -96,8 +97,10 @@ pub struct System {
     pub neighbours: NeighbourList,
     /// Neighbour skin (d units).
     pub skin: f64,
-    /// Threads used for force passes (1 = serial, no rayon).
+    /// Threads used for force passes (1 = serial).
     pub threads: usize,
+    /// The threads themselves, made anew when `threads` changes.
+    team: Team,
     /// Steps taken.
     pub step: u64,
     /// Simulated time (tau).
@@ -135,6 +138,7 @@ impl System {
             neighbours: NeighbourList::default(),
             skin,
             threads: threads.max(1),
+            team: Team::new(threads),
             step: 0,
             time: 0.0,
             timers: Timers::default(),
@@ -227,7 +231,7 @@ impl System {
         if force
             || self
                 .neighbours
-                .needs_rebuild(&self.simbox, &self.particles.x, self.skin)
+                .needs_rebuild(&self.simbox, &self.particles.x, self.skin, &self.team)
         {
             self.particles
                 .wrap(&self.simbox, self.lees_edwards.as_ref());
@@ -258,6 +262,7 @@ impl System {
         step_dt: Option<f64>,
     ) {
         self.particles.clear_forces();
+        self.renew_team();
         let p = &mut self.particles;
         let (omega, torque) = match &mut p.rotation {
             Some(r) => (Some(&r.omega[..]), Some(&mut r.torque[..])),
@@ -273,7 +278,7 @@ impl System {
             step_dt,
             neighbours: &self.neighbours,
             wraps: self.wraps,
-            threads: self.threads,
+            team: &self.team,
             tally,
             lees_edwards: self.lees_edwards,
             elapsed,
@@ -344,6 +349,13 @@ impl System {
         self.report = report;
     }
 
+    /// Makes the team anew if `threads` changed since it was made.
+    fn renew_team(&mut self) {
+        if self.team.threads() != self.threads.max(1) {
+            self.team = Team::new(self.threads);
+        }
+    }
+
     /// Prepares a stage: forces the list build and evaluates forces once.
     pub fn setup(&mut self, drivers: &StageDrivers) {
         self.stage_start_time = self.time;
@@ -365,9 +377,10 @@ impl System {
         stage_box: &SimBox,
     ) -> Result<(), EngineError> {
         let dt = drivers.dt;
+        self.renew_team();
         {
             let _t = self.timers.start(Stage::Integrate);
-            self.integrator.initial(&mut self.particles, dt);
+            self.integrator.initial(&mut self.particles, dt, &self.team);
         }
         self.update_neighbours(false);
         let elapsed = stage_step as f64 * dt;
@@ -377,7 +390,8 @@ impl System {
         self.check_walls()?;
         {
             let _t = self.timers.start(Stage::Integrate);
-            self.integrator.final_half(&mut self.particles, dt);
+            self.integrator
+                .final_half(&mut self.particles, dt, &self.team);
         }
         // Stage start plus steps times dt, not a running sum: no round-off
         // grows with the step count, and LAMMPS's harness computes the same.
@@ -542,9 +556,12 @@ impl System {
     /// Changes the box and maps positions affinely into it.
     pub fn remap_into(&mut self, new_box: SimBox) {
         let _t = self.timers.start(Stage::Integrate);
-        for x in &mut self.particles.x {
-            new_box.remap_from(&self.simbox, x);
-        }
+        let old = &self.simbox;
+        self.team.run_split(&mut self.particles.x, |_, _, x| {
+            for x in x {
+                new_box.remap_from(old, x);
+            }
+        });
         self.simbox = new_box;
     }
 

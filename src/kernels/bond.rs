@@ -88,7 +88,7 @@ pub fn cube_root(q: f64) -> f64 {
 }
 
 /// `|q - 1|` up to which [`cube_root_near_one`] is exact to round-off.
-const CLOSE_TO_ONE: f64 = 1.0 / 32.0;
+pub(super) const CLOSE_TO_ONE: f64 = 1.0 / 32.0;
 
 /// `(1 + x)^(1/3)` for `|x| <= 1/32`, the common case (volume strains of a
 /// few percent): degree 9, truncation error below 1.1e-17, no division and
@@ -100,7 +100,7 @@ fn cube_root_near_one(x: f64) -> f64 {
 }
 
 /// Binomial coefficients C(1/3, n), n = 0 .. 9: the series of `(1 + x)^(1/3)`.
-const CBRT_SERIES: [f64; 10] = [
+pub(super) const CBRT_SERIES: [f64; 10] = [
     1.0,
     1.0 / 3.0,
     -1.0 / 9.0,

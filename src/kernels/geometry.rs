@@ -6,6 +6,10 @@
 /// the native engine and LAMMPS's ghost atoms (already the right image) share
 /// one compiled loop each, with no branch on the convention per interaction.
 pub trait Separation: Sync {
+    /// Whether [`Separation::delta`] is the plain difference `x_i - x_j`,
+    /// so that vector code may form it directly.
+    const PLAIN: bool = false;
+
     /// The separation vector `x_i - x_j` under this convention.
     fn delta(&self, xi: &[f64; 3], xj: &[f64; 3]) -> [f64; 3];
 
@@ -23,6 +27,8 @@ pub trait Separation: Sync {
 pub struct Unwrapped;
 
 impl Separation for Unwrapped {
+    const PLAIN: bool = true;
+
     #[inline(always)]
     fn delta(&self, xi: &[f64; 3], xj: &[f64; 3]) -> [f64; 3] {
         super::sub(xi, xj)

@@ -10,6 +10,7 @@
 //! `+n` (positive is repulsive) and on `j` along `-n`.
 
 mod bond;
+mod bond_rows;
 mod fault;
 mod geometry;
 mod granular;
@@ -24,6 +25,10 @@ mod zero_net;
 pub use bond::{
     bond_force_magnitude, bond_forces, bond_forces_on, cube_root, dilation, BondCoeffs, BondEntry,
     BondInputs,
+};
+pub use bond_rows::{
+    gather_forces, gather_forces_on, gather_volumes, row_forces, row_forces_on, row_volumes,
+    row_volumes_on, BondRows, BondRowsError, RowInputs,
 };
 pub use fault::{
     stable_timestep, verlet_limit, Fault, FaultKind, ForcePass, COLLAPSED_BELOW, DEEP_OVERLAP,

@@ -17,9 +17,10 @@ use super::parallel::{as_rows, as_vec3, chunk_range, Scratch, Vec3};
 use super::simbox::SimBox;
 use super::timers::Stage;
 use crate::kernels::{
-    accumulate_multibody_sums, accumulate_reference_volumes, accumulate_volumes, balance_multibody,
-    bond_forces, pair_forces, BondCoeffs, BondEntry, BondInputs, Fault, ForcePass, MultibodyInputs,
-    MultibodySum, Ownership, PairCoeffs, PairInputs, Separation, Tally, Unwrapped,
+    accumulate_multibody_sums, accumulate_reference_volumes, balance_multibody, gather_forces,
+    gather_volumes, pair_forces, row_forces, row_volumes, BondCoeffs, BondEntry, BondRows, Fault,
+    ForcePass, MultibodyInputs, MultibodySum, Ownership, PairCoeffs, PairInputs, RowInputs,
+    Separation, Tally, Unwrapped,
 };
 
 /// Index of the bond term in [`ModelTally::terms`].
@@ -82,28 +83,35 @@ pub struct BpmModel {
     reference_volume: Vec<f64>,
     multibody_sums: Vec<MultibodySum>,
     force_scratch: Scratch<Vec3>,
-    volume_scratch: Scratch<f64>,
-    partition: BondPartition,
+    layout: BondLayout,
 }
 
-/// Bonds split by whether the plain difference of the stored positions is
-/// already the minimum image ("interior", most bonds) or not ("boundary").
+/// The bonds as rows for the two-step bond pass
+/// ([`crate::kernels::row_forces`], then [`crate::kernels::gather_forces`]),
+/// split by whether the plain difference of the stored positions is already
+/// the minimum image ("interior", most bonds, first) or not ("boundary").
 ///
 /// Positions wrap only when the pair list is rebuilt, and between wraps a
 /// bond's plain difference changes continuously (also under affine
 /// deformation), so the split holds until the next wrap; interior bonds then
 /// skip the minimum-image arithmetic, as LAMMPS's ghost atoms do.
 #[derive(Debug, Default)]
-struct BondPartition {
+struct BondLayout {
     /// The wrap count of the system when the split was made.
     generation: Option<u64>,
-    interior: Vec<BondEntry>,
-    interior_r0: Vec<f64>,
-    boundary: Vec<BondEntry>,
-    boundary_r0: Vec<f64>,
+    /// Interior rows, then boundary rows, each in CSR order.
+    rows: BondRows,
+    /// Number of interior rows.
+    interior: usize,
+    /// Each row's force on its atom `i`, written by the first step.
+    force: Vec<[f64; 4]>,
+    /// Each row's `r^3` (the multibody term only).
+    r3: Vec<f64>,
+    /// Each thread's share of the row pass.
+    passes: Vec<ForcePass>,
 }
 
-impl BondPartition {
+impl BondLayout {
     fn rebuild<S: Separation>(
         &mut self,
         sep: &S,
@@ -111,20 +119,21 @@ impl BondPartition {
         bonds: &BondTopology,
         generation: u64,
     ) {
-        self.interior.clear();
-        self.interior_r0.clear();
-        self.boundary.clear();
-        self.boundary_r0.clear();
-        for (b, &r0) in bonds.entries.iter().zip(&bonds.r0) {
+        let plain = |b: &BondEntry| {
             let (xi, xj) = (&x[b.i as usize], &x[b.j as usize]);
-            if sep.delta(xi, xj) == Unwrapped.delta(xi, xj) {
-                self.interior.push(*b);
-                self.interior_r0.push(r0);
-            } else {
-                self.boundary.push(*b);
-                self.boundary_r0.push(r0);
-            }
-        }
+            sep.delta(xi, xj) == Unwrapped.delta(xi, xj)
+        };
+        let (interior, boundary): (Vec<usize>, Vec<usize>) =
+            (0..bonds.len()).partition(|&b| plain(&bonds.entries[b]));
+        self.interior = interior.len();
+        let row = |b: usize| {
+            let e = &bonds.entries[b];
+            (e.i as usize, e.j as usize, bonds.r0[b], b)
+        };
+        let order: Vec<usize> = interior.into_iter().chain(boundary).collect();
+        self.rows = BondRows::new(x.len(), order.into_iter().map(row))
+            .expect("the topology's bonds join distinct particles of the system");
+        self.force.resize(self.rows.len(), [0.0; 4]);
         self.generation = Some(generation);
     }
 }
@@ -148,8 +157,7 @@ impl BpmModel {
             reference_volume: Vec::new(),
             multibody_sums: Vec::new(),
             force_scratch: Scratch::default(),
-            volume_scratch: Scratch::default(),
-            partition: BondPartition::default(),
+            layout: BondLayout::default(),
         };
         model.set_coefficients(bond, pair, zero_net, n);
         model
@@ -198,7 +206,7 @@ impl BpmModel {
     }
 
     fn update_reference_volumes(&mut self, n: usize) {
-        self.partition.generation = None;
+        self.layout.generation = None;
         if self.terms.multibody {
             self.volume = vec![0.0; n];
             self.reference_volume = vec![0.0; n];
@@ -225,73 +233,67 @@ impl BpmModel {
             v,
             neighbours,
             wraps,
-            threads,
+            team,
             tally,
             ..
         } = *input;
         let timers = &mut *out.timers;
         let f = &mut *out.f;
-        let bonds = &self.bonds;
         let n = x.len();
         let own = Ownership::all(n);
-        let chunks = threads.max(1);
+        let chunks = team.threads();
         let sep = simbox.minimum_image();
-        if self.partition.generation != Some(wraps) {
-            self.partition.rebuild(&sep, x, bonds, wraps);
+        if self.layout.generation != Some(wraps) {
+            self.layout.rebuild(&sep, x, &self.bonds, wraps);
         }
-        let part = &self.partition;
-        let (ni, nb) = (part.interior.len(), part.boundary.len());
+        let layout = &mut self.layout;
+        layout.passes.resize(chunks, ForcePass::default());
+        let rows = &layout.rows;
         if self.terms.multibody {
             let _t = timers.start(Stage::Volumes);
-            self.volume.fill(0.0);
-            self.volume_scratch
-                .scatter(chunks, &mut self.volume, |c, out| {
-                    accumulate_volumes(
-                        &Unwrapped,
-                        x,
-                        &part.interior[chunk_range(ni, chunks, c)],
-                        own,
-                        out,
-                    );
-                    accumulate_volumes(
-                        &sep,
-                        x,
-                        &part.boundary[chunk_range(nb, chunks, c)],
-                        own,
-                        out,
-                    );
+            layout.r3.resize(rows.len(), 0.0);
+            team.run_sections(
+                &mut layout.r3,
+                layout.interior,
+                &mut layout.passes,
+                |_, [(ri, interior), (rb, boundary)]| {
+                    row_volumes(&Unwrapped, rows, ri, x, interior);
+                    row_volumes(&sep, rows, rb, x, boundary);
                     ForcePass::default()
-                });
+                },
+            );
+            let r3 = &layout.r3;
+            team.run_split(&mut self.volume, |_, range, part| {
+                gather_volumes(rows, range, r3, part)
+            });
         }
         let bond_pass = {
             let _t = timers.start(Stage::Bonds);
-            let volumes = self
-                .terms
-                .multibody
-                .then_some((&self.volume[..], &self.reference_volume[..]));
-            let v_opt = self.terms.bond_damping.then_some(v);
-            let coeffs = [self.bond];
-            self.force_scratch.scatter(chunks, as_vec3(f), |c, out| {
-                let out = as_rows(out);
-                let ri = chunk_range(ni, chunks, c);
-                let rb = chunk_range(nb, chunks, c);
-                let interior = BondInputs {
-                    x,
-                    v: v_opt,
-                    bonds: &part.interior[ri.clone()],
-                    r0: &part.interior_r0[ri],
-                    coeffs: &coeffs,
-                    volumes,
-                    tally,
-                };
-                let boundary = BondInputs {
-                    bonds: &part.boundary[rb.clone()],
-                    r0: &part.boundary_r0[rb],
-                    ..interior
-                };
-                bond_forces(&Unwrapped, &interior, own, out)
-                    .merged(&bond_forces(&sep, &boundary, own, out))
-            })
+            let inputs = RowInputs {
+                x,
+                v: self.terms.bond_damping.then_some(v),
+                coeffs: self.bond,
+                volumes: self
+                    .terms
+                    .multibody
+                    .then_some((&self.volume[..], &self.reference_volume[..])),
+                tally,
+            };
+            team.run_sections(
+                &mut layout.force,
+                layout.interior,
+                &mut layout.passes,
+                |_, [(ri, interior), (rb, boundary)]| {
+                    row_forces(&Unwrapped, rows, ri, &inputs, interior)
+                        .merged(&row_forces(&sep, rows, rb, &inputs, boundary))
+                },
+            );
+            let forces = &layout.force;
+            team.run_split(f, |_, range, part| gather_forces(rows, range, forces, part));
+            layout
+                .passes
+                .iter()
+                .fold(ForcePass::default(), |acc, p| acc.merged(p))
         };
         let balance = if self.terms.zero_net {
             let _t = timers.start(Stage::Bonds);
@@ -312,7 +314,7 @@ impl BpmModel {
                     special: [1.0; 4],
                     tally,
                 };
-                self.force_scratch.scatter(chunks, as_vec3(f), |c, out| {
+                self.force_scratch.scatter(team, as_vec3(f), |c, out| {
                     let rows = neighbours.rows(chunk_range(n, chunks, c));
                     pair_forces(&sep, &inputs, rows, own, as_rows(out))
                 })

@@ -5,6 +5,10 @@
 //! the speed work with its verdict. `bpm bench-lammps`
 //! ([`run_bench_lammps`]) runs the Debian LAMMPS variants alone.
 
+mod packing;
+
+pub use packing::{bench_packing, workload_protocol, PackingBench, PackingWorkload};
+
 use crate::analysis::plot::{write_svg, Mark, Panel, PlotError, Series};
 use crate::engine::{Stage, StageDrivers, System};
 use crate::file_error::FileError;
@@ -52,6 +56,8 @@ pub struct BenchOptions {
     /// Copies of the solid per side for the cost against size (1 = the
     /// solid itself); `bpm bench-lammps` uses the solid only.
     pub replicas: Vec<usize>,
+    /// The compaction workload, or `None` to skip it.
+    pub packing: Option<PackingWorkload>,
 }
 
 /// One measured case.
@@ -120,6 +126,8 @@ pub struct Bench {
     /// Debian's LAMMPS with our plugin and with `bond_style harmonic`
     /// (`None` when `lmp-bpm` is not built).
     pub debian: Option<DebianSpeed>,
+    /// The compaction workload (`None` when skipped).
+    pub packing: Option<PackingBench>,
 }
 
 /// Debian's LAMMPS on the solid, one rank: our plugin's variants and
@@ -431,6 +439,7 @@ impl Bench {
                 target,
             ));
         }
+        goals.extend(self.packing_goals());
         let (smallest, largest) = (
             sizes.iter().min().copied().unwrap_or(0),
             sizes.iter().max().copied().unwrap_or(0),
@@ -441,6 +450,47 @@ impl Bench {
             goal: ">= 4, 3,000 to > 1,000,000".into(),
             met: Some(sizes.len() >= 4 && smallest >= 3_000 && largest > 1_000_000),
         });
+        goals
+    }
+
+    /// The compaction workload's goals (issue 33): one thread at least 5x
+    /// upstream on the packing, two threads at most 25 ns per
+    /// particle-step and at least 1.8x one.
+    fn packing_goals(&self) -> Vec<Goal> {
+        let Some(p) = &self.packing else {
+            return vec![Goal::at_least(
+                "compaction workload (skipped: --packing-grains 0)".into(),
+                f64::NAN,
+                5.0,
+            )];
+        };
+        let ns = |a_b: f64, threads: usize| {
+            p.cases
+                .iter()
+                .find(|c| c.a_b == a_b && c.threads == threads)
+                .map_or(f64::NAN, |c| c.ns_per_particle_step)
+        };
+        let mut goals = Vec::new();
+        for a_b in [0.0, -0.5] {
+            goals.push(Goal::at_least(
+                format!("packing: native speed-up over upstream LAMMPS, a_B={a_b}, 1 thread (x)"),
+                p.upstream
+                    .iter()
+                    .find(|u| u.a_b == a_b)
+                    .map_or(f64::NAN, |u| u.upstream_ns / u.native_ns),
+                5.0,
+            ));
+            goals.push(Goal::at_most(
+                format!("packing: compaction stages, a_B={a_b}, 2 threads (ns per particle-step)"),
+                ns(a_b, 2),
+                25.0,
+            ));
+            goals.push(Goal::at_least(
+                format!("packing: 2-thread speed-up, a_B={a_b} (x)"),
+                ns(a_b, 1) / ns(a_b, 2),
+                1.8,
+            ));
+        }
         goals
     }
 
@@ -542,6 +592,9 @@ pub fn run_bench(
             opts.replicas
         )));
     }
+    if let Some(workload) = &opts.packing {
+        workload.validate()?;
+    }
     if let Some(dir) = output
         .and_then(Path::parent)
         .filter(|d| !d.as_os_str().is_empty())
@@ -570,12 +623,17 @@ pub fn run_bench(
     let specialisations = specialisation_ratios(&solid, opts.steps, log);
     let upstream = upstream_speeds(&solid, opts, log);
     let debian = debian_speeds(&solid, lmp_bpm, opts, log);
+    let packing = match &opts.packing {
+        Some(workload) => Some(bench_packing(workload, threads, log)?),
+        None => None,
+    };
     Ok(Bench {
         size: opts.size,
         cases,
         specialisations,
         upstream,
         debian,
+        packing,
     })
 }
 
@@ -587,7 +645,8 @@ impl Bench {
             "program": "bpm bench", "version": crate::VERSION, "size": opts.size, "seed": opts.seed,
             "steps": opts.steps, "replicas": opts.replicas, "isa": Isa::detect().name(), "cases": self.cases,
             "specialisations": self.specialisations, "upstream": self.upstream,
-            "debian": self.debian, "goals": self.goals(),
+            "debian": self.debian, "packing_workload": opts.packing, "packing": self.packing,
+            "goals": self.goals(),
         });
         crate::verify::write_json(path, &report).map_err(FileError::on("writing", path))?;
         write_svg(&path.with_extension("svg"), &self.panels())?;
@@ -740,10 +799,10 @@ impl UpstreamSpeed {
 /// Runs of each timed case, native or LAMMPS (the fastest kept): the
 /// machine is shared, and one run can be slowed by its neighbours by tens
 /// of percent.
-const REPEATS: usize = 2;
+pub(super) const REPEATS: usize = 2;
 
 /// The faster of `kept` (if any) and `case`.
-fn faster(kept: Option<BenchCase>, case: BenchCase) -> BenchCase {
+pub(super) fn faster(kept: Option<BenchCase>, case: BenchCase) -> BenchCase {
     match kept {
         Some(k) if k.ns_per_particle_step <= case.ns_per_particle_step => k,
         _ => case,
@@ -751,7 +810,7 @@ fn faster(kept: Option<BenchCase>, case: BenchCase) -> BenchCase {
 }
 
 /// The box scale every benchmark strains its solid by, so bonds carry force.
-const BENCH_STRAIN: f64 = 0.999;
+pub(super) const BENCH_STRAIN: f64 = 0.999;
 
 /// Builds the bulk solid used by the benchmark (the L = 14 d system of
 /// docs/reference-numbers.md, "Cost reference points" by default).
@@ -1093,6 +1152,7 @@ mod tests {
             specialisations: Vec::new(),
             upstream: Vec::new(),
             debian: Some(debian),
+            packing: None,
         };
         let goals = bench.goals();
         let find = |part: &str| goals.iter().find(|g| g.figure.contains(part)).unwrap();

