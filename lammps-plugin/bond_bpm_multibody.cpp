@@ -175,7 +175,9 @@ double BondBPMMultibody::single(int type, double rsq, int i, int j, double &ffor
   if (r0 <= 0.0) r0 = reference ? reference->r0_between(j, i) : -1.0;
   fforce = 0.0;
   if (r0 <= 0.0 || r <= 0.0) return 0.0;
-  double dilation = r / r0;    // without volumes, the multibody term is left out
+  // Without volumes the multibody term is left out: a dilation equal to
+  // r / r0 as the kernels form it, r * (1 / r0), cancels it exactly.
+  double dilation = r * (1.0 / r0);
   return bpm_bond_single(r, r0, dilation, &coeffs[type - 1], &fforce);
 }
 

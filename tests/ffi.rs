@@ -206,7 +206,7 @@ fn pair_abi_reads_a_lammps_style_neighbour_list() {
 /// What single() promises (src/ffi.rs, bpm_kernels.h): the force over
 /// distance and the spring-proxy energy of the bond, without damping (it
 /// gets no velocities), and the multibody term of the `dilation` it is given
-/// (the shim passes r / r0, which leaves that term out).
+/// (the shim passes r * (1 / r0), which leaves that term out).
 #[test]
 fn single_bond_abi_equals_the_bulk_bond_loop_without_damping() {
     let (x0, bonds, r0) = random_network(60, 3.2, 1.5, 11);
@@ -263,9 +263,9 @@ fn single_bond_abi_equals_the_bulk_bond_loop_without_damping() {
         let del = Unwrapped.delta(xi, xj);
         let r = Unwrapped.distance(xi, xj);
         let along = |fforce: f64| del.map(|d| d * fforce);
-        // The shim's call: dilation r / r0, no multibody term. The bulk
-        // loop without velocities, i.e. without damping, whatever gamma.
-        let (fforce, e) = single(r, r0, r / r0, &damped);
+        // The shim's call: dilation r * (1 / r0), no multibody term. The
+        // bulk loop without velocities, i.e. without damping, whatever gamma.
+        let (fforce, e) = single(r, r0, r * (1.0 / r0), &damped);
         let (f_bulk, e_bulk) = bulk(b, r0, damped, None, false);
         assert!(
             close(along(fforce), f_bulk),
@@ -280,7 +280,7 @@ fn single_bond_abi_equals_the_bulk_bond_loop_without_damping() {
         // and gamma = 0, and gamma does not change the result.
         let (f_still, _) = bulk(b, r0, undamped, Some(&v), false);
         assert!(close(along(fforce), f_still), "bond {b:?}");
-        assert_eq!(single(r, r0, r / r0, &undamped), (fforce, e));
+        assert_eq!(single(r, r0, r * (1.0 / r0), &undamped), (fforce, e));
         // Given the bond's dilation, the multibody term is the bulk loop's.
         let d = dilation(
             vol[b.i as usize],

@@ -501,6 +501,25 @@ fn cube_root_is_within_two_ulp_of_the_library() {
     assert!(cube_root(-8.0) == -2.0 && cube_root(0.0) == 0.0);
 }
 
+/// How many bonds have a volume ratio outside the cube root's series
+/// range (`|q - 1| > 1/32`), asserting that some do and most do not, so a
+/// test covers both paths of the cube root.
+fn some_far_volume_ratios(bonds: &[BondEntry], vol: &[f64], vol0: &[f64]) -> usize {
+    let far = bonds
+        .iter()
+        .filter(|b| {
+            let (i, j) = (b.i as usize, b.j as usize);
+            ((vol[i] + vol[j]) / (vol0[i] + vol0[j]) - 1.0).abs() > 1.0 / 32.0
+        })
+        .count();
+    assert!(
+        far > 0 && far < bonds.len() / 2,
+        "{far} of {} volume ratios outside the series range: want some, not most",
+        bonds.len()
+    );
+    far
+}
+
 /// The bond kernel works on blocks of bonds; checked bond by bond against
 /// the force law written out directly (`bond_force_magnitude`,
 /// `dilation`), on a network whose bond count is not a multiple of the
@@ -529,18 +548,7 @@ fn blocked_bond_kernel_matches_the_force_law_bond_by_bond_on_every_instruction_s
     let (mut vol, mut vol0) = (vec![0.0; n], vec![0.0; n]);
     accumulate_volumes(&Unwrapped, &x, &bonds, all, &mut vol);
     accumulate_reference_volumes(&bonds, &r0, all, &mut vol0);
-    let far = bonds
-        .iter()
-        .filter(|b| {
-            let (i, j) = (b.i as usize, b.j as usize);
-            ((vol[i] + vol[j]) / (vol0[i] + vol0[j]) - 1.0).abs() > 1.0 / 32.0
-        })
-        .count();
-    assert!(
-        far > 0 && far < bonds.len() / 2,
-        "{far} of {} volume ratios outside the series range: want some, not most",
-        bonds.len()
-    );
+    let far = some_far_volume_ratios(&bonds, &vol, &vol0);
     let coeffs = [
         BondCoeffs {
             k: 1.0,
@@ -693,47 +701,45 @@ fn bond_rows_give_the_scatter_kernels_forces_bit_for_bit() {
     let (bonds_in, r0_in) = pick(&interior);
     let (bonds_out, r0_out) = pick(&boundary);
     let order: Vec<usize> = interior.iter().chain(&boundary).copied().collect();
+    let ni = interior.len();
+    let all = Ownership::all(n);
+    let mut vol0 = vec![0.0; n];
+    accumulate_reference_volumes(&bonds, &r0, all, &mut vol0);
     let rows = BondRows::new(
         n,
         order
             .iter()
             .map(|&b| (bonds[b].i as usize, bonds[b].j as usize, r0[b], b)),
+        Some(&vol0),
     )
     .unwrap();
-    let ni = interior.len();
-    let all = Ownership::all(n);
 
-    // Volumes: the scatter's, and the rows'.
+    // Volumes: the scatter's, and the rows' (whose lengths the force rows
+    // then reuse).
     let mut vol = vec![0.0; n];
     accumulate_volumes(&Unwrapped, &x, &bonds_in, all, &mut vol);
     accumulate_volumes(&sep, &x, &bonds_out, all, &mut vol);
-    let mut vol0 = vec![0.0; n];
-    accumulate_reference_volumes(&bonds, &r0, all, &mut vol0);
+    let mut lengths = vec![[0.0; 2]; rows.len()];
     for isa in [Isa::Portable, Isa::Avx2]
         .into_iter()
         .filter(|i| i.available())
     {
-        let mut r3 = vec![0.0; rows.len()];
-        let (a, b) = r3.split_at_mut(ni);
+        let mut out = vec![[f64::NAN; 2]; rows.len()];
+        let (a, b) = out.split_at_mut(ni);
         row_volumes_on(isa, &Unwrapped, &rows, 0..ni, &x, a);
         row_volumes_on(isa, &sep, &rows, ni..rows.len(), &x, b);
         let mut from_rows = vec![f64::NAN; n];
-        gather_volumes(&rows, 0..n, &r3, &mut from_rows);
+        gather_volumes(&rows, 0..n, &out, &mut from_rows);
         assert_eq!(from_rows, vol, "{isa:?} volumes");
+        for (k, &bond) in order.iter().enumerate() {
+            let (i, j) = (bonds[bond].i as usize, bonds[bond].j as usize);
+            let r = sep.distance(&x[i], &x[j]);
+            assert_eq!(out[k][0], r, "{isa:?}: length of row {k}");
+        }
+        lengths = out;
     }
 
-    let far = bonds
-        .iter()
-        .filter(|b| {
-            let (i, j) = (b.i as usize, b.j as usize);
-            ((vol[i] + vol[j]) / (vol0[i] + vol0[j]) - 1.0).abs() > 1.0 / 32.0
-        })
-        .count();
-    assert!(
-        far > 0 && far < bonds.len() / 2,
-        "{far} of {} volume ratios outside the cube root's series range: want some",
-        bonds.len()
-    );
+    some_far_volume_ratios(&bonds, &vol, &vol0);
     let coeffs = BondCoeffs {
         k: 1.3,
         a: -0.55,
@@ -769,7 +775,7 @@ fn bond_rows_give_the_scatter_kernels_forces_bit_for_bit() {
             x: &x,
             v: velocities,
             coeffs,
-            volumes,
+            multibody: multibody.then_some((&vol[..], &lengths[..])),
             tally,
         };
         for isa in [Isa::Portable, Isa::Avx2]
@@ -804,7 +810,7 @@ fn bond_rows_report_a_collapsed_bond_and_refuse_bad_atoms() {
     let x: Vec<[f64; 3]> = (0..12).map(|k| [k as f64, 0.0, 0.0]).collect();
     let mut r0: Vec<f64> = vec![1.0; 11];
     r0[6] = 10.0;
-    let rows = BondRows::new(12, (0..11).map(|b| (b, b + 1, r0[b], 100 + b))).unwrap();
+    let rows = BondRows::new(12, (0..11).map(|b| (b, b + 1, r0[b], 100 + b)), None).unwrap();
     let inputs = RowInputs {
         x: &x,
         v: None,
@@ -813,7 +819,7 @@ fn bond_rows_report_a_collapsed_bond_and_refuse_bad_atoms() {
             a: 0.0,
             gamma: 0.0,
         },
-        volumes: None,
+        multibody: None,
         tally: false,
     };
     for isa in [Isa::Portable, Isa::Avx2]
@@ -831,11 +837,18 @@ fn bond_rows_report_a_collapsed_bond_and_refuse_bad_atoms() {
         );
     }
     assert!(matches!(
-        BondRows::new(3, [(0, 3, 1.0, 0)].into_iter()),
+        BondRows::new(3, [(0, 3, 1.0, 0)].into_iter(), None),
         Err(BondRowsError::BadAtom { .. })
     ));
     assert!(matches!(
-        BondRows::new(3, [(1, 1, 1.0, 0)].into_iter()),
+        BondRows::new(3, [(1, 1, 1.0, 0)].into_iter(), None),
         Err(BondRowsError::BadAtom { .. })
+    ));
+    assert!(matches!(
+        BondRows::new(3, [(0, 1, 1.0, 0)].into_iter(), Some(&[1.0, 1.0])),
+        Err(BondRowsError::ReferenceVolumes {
+            given: 2,
+            particles: 3
+        })
     ));
 }

@@ -30,10 +30,7 @@ impl<T: Copy + Default + Send + Sync + std::ops::AddAssign> Scratch<T> {
             return work(0, out);
         }
         self.buffers.resize_with(chunks, Vec::new);
-        for buf in &mut self.buffers[1..] {
-            buf.clear();
-            buf.resize(out.len(), T::default());
-        }
+        let len = out.len();
         self.passes.clear();
         self.passes.resize(chunks, ForcePass::default());
         {
@@ -47,7 +44,11 @@ impl<T: Copy + Default + Send + Sync + std::ops::AddAssign> Scratch<T> {
                     if c == 0 {
                         out.range(0..out.len())
                     } else {
-                        buffers.get(c)
+                        // Each chunk clears its own copy, on its own thread.
+                        let buf = buffers.get(c);
+                        buf.clear();
+                        buf.resize(len, T::default());
+                        buf
                     }
                 };
                 let pass = work(c, target);

@@ -456,7 +456,7 @@ pub unsafe extern "C" fn bpm_pair_forces(
 /// energy of one bond, for LAMMPS's `Bond::single`: the force
 /// [`bond_forces`] gives that bond without damping (`single()` gets no
 /// velocities), with the multibody term of `dilation` (the shim passes
-/// `r / r0`, which leaves the term out: `single()` gets no volumes).
+/// `r * (1 / r0)`, which leaves the term out: `single()` gets no volumes).
 ///
 /// # Safety
 /// `coeffs` and `fforce` must be valid pointers.

@@ -48,13 +48,23 @@ pub struct BondEntry {
 /// Scalar bond force magnitude along `+n` on atom `i`.
 #[inline(always)]
 pub fn bond_force_magnitude(r: f64, r0: f64, dilation: f64, n_dot_dv: f64, c: &BondCoeffs) -> f64 {
-    c.k * (r0 - r) + c.a * (dilation - r / r0) - c.gamma * n_dot_dv
+    c.k * (r0 - r) + c.a * (dilation - r * reciprocal(r0)) - c.gamma * n_dot_dv
 }
 
 /// Local volumetric dilation `D_ij` of a bond from the volume proxies.
 #[inline(always)]
 pub fn dilation(vi: f64, vj: f64, v0i: f64, v0j: f64) -> f64 {
-    cube_root((vi + vj) / (v0i + v0j))
+    cube_root((vi + vj) * reciprocal(v0i + v0j))
+}
+
+/// `1 / x`. The multibody term divides by the reference length and the
+/// reference volume sum as products with their reciprocals, which an
+/// engine that keeps its bonds can compute once instead of every step
+/// (the native engine's bond rows); every kernel uses the same form, so
+/// all give the same bits.
+#[inline(always)]
+pub fn reciprocal(x: f64) -> f64 {
+    1.0 / x
 }
 
 /// Cube root of a positive finite `q`, within 2 ulp of `f64::cbrt`.
@@ -252,9 +262,9 @@ struct BondBlock {
     k: [f64; LANES],
     a: [f64; LANES],
     gamma: [f64; LANES],
-    /// `V_i + V_j` and `V0_i + V0_j`.
+    /// `V_i + V_j` and `1 / (V0_i + V0_j)`.
     vsum: [f64; LANES],
-    v0sum: [f64; LANES],
+    inv_v0sum: [f64; LANES],
     /// `n . dv` times r (the dot product of the separation and the
     /// velocity difference).
     del_dot_dv: [f64; LANES],
@@ -276,7 +286,7 @@ impl BondBlock {
             a: [0.0; LANES],
             gamma: [0.0; LANES],
             vsum: [0.0; LANES],
-            v0sum: [0.0; LANES],
+            inv_v0sum: [0.0; LANES],
             del_dot_dv: [0.0; LANES],
             fpair: [0.0; LANES],
             energy: [0.0; LANES],
@@ -327,7 +337,7 @@ fn bond_blocks<
                 b.dz[l] = 0.0;
                 b.r0[l] = 1.0;
                 b.vsum[l] = 1.0;
-                b.v0sum[l] = 1.0;
+                b.inv_v0sum[l] = 1.0;
                 b.del_dot_dv[l] = 0.0;
                 continue;
             }
@@ -349,7 +359,7 @@ fn bond_blocks<
             }
             if MULTIBODY {
                 b.vsum[l] = vol[i] + vol[j];
-                b.v0sum[l] = vol0[i] + vol0[j];
+                b.inv_v0sum[l] = 1.0 / (vol0[i] + vol0[j]);
             }
             if DAMPED {
                 b.del_dot_dv[l] = dot(&del, &sub(&v[i], &v[j]));
@@ -360,13 +370,13 @@ fn bond_blocks<
         let mut dilation = [0.0; LANES];
         if MULTIBODY {
             for l in 0..LANES {
-                let x = b.vsum[l] / b.v0sum[l] - 1.0;
+                let x = b.vsum[l] * b.inv_v0sum[l] - 1.0;
                 far |= x.abs() > CLOSE_TO_ONE;
                 dilation[l] = cube_root_near_one(x);
             }
             if far {
                 for l in 0..LANES {
-                    let q = b.vsum[l] / b.v0sum[l];
+                    let q = b.vsum[l] * b.inv_v0sum[l];
                     if (q - 1.0).abs() > CLOSE_TO_ONE {
                         dilation[l] = cube_root(q);
                     }
@@ -381,7 +391,7 @@ fn bond_blocks<
             let dstretch = r - b.r0[l];
             let mut fmag = -b.k[l] * dstretch;
             if MULTIBODY {
-                fmag += b.a[l] * (dilation[l] - r / b.r0[l]);
+                fmag += b.a[l] * (dilation[l] - r * (1.0 / b.r0[l]));
             }
             if DAMPED {
                 fmag -= b.gamma[l] * b.del_dot_dv[l] * rinv;

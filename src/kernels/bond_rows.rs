@@ -16,7 +16,7 @@
 //! The arithmetic per bond is that of [`super::bond_forces`], operation by
 //! operation and without fused multiply-adds, on every instruction set.
 
-use super::bond::{cube_root, BondCoeffs, CLOSE_TO_ONE};
+use super::bond::{cube_root, reciprocal, BondCoeffs, CLOSE_TO_ONE};
 use super::fault::{Fault, ForcePass, COLLAPSED_BELOW, OVERSTRETCHED_ABOVE};
 use super::isa::Isa;
 use super::Separation;
@@ -35,6 +35,10 @@ pub struct BondRows {
     i: Vec<u32>,
     j: Vec<u32>,
     r0: Vec<f64>,
+    /// `1 / r0`, once per layout instead of a division per step.
+    inv_r0: Vec<f64>,
+    /// `1 / (V0_i + V0_j)`, when the layout was given reference volumes.
+    inv_v0sum: Vec<f64>,
     /// Each row's bond in the caller's numbering (for fault reports).
     bond: Vec<u32>,
     /// `offsets[p]..offsets[p + 1]` index `incidence` for particle `p`.
@@ -60,6 +64,14 @@ pub enum BondRowsError {
         /// Particle count.
         particles: usize,
     },
+    /// Reference volumes for another number of particles.
+    #[error("{given} reference volumes for {particles} particles")]
+    ReferenceVolumes {
+        /// Volumes given.
+        given: usize,
+        /// Particle count.
+        particles: usize,
+    },
     /// More rows or particles than 31-bit indices hold.
     #[error("{what} ({count}) exceed the 2^31 the bond rows can index")]
     TooMany {
@@ -72,12 +84,20 @@ pub enum BondRowsError {
 
 impl BondRows {
     /// Rows of `(i, j, r0, bond)` on `particles` particles, in the order
-    /// given.
+    /// given; `reference_volumes` (`V0` per particle) when the multibody
+    /// term is on.
     pub fn new(
         particles: usize,
         rows: impl ExactSizeIterator<Item = (usize, usize, f64, usize)>,
+        reference_volumes: Option<&[f64]>,
     ) -> Result<Self, BondRowsError> {
         let limit = (AS_J - 1) as usize;
+        if let Some(vol0) = reference_volumes.filter(|v| v.len() != particles) {
+            return Err(BondRowsError::ReferenceVolumes {
+                given: vol0.len(),
+                particles,
+            });
+        }
         if particles > limit {
             return Err(BondRowsError::TooMany {
                 what: "particles",
@@ -107,6 +127,10 @@ impl BondRows {
             layout.i.push(i as u32);
             layout.j.push(j as u32);
             layout.r0.push(r0);
+            layout.inv_r0.push(reciprocal(r0));
+            if let Some(vol0) = reference_volumes {
+                layout.inv_v0sum.push(reciprocal(vol0[i] + vol0[j]));
+            }
             layout.bond.push(bond.min(limit) as u32);
             layout.offsets[i + 1] += 1;
             layout.offsets[j + 1] += 1;
@@ -162,22 +186,25 @@ pub struct RowInputs<'a> {
     pub v: Option<&'a [[f64; 3]]>,
     /// The coefficients (one bond type).
     pub coeffs: BondCoeffs,
-    /// `(V, V0)` per particle; `None` drops the multibody term.
-    pub volumes: Option<(&'a [f64], &'a [f64])>,
+    /// The multibody term's current volumes `V` per particle and the
+    /// rows' lengths and `r^3` from [`row_volumes`] on the same positions
+    /// (the lengths are not computed again); `None` drops the term. Needs
+    /// rows built with reference volumes.
+    pub multibody: Option<(&'a [f64], &'a [[f64; 2]])>,
     /// Whether to sum energy and virial.
     pub tally: bool,
 }
 
-/// Writes `r^3` of rows `range` into `r3` (one entry per row of the range),
-/// with `sep` forming the separations.
+/// Writes `[r, r^3]` of rows `range` into `out` (one entry per row of the
+/// range), with `sep` forming the separations.
 pub fn row_volumes<S: Separation>(
     sep: &S,
     rows: &BondRows,
     range: Range<usize>,
     x: &[[f64; 3]],
-    r3: &mut [f64],
+    out: &mut [[f64; 2]],
 ) {
-    row_volumes_on(Isa::detect(), sep, rows, range, x, r3)
+    row_volumes_on(Isa::detect(), sep, rows, range, x, out)
 }
 
 /// [`row_volumes`] compiled for `isa` (the portable build when this
@@ -188,22 +215,29 @@ pub fn row_volumes_on<S: Separation>(
     rows: &BondRows,
     range: Range<usize>,
     x: &[[f64; 3]],
-    r3: &mut [f64],
+    out: &mut [[f64; 2]],
 ) {
-    rows.check_range(&range, r3.len());
+    rows.check_range(&range, out.len());
     rows.check_particles("positions", x.len());
     #[cfg(target_arch = "x86_64")]
     if isa == Isa::Avx2 && Isa::Avx2.available() {
         // SAFETY: the processor has AVX2; indices were checked by the
         // layout and lengths just above.
-        return unsafe { avx2::row_volumes(sep, rows, range, x, r3) };
+        return unsafe { avx2::row_volumes(sep, rows, range, x, out) };
     }
     let _ = isa;
-    for (out, row) in r3.iter_mut().zip(range) {
-        let del = sep.delta(&x[rows.i[row] as usize], &x[rows.j[row] as usize]);
-        let rsq = del[0] * del[0] + del[1] * del[1] + del[2] * del[2];
-        *out = rsq * rsq.sqrt();
+    for (out, row) in out.iter_mut().zip(range) {
+        *out = scalar_length(sep, rows, row, x);
     }
+}
+
+/// `[r, r^3]` of one row.
+#[inline(always)]
+fn scalar_length<S: Separation>(sep: &S, rows: &BondRows, row: usize, x: &[[f64; 3]]) -> [f64; 2] {
+    let del = sep.delta(&x[rows.i[row] as usize], &x[rows.j[row] as usize]);
+    let rsq = del[0] * del[0] + del[1] * del[1] + del[2] * del[2];
+    let r = rsq.sqrt();
+    [r, rsq * r]
 }
 
 /// Writes each bond's force on its atom `i` into its row (`[fx, fy, fz,
@@ -234,11 +268,16 @@ pub fn row_forces_on<S: Separation>(
     if let Some(v) = inputs.v {
         rows.check_particles("velocities", v.len());
     }
-    if let Some((vol, vol0)) = inputs.volumes {
+    if let Some((vol, lengths)) = inputs.multibody {
         rows.check_particles("volumes", vol.len());
-        rows.check_particles("reference volumes", vol0.len());
+        assert_eq!(lengths.len(), rows.len(), "one length per row");
+        assert_eq!(
+            rows.inv_v0sum.len(),
+            rows.len(),
+            "the multibody term needs rows built with reference volumes"
+        );
     }
-    let flags = (inputs.volumes.is_some(), inputs.v.is_some(), inputs.tally);
+    let flags = (inputs.multibody.is_some(), inputs.v.is_some(), inputs.tally);
     macro_rules! dispatch {
         ($($mb:literal, $damped:literal, $tally:literal);*) => {
             match flags {
@@ -298,15 +337,17 @@ fn scalar_row<S: Separation, const MB: bool, const DAMPED: bool>(
     let r0 = rows.r0[row];
     let x = inputs.x;
     let del = sep.delta(&x[i], &x[j]);
-    let rsq = del[0] * del[0] + del[1] * del[1] + del[2] * del[2];
-    let r = rsq.sqrt();
+    let r = match inputs.multibody {
+        Some((_, lengths)) if MB => lengths[row][0],
+        _ => (del[0] * del[0] + del[1] * del[1] + del[2] * del[2]).sqrt(),
+    };
     let rinv = 1.0 / r;
     let dstretch = r - r0;
     let mut fmag = -c.k * dstretch;
     if MB {
-        let (vol, vol0) = inputs.volumes.unwrap_or((&[], &[]));
-        let q = (vol[i] + vol[j]) / (vol0[i] + vol0[j]);
-        fmag += c.a * (cube_root(q) - r / r0);
+        let vol = inputs.multibody.map_or(&[][..], |m| m.0);
+        let q = (vol[i] + vol[j]) * rows.inv_v0sum[row];
+        fmag += c.a * (cube_root(q) - r * rows.inv_r0[row]);
     }
     if DAMPED {
         let v = inputs.v.unwrap_or(&[]);
@@ -401,15 +442,46 @@ pub fn gather_forces_on(
 }
 
 /// Sets `vol[p]` for each particle `p` of `particles` (`vol` holds exactly
-/// those) to the sum of its rows' `r^3`, in row order.
-pub fn gather_volumes(rows: &BondRows, particles: Range<usize>, r3: &[f64], vol: &mut [f64]) {
-    check_gather(rows, &particles, r3.len(), vol.len());
-    for (p, vp) in particles.zip(vol.iter_mut()) {
-        let mut sum = 0.0;
-        for &e in &rows.incidence[rows.offsets[p]..rows.offsets[p + 1]] {
-            sum += r3[(e & !AS_J) as usize];
+/// those) to the sum of its rows' `r^3` (the second of each row's
+/// `[r, r^3]` from [`row_volumes`]), in row order.
+pub fn gather_volumes(
+    rows: &BondRows,
+    particles: Range<usize>,
+    lengths: &[[f64; 2]],
+    vol: &mut [f64],
+) {
+    check_gather(rows, &particles, lengths.len(), vol.len());
+    let entries = |p: usize| &rows.incidence[rows.offsets[p]..rows.offsets[p + 1]];
+    // SAFETY: incidence entries index rows (checked by the layout), and
+    // `lengths` has one per row (checked above).
+    let term = |e: u32| unsafe { lengths.get_unchecked((e & !AS_J) as usize)[1] };
+    // Two particles at a time, their sums interleaved: each sum is one
+    // chain of dependent additions, and two chains keep the adder busy.
+    let start = particles.start;
+    let mut pairs = vol.chunks_exact_mut(2);
+    for (k, two) in (&mut pairs).enumerate() {
+        let p = start + 2 * k;
+        let (a, b) = (entries(p), entries(p + 1));
+        let (mut sa, mut sb) = (0.0, 0.0);
+        let common = a.len().min(b.len());
+        for (&ea, &eb) in a[..common].iter().zip(&b[..common]) {
+            sa += term(ea);
+            sb += term(eb);
         }
-        *vp = sum;
+        for &e in &a[common..] {
+            sa += term(e);
+        }
+        for &e in &b[common..] {
+            sb += term(e);
+        }
+        two[0] = sa;
+        two[1] = sb;
+    }
+    if let [last] = pairs.into_remainder() {
+        *last = entries(particles.end - 1)
+            .iter()
+            .map(|&e| term(e))
+            .fold(0.0, |s, t| s + t);
     }
 }
 
@@ -531,24 +603,35 @@ mod avx2 {
         rows: &BondRows,
         range: Range<usize>,
         x: &[[f64; 3]],
-        r3: &mut [f64],
+        out: &mut [[f64; 2]],
     ) {
         let full = range.len() / 4 * 4;
         for k in (0..full).step_by(4) {
             let row = range.start + k;
             let del = separations(sep, x, &rows.i[row..row + 4], &rows.j[row..row + 4]);
             let rsq = dot(&del, &del);
-            _mm256_storeu_pd(
-                r3.as_mut_ptr().add(k),
-                _mm256_mul_pd(rsq, _mm256_sqrt_pd(rsq)),
-            );
+            let r = _mm256_sqrt_pd(rsq);
+            let r3 = _mm256_mul_pd(rsq, r);
+            // Lanes to [r, r^3] pairs: rows 0, 1 then rows 2, 3.
+            let (even, odd) = (_mm256_unpacklo_pd(r, r3), _mm256_unpackhi_pd(r, r3));
+            let dst = out.as_mut_ptr().add(k) as *mut f64;
+            _mm256_storeu_pd(dst, _mm256_permute2f128_pd(even, odd, 0x20));
+            _mm256_storeu_pd(dst.add(4), _mm256_permute2f128_pd(even, odd, 0x31));
         }
         for k in full..range.len() {
-            let row = range.start + k;
-            let del = sep.delta(&x[rows.i[row] as usize], &x[rows.j[row] as usize]);
-            let rsq = del[0] * del[0] + del[1] * del[1] + del[2] * del[2];
-            r3[k] = rsq * rsq.sqrt();
+            out[k] = scalar_length(sep, rows, range.start + k, x);
         }
+    }
+
+    /// The lengths of four rows from their `[r, r^3]` pairs, as lanes.
+    #[target_feature(enable = "avx2")]
+    #[inline]
+    unsafe fn lengths_of(pairs: *const [f64; 2]) -> __m256d {
+        let p = pairs as *const f64;
+        let (rows01, rows23) = (_mm256_loadu_pd(p), _mm256_loadu_pd(p.add(4)));
+        // [r0, r2, r1, r3] in lane order 0, 1, 2, 3, then put in place.
+        let mixed = _mm256_unpacklo_pd(rows01, rows23);
+        _mm256_permute4x64_pd::<0b11_01_10_00>(mixed)
     }
 
     /// The series of `(1 + x)^(1/3)` of [`super::super::bond`] to degree 9
@@ -609,24 +692,23 @@ mod avx2 {
             let (i, j) = (&rows.i[row..row + 4], &rows.j[row..row + 4]);
             let del = separations(sep, inputs.x, i, j);
             let r0 = _mm256_loadu_pd(rows.r0.as_ptr().add(row));
-            let rsq = dot(&del, &del);
-            let r = _mm256_sqrt_pd(rsq);
+            let r = match inputs.multibody {
+                Some((_, lengths)) if MB => lengths_of(lengths.as_ptr().add(row)),
+                _ => _mm256_sqrt_pd(dot(&del, &del)),
+            };
             let rinv = _mm256_div_pd(one, r);
             let dstretch = _mm256_sub_pd(r, r0);
             let mut fmag = _mm256_mul_pd(neg_k, dstretch);
             if MB {
-                let (vol, vol0) = inputs.volumes.unwrap_or((&[], &[]));
+                let vol = inputs.multibody.map_or(&[][..], |m| m.0);
                 let idx_i = _mm_loadu_si128(i.as_ptr() as *const __m128i);
                 let idx_j = _mm_loadu_si128(j.as_ptr() as *const __m128i);
                 let vsum = _mm256_add_pd(
                     _mm256_i32gather_pd::<8>(vol.as_ptr(), idx_i),
                     _mm256_i32gather_pd::<8>(vol.as_ptr(), idx_j),
                 );
-                let v0sum = _mm256_add_pd(
-                    _mm256_i32gather_pd::<8>(vol0.as_ptr(), idx_i),
-                    _mm256_i32gather_pd::<8>(vol0.as_ptr(), idx_j),
-                );
-                let q = _mm256_div_pd(vsum, v0sum);
+                let inv_v0sum = _mm256_loadu_pd(rows.inv_v0sum.as_ptr().add(row));
+                let q = _mm256_mul_pd(vsum, inv_v0sum);
                 let xq = _mm256_sub_pd(q, one);
                 let mut dilation = cube_root_near_one(xq);
                 let far = _mm256_movemask_pd(_mm256_cmp_pd::<_CMP_GT_OQ>(
@@ -645,9 +727,10 @@ mod avx2 {
                     }
                     dilation = _mm256_loadu_pd(lanes.as_ptr());
                 }
+                let inv_r0 = _mm256_loadu_pd(rows.inv_r0.as_ptr().add(row));
                 fmag = _mm256_add_pd(
                     fmag,
-                    _mm256_mul_pd(a, _mm256_sub_pd(dilation, _mm256_div_pd(r, r0))),
+                    _mm256_mul_pd(a, _mm256_sub_pd(dilation, _mm256_mul_pd(r, inv_r0))),
                 );
             }
             if DAMPED {

@@ -23,8 +23,8 @@ mod volume;
 mod zero_net;
 
 pub use bond::{
-    bond_force_magnitude, bond_forces, bond_forces_on, cube_root, dilation, BondCoeffs, BondEntry,
-    BondInputs,
+    bond_force_magnitude, bond_forces, bond_forces_on, cube_root, dilation, reciprocal, BondCoeffs,
+    BondEntry, BondInputs,
 };
 pub use bond_rows::{
     gather_forces, gather_forces_on, gather_volumes, row_forces, row_forces_on, row_volumes,

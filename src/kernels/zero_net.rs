@@ -23,7 +23,7 @@
 //! atoms communicates like the volumes), and the correction
 //! ([`balance_multibody`]).
 
-use super::bond::{dilation, BondCoeffs, BondEntry};
+use super::bond::{dilation, reciprocal, BondCoeffs, BondEntry};
 use super::tally::{Ownership, Tally};
 use super::{dot, Separation};
 
@@ -62,7 +62,7 @@ pub fn accumulate_multibody_sums<S: Separation>(
         let c = &inputs.coeffs[(bond.ty - 1) as usize];
         let del = sep.delta(&inputs.x[i], &inputs.x[j]);
         let r = dot(&del, &del).sqrt();
-        let m = c.a * (dilation(vol[i], vol[j], vol0[i], vol0[j]) - r / r0);
+        let m = c.a * (dilation(vol[i], vol[j], vol0[i], vol0[j]) - r * reciprocal(r0));
         let s = m / r;
         let (on_i, on_j, _) = own.split(i, j);
         if on_i {

