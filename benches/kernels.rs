@@ -92,6 +92,71 @@ fn kernels(c: &mut Criterion) {
                 b.iter(|| per_bond_loop(&inputs, &mut f))
             });
         }
+        bond_rows_cases(c, name, &inputs);
+    }
+}
+
+/// The native engine's two-step bond pass on the same bonds, beside the
+/// scatter kernel: `bond_rows::...`, the row pass (with the volume pass it
+/// needs for the multibody term) and the per-particle sums, one thread.
+fn bond_rows_cases(c: &mut Criterion, name: &str, inputs: &BondInputs) {
+    let n = inputs.x.len();
+    let own = Ownership::all(n);
+    let mut vol0 = vec![0.0; n];
+    accumulate_reference_volumes(inputs.bonds, inputs.r0, own, &mut vol0);
+    let multibody = inputs.volumes.is_some();
+    let rows = BondRows::new(
+        n,
+        inputs
+            .bonds
+            .iter()
+            .zip(inputs.r0)
+            .enumerate()
+            .map(|(k, (b, &r0))| (b.i as usize, b.j as usize, r0, k)),
+        multibody.then_some(&vol0[..]),
+    )
+    .expect("valid bonds");
+    let mut lengths = vec![[0.0; 2]; rows.len()];
+    let mut vol = vec![0.0; n];
+    let mut force_rows = vec![[0.0; 4]; rows.len()];
+    let mut f = vec![[0.0; 3]; n];
+    let id = name.replacen("bond::", "bond_rows::", 1);
+    for isa in [Isa::Portable, Isa::Avx2] {
+        if !isa.available() {
+            continue;
+        }
+        c.bench_function(&format!("{id}/{}", isa.name()), |b| {
+            b.iter(|| {
+                if multibody {
+                    row_volumes_on(
+                        isa,
+                        &Unwrapped,
+                        &rows,
+                        0..rows.len(),
+                        inputs.x,
+                        &mut lengths,
+                    );
+                    gather_volumes(&rows, 0..n, &lengths, &mut vol);
+                }
+                let row_inputs = RowInputs {
+                    x: inputs.x,
+                    v: inputs.v,
+                    coeffs: inputs.coeffs[0],
+                    multibody: multibody.then_some((&vol[..], &lengths[..])),
+                    tally: inputs.tally,
+                };
+                let pass = row_forces_on(
+                    isa,
+                    &Unwrapped,
+                    &rows,
+                    0..rows.len(),
+                    &row_inputs,
+                    &mut force_rows,
+                );
+                gather_forces_on(isa, &rows, 0..n, &force_rows, &mut f);
+                pass
+            })
+        });
     }
 }
 
