@@ -19,6 +19,7 @@
 use super::bond::{cube_root, reciprocal, BondCoeffs, CLOSE_TO_ONE};
 use super::fault::{Fault, ForcePass, COLLAPSED_BELOW, OVERSTRETCHED_ABOVE};
 use super::isa::Isa;
+use super::tally::Tally;
 use super::Separation;
 use std::ops::Range;
 
@@ -310,11 +311,68 @@ fn forces_on<S: Separation, const MB: bool, const DAMPED: bool, const TALLY: boo
     }
     let _ = isa;
     let mut pass = ForcePass::default();
-    for (row, out) in range.zip(out.iter_mut()) {
+    let len = range.len();
+    let full = len / 4 * 4;
+    let mut lanes = LaneTally::default();
+    for (k, (row, out)) in range.zip(out.iter_mut()).enumerate() {
         let force = scalar_row::<S, MB, DAMPED>(sep, rows, row, inputs);
-        settle_row::<TALLY>(rows, row, &force, &mut pass, out);
+        if k < full {
+            settle_row::<false>(rows, row, &force, &mut pass, out);
+            if TALLY {
+                lanes.add(k % 4, &force, inputs.coeffs.k, rows.r0[row]);
+            }
+        } else {
+            if k == full && TALLY {
+                pass.tally = lanes.total();
+            }
+            settle_row::<TALLY>(rows, row, &force, &mut pass, out);
+        }
+    }
+    if full == len && TALLY {
+        pass.tally = lanes.total();
     }
     pass
+}
+
+/// Energy and virial of the rows in blocks of four, summed per lane (row
+/// `k` of a range into lane `k % 4`) and the lanes added at the end: four
+/// independent chains of additions where one would wait on each result.
+/// The vector build keeps the same lanes in registers, so both give the
+/// same sums; a range's last rows (fewer than four) are added after, one by
+/// one.
+#[derive(Default)]
+struct LaneTally {
+    /// Energy, then the virial `[xx, yy, zz, xy, xz, yz]`, per lane.
+    sums: [[f64; 4]; 7],
+}
+
+impl LaneTally {
+    fn add(&mut self, lane: usize, force: &RowForce, k: f64, r0: f64) {
+        let RowForce { del, r, fpair, .. } = *force;
+        let f = [del[0] * fpair, del[1] * fpair, del[2] * fpair];
+        let dstretch = r - r0;
+        let terms = [
+            0.5 * k * dstretch * dstretch,
+            f[0] * del[0],
+            f[1] * del[1],
+            f[2] * del[2],
+            f[0] * del[1],
+            f[0] * del[2],
+            f[1] * del[2],
+        ];
+        for (sum, term) in self.sums.iter_mut().zip(terms) {
+            sum[lane] += term;
+        }
+    }
+
+    /// The lanes added in order.
+    fn total(&self) -> Tally {
+        let added = |s: &[f64; 4]| ((s[0] + s[1]) + s[2]) + s[3];
+        Tally {
+            energy: added(&self.sums[0]),
+            virial: std::array::from_fn(|c| added(&self.sums[c + 1])),
+        }
+    }
 }
 
 /// One row's force, as the lanes of [`super::bond_forces`] compute it.
@@ -687,6 +745,7 @@ mod avx2 {
         let close = _mm256_set1_pd(CLOSE_TO_ONE);
         let mut pass = ForcePass::default();
         let full = range.len() / 4 * 4;
+        let mut sums = [_mm256_setzero_pd(); 7];
         for k in (0..full).step_by(4) {
             let row = range.start + k;
             let (i, j) = (&rows.i[row..row + 4], &rows.j[row..row + 4]);
@@ -760,16 +819,8 @@ mod avx2 {
                     _mm256_mul_pd(force[0], del[2]),
                     _mm256_mul_pd(force[1], del[2]),
                 ];
-                let mut lanes = [[0.0; 4]; 7];
-                for (t, lane) in terms.iter().zip(lanes.iter_mut()) {
-                    _mm256_storeu_pd(lane.as_mut_ptr(), *t);
-                }
-                let tally = &mut pass.tally;
-                for l in 0..4 {
-                    tally.energy += lanes[0][l];
-                    for v in 0..6 {
-                        tally.virial[v] += lanes[v + 1][l];
-                    }
+                for (sum, term) in sums.iter_mut().zip(terms) {
+                    *sum = _mm256_add_pd(*sum, term);
                 }
             }
             let in_range = _mm256_and_pd(
@@ -791,6 +842,13 @@ mod avx2 {
                     }
                 }
             }
+        }
+        if TALLY {
+            let mut lanes = LaneTally::default();
+            for (sum, lane) in sums.iter().zip(lanes.sums.iter_mut()) {
+                _mm256_storeu_pd(lane.as_mut_ptr(), *sum);
+            }
+            pass.tally = lanes.total();
         }
         for k in full..range.len() {
             let row = range.start + k;
