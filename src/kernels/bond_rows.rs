@@ -243,7 +243,8 @@ fn scalar_length<S: Separation>(sep: &S, rows: &BondRows, row: usize, x: &[[f64;
 
 /// Writes each bond's force on its atom `i` into its row (`[fx, fy, fz,
 /// 0]`, one row of `out` per row of `range`); returns energy and virial
-/// summed in row order, and the first row outside the model's range.
+/// (summed in four lanes, `LaneTally`), and the first row outside the
+/// model's range.
 pub fn row_forces<S: Separation>(
     sep: &S,
     rows: &BondRows,
@@ -311,25 +312,23 @@ fn forces_on<S: Separation, const MB: bool, const DAMPED: bool, const TALLY: boo
     }
     let _ = isa;
     let mut pass = ForcePass::default();
-    let len = range.len();
-    let full = len / 4 * 4;
+    let full = range.len() / 4 * 4;
     let mut lanes = LaneTally::default();
-    for (k, (row, out)) in range.zip(out.iter_mut()).enumerate() {
+    for (k, out) in out[..full].iter_mut().enumerate() {
+        let row = range.start + k;
         let force = scalar_row::<S, MB, DAMPED>(sep, rows, row, inputs);
-        if k < full {
-            settle_row::<false>(rows, row, &force, &mut pass, out);
-            if TALLY {
-                lanes.add(k % 4, &force, inputs.coeffs.k, rows.r0[row]);
-            }
-        } else {
-            if k == full && TALLY {
-                pass.tally = lanes.total();
-            }
-            settle_row::<TALLY>(rows, row, &force, &mut pass, out);
+        settle_row::<false>(rows, row, &force, &mut pass, out);
+        if TALLY {
+            lanes.add(k % 4, &force);
         }
     }
-    if full == len && TALLY {
+    if TALLY {
         pass.tally = lanes.total();
+    }
+    for (k, out) in out.iter_mut().enumerate().skip(full) {
+        let row = range.start + k;
+        let force = scalar_row::<S, MB, DAMPED>(sep, rows, row, inputs);
+        settle_row::<TALLY>(rows, row, &force, &mut pass, out);
     }
     pass
 }
@@ -347,12 +346,13 @@ struct LaneTally {
 }
 
 impl LaneTally {
-    fn add(&mut self, lane: usize, force: &RowForce, k: f64, r0: f64) {
-        let RowForce { del, r, fpair, .. } = *force;
+    fn add(&mut self, lane: usize, force: &RowForce) {
+        let RowForce {
+            del, fpair, energy, ..
+        } = *force;
         let f = [del[0] * fpair, del[1] * fpair, del[2] * fpair];
-        let dstretch = r - r0;
         let terms = [
-            0.5 * k * dstretch * dstretch,
+            energy,
             f[0] * del[0],
             f[1] * del[1],
             f[2] * del[2],

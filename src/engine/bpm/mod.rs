@@ -254,14 +254,14 @@ impl BpmModel {
         if self.terms.multibody {
             let _t = timers.start(Stage::Volumes);
             layout.lengths.resize(rows.len(), [0.0; 2]);
+            // No result per chunk: a vector of `()` allocates nothing.
             team.run_sections(
                 &mut layout.lengths,
                 layout.interior,
-                &mut layout.passes,
+                &mut vec![(); chunks],
                 |_, [(ri, interior), (rb, boundary)]| {
                     row_volumes(&Unwrapped, rows, ri, x, interior);
                     row_volumes(&sep, rows, rb, x, boundary);
-                    ForcePass::default()
                 },
             );
             let lengths = &layout.lengths;
