@@ -633,14 +633,15 @@ type Network = (
     Vec<[f64; 3]>,
 );
 
-/// A periodic box whose minimum image differs from the plain difference for
-/// bonds across its faces: `(box, bonded positions, bonds, r0, velocities)`.
+/// A periodic, tilted box whose minimum image differs from the plain
+/// difference for bonds across its faces: `(box, bonded positions, bonds,
+/// r0, velocities)`.
 fn periodic_network(seed: u64) -> Network {
     let l = 6.0;
     let simbox = bpm::engine::SimBox {
         lo: [0.0; 3],
         lengths: [l; 3],
-        tilt: [0.0; 3],
+        tilt: [0.9, -0.7, 0.4],
         periodic: [true; 3],
     };
     let (x0, _, _) = random_network(260, l, 0.0, seed);

@@ -3,6 +3,7 @@
 //! Box vectors follow LAMMPS: `a = (lx, 0, 0)`, `b = (xy, ly, 0)`,
 //! `c = (xz, yz, lz)`, with the lower corner at `lo`.
 
+pub use crate::kernels::MinimumImage;
 use crate::kernels::Separation;
 
 /// A parallelepiped box with LAMMPS's restricted-triclinic convention.
@@ -130,74 +131,12 @@ impl SimBox {
     }
 }
 
-/// Rounds to the nearest integer (ties to even) with two additions, valid
-/// for |x| < 2^51: SSE2 has no rounding instruction and a libm call per
-/// bond would dominate the bond loop.
-#[inline(always)]
-fn round_nearest(x: f64) -> f64 {
-    const MAGIC: f64 = 6_755_399_441_055_744.0; // 2^52 + 2^51
-    (x + MAGIC) - MAGIC
-}
-
-/// The minimum-image convention of a box, prepared for hot loops: inverse
-/// lengths are precomputed and non-periodic dimensions have inverse 0, so
-/// the separation is computed without branches.
-#[derive(Clone, Copy, Debug)]
-pub struct MinimumImage {
-    lengths: [f64; 3],
-    tilt: [f64; 3],
-    inv: [f64; 3],
-}
-
 impl SimBox {
     /// The minimum-image separation of this box, valid while interaction
     /// ranges stay below half of each face distance and tilts within half a
     /// box length (both checked at scene load).
     pub fn minimum_image(&self) -> MinimumImage {
-        let inv = std::array::from_fn(|d| {
-            if self.periodic[d] {
-                1.0 / self.lengths[d]
-            } else {
-                0.0
-            }
-        });
-        MinimumImage {
-            lengths: self.lengths,
-            tilt: self.tilt,
-            inv,
-        }
-    }
-}
-
-impl MinimumImage {
-    /// The minimum-image separation `x_i - (x_j + h k)` and the image `k`
-    /// of `j` it picks (as floats), for quantities that depend on which
-    /// image interacts, such as the velocity of a Lees-Edwards image.
-    #[inline(always)]
-    pub fn delta_image(&self, xi: &[f64; 3], xj: &[f64; 3]) -> ([f64; 3], [f64; 3]) {
-        let [lx, ly, lz] = self.lengths;
-        let [xy, xz, yz] = self.tilt;
-        let mut dx = xi[0] - xj[0];
-        let mut dy = xi[1] - xj[1];
-        let mut dz = xi[2] - xj[2];
-        let kz = round_nearest(dz * self.inv[2]);
-        dz -= kz * lz;
-        dy -= kz * yz;
-        dx -= kz * xz;
-        let ky = round_nearest(dy * self.inv[1]);
-        dy -= ky * ly;
-        dx -= ky * xy;
-        let kx = round_nearest(dx * self.inv[0]);
-        dx -= kx * lx;
-        ([dx, dy, dz], [kx, ky, kz])
-    }
-}
-
-impl Separation for MinimumImage {
-    /// Minimum image in LAMMPS's order: z, then y, then x.
-    #[inline(always)]
-    fn delta(&self, xi: &[f64; 3], xj: &[f64; 3]) -> [f64; 3] {
-        self.delta_image(xi, xj).0
+        MinimumImage::new(self.lengths, self.tilt, self.periodic)
     }
 }
 
@@ -244,25 +183,6 @@ mod tests {
             for k in 0..3 {
                 assert!((d[k] - base[k]).abs() < 1e-12, "image {n:?}");
             }
-        }
-    }
-
-    #[test]
-    fn branchless_rounding_matches_round_half_even() {
-        for x in [
-            -2.5,
-            -1.5,
-            -0.5000001,
-            -0.49,
-            0.0,
-            0.49,
-            0.5,
-            1.5,
-            2.5,
-            3.7,
-            -1e6 - 0.2,
-        ] {
-            assert_eq!(round_nearest(x), x.round_ties_even(), "{x}");
         }
     }
 

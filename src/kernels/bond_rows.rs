@@ -26,6 +26,9 @@ use std::ops::Range;
 /// The sign bit of an incidence entry: the particle is the row's `j`.
 const AS_J: u32 = 1 << 31;
 
+/// The most rows, and particles, the 31 bits of an entry index.
+const MAX_INDEX: usize = (AS_J - 1) as usize;
+
 /// Bonds as rows, and for each particle the rows it takes part in.
 ///
 /// Built once per layout (the engine rebuilds it when positions wrap);
@@ -73,13 +76,15 @@ pub enum BondRowsError {
         /// Particle count.
         particles: usize,
     },
-    /// More rows or particles than 31-bit indices hold.
-    #[error("{what} ({count}) exceed the 2^31 the bond rows can index")]
+    /// More rows or particles than the layout's 31-bit indices hold.
+    #[error("{what} ({count}) exceed the {limit} the bond rows can index")]
     TooMany {
         /// Rows or particles.
         what: &'static str,
         /// How many.
         count: usize,
+        /// The most there can be.
+        limit: usize,
     },
 }
 
@@ -92,23 +97,24 @@ impl BondRows {
         rows: impl ExactSizeIterator<Item = (usize, usize, f64, usize)>,
         reference_volumes: Option<&[f64]>,
     ) -> Result<Self, BondRowsError> {
-        let limit = (AS_J - 1) as usize;
         if let Some(vol0) = reference_volumes.filter(|v| v.len() != particles) {
             return Err(BondRowsError::ReferenceVolumes {
                 given: vol0.len(),
                 particles,
             });
         }
-        if particles > limit {
+        if particles > MAX_INDEX {
             return Err(BondRowsError::TooMany {
                 what: "particles",
                 count: particles,
+                limit: MAX_INDEX,
             });
         }
-        if rows.len() > limit {
+        if rows.len() > MAX_INDEX {
             return Err(BondRowsError::TooMany {
                 what: "bond rows",
                 count: rows.len(),
+                limit: MAX_INDEX,
             });
         }
         let mut layout = Self {
@@ -132,7 +138,7 @@ impl BondRows {
             if let Some(vol0) = reference_volumes {
                 layout.inv_v0sum.push(reciprocal(vol0[i] + vol0[j]));
             }
-            layout.bond.push(bond.min(limit) as u32);
+            layout.bond.push(bond.min(u32::MAX as usize) as u32);
             layout.offsets[i + 1] += 1;
             layout.offsets[j + 1] += 1;
         }
@@ -163,6 +169,12 @@ impl BondRows {
     /// Number of particles.
     pub fn particles(&self) -> usize {
         self.particles
+    }
+
+    /// Particle `p`'s incidence entries, in row order.
+    #[inline(always)]
+    fn entries(&self, p: usize) -> &[u32] {
+        &self.incidence[self.offsets[p]..self.offsets[p + 1]]
     }
 
     fn check_range(&self, range: &Range<usize>, out: usize) {
@@ -455,6 +467,57 @@ fn settle_row<const TALLY: bool>(
     }
 }
 
+/// How many particles a gather sums side by side (four measured no faster
+/// than two on the compaction packing: the gather waits on its loads).
+const CHAINS: usize = 2;
+
+/// Calls `take(c, e)` for each incidence entry `e` of each particle
+/// `first + c`, `c < N`, every particle's entries in row order. The N
+/// particles' entries alternate while all have some left: each particle's
+/// sum is one chain of dependent additions, and one chain alone waits on the
+/// adder's latency at every entry, where N chains keep it busy.
+#[inline(always)]
+fn interleaved_entries<const N: usize>(
+    rows: &BondRows,
+    first: usize,
+    mut take: impl FnMut(usize, u32),
+) {
+    let lists: [&[u32]; N] = std::array::from_fn(|c| rows.entries(first + c));
+    let common = lists.iter().map(|l| l.len()).min().unwrap_or(0);
+    for m in 0..common {
+        for (c, list) in lists.iter().enumerate() {
+            // SAFETY: `m` is below every list's length.
+            take(c, unsafe { *list.get_unchecked(m) });
+        }
+    }
+    for (c, list) in lists.iter().enumerate() {
+        for &e in &list[common..] {
+            take(c, e);
+        }
+    }
+}
+
+/// Runs `sum::<N>(first, out)` over `particles` in groups of [`CHAINS`],
+/// then on the last few one at a time; `out` holds one value per particle.
+#[inline(always)]
+fn in_groups<T>(
+    particles: Range<usize>,
+    out: &mut [T],
+    mut group: impl FnMut(usize, &mut [T; CHAINS]),
+    mut single: impl FnMut(usize, &mut T),
+) {
+    let mut groups = out.chunks_exact_mut(CHAINS);
+    for (k, values) in (&mut groups).enumerate() {
+        let values: &mut [T; CHAINS] = values.try_into().expect("chunks of CHAINS");
+        group(particles.start + CHAINS * k, values);
+    }
+    let rest = groups.into_remainder();
+    let first = particles.end - rest.len();
+    for (k, value) in rest.iter_mut().enumerate() {
+        single(first + k, value);
+    }
+}
+
 /// Adds to `f[p]` for each particle `p` of `particles` (`f` holds exactly
 /// those) its rows: `+row` where it is the bond's `i`, `-row` where it is
 /// the `j`, in row order.
@@ -509,38 +572,19 @@ pub fn gather_volumes(
     vol: &mut [f64],
 ) {
     check_gather(rows, &particles, lengths.len(), vol.len());
-    let entries = |p: usize| &rows.incidence[rows.offsets[p]..rows.offsets[p + 1]];
     // SAFETY: incidence entries index rows (checked by the layout), and
     // `lengths` has one per row (checked above).
     let term = |e: u32| unsafe { lengths.get_unchecked((e & !AS_J) as usize)[1] };
-    // Two particles at a time, their sums interleaved: each sum is one
-    // chain of dependent additions, and two chains keep the adder busy.
-    let start = particles.start;
-    let mut pairs = vol.chunks_exact_mut(2);
-    for (k, two) in (&mut pairs).enumerate() {
-        let p = start + 2 * k;
-        let (a, b) = (entries(p), entries(p + 1));
-        let (mut sa, mut sb) = (0.0, 0.0);
-        let common = a.len().min(b.len());
-        for (&ea, &eb) in a[..common].iter().zip(&b[..common]) {
-            sa += term(ea);
-            sb += term(eb);
-        }
-        for &e in &a[common..] {
-            sa += term(e);
-        }
-        for &e in &b[common..] {
-            sb += term(e);
-        }
-        two[0] = sa;
-        two[1] = sb;
-    }
-    if let [last] = pairs.into_remainder() {
-        *last = entries(particles.end - 1)
-            .iter()
-            .map(|&e| term(e))
-            .fold(0.0, |s, t| s + t);
-    }
+    in_groups(
+        particles,
+        vol,
+        |first, out| {
+            let mut sums = [0.0; CHAINS];
+            interleaved_entries::<CHAINS>(rows, first, |c, e| sums[c] += term(e));
+            *out = sums;
+        },
+        |p, out| *out = rows.entries(p).iter().fold(0.0, |s, &e| s + term(e)),
+    );
 }
 
 fn check_gather(rows: &BondRows, particles: &Range<usize>, values: usize, out: usize) {
@@ -564,6 +608,7 @@ mod avx2 {
     //! differences formed row-wise and turned into lanes of x, y and z by a
     //! 4x4 transpose; the force rows are turned back the same way.
 
+    use super::super::geometry::{MinimumImage, ROUNDING_MAGIC};
     use super::*;
     use std::arch::x86_64::*;
 
@@ -620,17 +665,64 @@ mod avx2 {
         to_lanes(d[0], d[1], d[2], d[3])
     }
 
-    /// The separations of four rows, as lanes.
+    /// A minimum-image convention broadcast to lanes.
+    pub(super) struct LaneImage {
+        lengths: [__m256d; 3],
+        tilt: [__m256d; 3],
+        inv: [__m256d; 3],
+        magic: __m256d,
+    }
+
+    impl LaneImage {
+        #[target_feature(enable = "avx2")]
+        pub(super) unsafe fn new(image: &MinimumImage) -> Self {
+            let lanes = |v: [f64; 3]| v.map(|c| _mm256_set1_pd(c));
+            Self {
+                lengths: lanes(image.lengths),
+                tilt: lanes(image.tilt),
+                inv: lanes(image.inv),
+                magic: _mm256_set1_pd(ROUNDING_MAGIC),
+            }
+        }
+
+        /// [`MinimumImage::delta_image`]'s operations, in its order, on
+        /// four differences at once: the same separations bit for bit.
+        #[target_feature(enable = "avx2")]
+        #[inline]
+        unsafe fn apply(&self, [mut dx, mut dy, mut dz]: [__m256d; 3]) -> [__m256d; 3] {
+            let round = |v| _mm256_sub_pd(_mm256_add_pd(v, self.magic), self.magic);
+            let shift = |v, k, length| _mm256_sub_pd(v, _mm256_mul_pd(k, length));
+            let [lx, ly, lz] = self.lengths;
+            let [xy, xz, yz] = self.tilt;
+            let kz = round(_mm256_mul_pd(dz, self.inv[2]));
+            dz = shift(dz, kz, lz);
+            dy = shift(dy, kz, yz);
+            dx = shift(dx, kz, xz);
+            let ky = round(_mm256_mul_pd(dy, self.inv[1]));
+            dy = shift(dy, ky, ly);
+            dx = shift(dx, ky, xy);
+            let kx = round(_mm256_mul_pd(dx, self.inv[0]));
+            dx = shift(dx, kx, lx);
+            [dx, dy, dz]
+        }
+    }
+
+    /// The separations of four rows, as lanes: formed in vector registers
+    /// when `image` holds the separation's minimum-image convention.
     #[target_feature(enable = "avx2")]
     #[inline]
     unsafe fn separations<S: Separation>(
         sep: &S,
+        image: Option<&LaneImage>,
         x: &[[f64; 3]],
         i: &[u32],
         j: &[u32],
     ) -> [__m256d; 3] {
         if S::PLAIN {
             return differences(x, i, j);
+        }
+        if let Some(image) = image {
+            return image.apply(differences(x, i, j));
         }
         let mut d = [[0.0; 3]; 4];
         for (l, d) in d.iter_mut().enumerate() {
@@ -663,10 +755,12 @@ mod avx2 {
         x: &[[f64; 3]],
         out: &mut [[f64; 2]],
     ) {
+        let image = sep.minimum_image().map(|m| LaneImage::new(m));
         let full = range.len() / 4 * 4;
         for k in (0..full).step_by(4) {
             let row = range.start + k;
-            let del = separations(sep, x, &rows.i[row..row + 4], &rows.j[row..row + 4]);
+            let (i, j) = (&rows.i[row..row + 4], &rows.j[row..row + 4]);
+            let del = separations(sep, image.as_ref(), x, i, j);
             let rsq = dot(&del, &del);
             let r = _mm256_sqrt_pd(rsq);
             let r3 = _mm256_mul_pd(rsq, r);
@@ -743,13 +837,14 @@ mod avx2 {
         let infinity = _mm256_set1_pd(f64::INFINITY);
         let magnitude = _mm256_castsi256_pd(_mm256_set1_epi64x(i64::MAX));
         let close = _mm256_set1_pd(CLOSE_TO_ONE);
+        let image = sep.minimum_image().map(|m| LaneImage::new(m));
         let mut pass = ForcePass::default();
         let full = range.len() / 4 * 4;
         let mut sums = [_mm256_setzero_pd(); 7];
         for k in (0..full).step_by(4) {
             let row = range.start + k;
             let (i, j) = (&rows.i[row..row + 4], &rows.j[row..row + 4]);
-            let del = separations(sep, inputs.x, i, j);
+            let del = separations(sep, image.as_ref(), inputs.x, i, j);
             let r0 = _mm256_loadu_pd(rows.r0.as_ptr().add(row));
             let r = match inputs.multibody {
                 Some((_, lengths)) if MB => lengths_of(lengths.as_ptr().add(row)),
@@ -865,9 +960,6 @@ mod avx2 {
         forces: &[[f64; 4]],
         f: &mut [[f64; 3]],
     ) {
-        // Two particles at a time, their sums interleaved: each particle's
-        // sum is one chain of dependent additions, and two chains keep the
-        // adder busy where one would wait on the last result.
         let base = forces.as_ptr() as *const f64;
         let term = |e: u32| {
             let row = _mm256_loadu_pd(base.add(4 * (e & !AS_J) as usize));
@@ -884,37 +976,25 @@ mod avx2 {
             _mm_storeu_pd(fp.as_mut_ptr(), _mm256_castpd256_pd128(sum));
             _mm_store_sd(fp.as_mut_ptr().add(2), _mm256_extractf128_pd::<1>(sum));
         };
-        let entries = |p: usize| {
-            let first = *rows.offsets.get_unchecked(p);
-            let last = *rows.offsets.get_unchecked(p + 1);
-            rows.incidence.get_unchecked(first..last)
-        };
-        let start = particles.start;
-        let mut pairs = f.chunks_exact_mut(2);
-        for (k, two) in (&mut pairs).enumerate() {
-            let p = start + 2 * k;
-            let (a, b) = (entries(p), entries(p + 1));
-            let (mut sa, mut sb) = (load(&two[0]), load(&two[1]));
-            let common = a.len().min(b.len());
-            for m in 0..common {
-                sa = _mm256_add_pd(sa, term(*a.get_unchecked(m)));
-                sb = _mm256_add_pd(sb, term(*b.get_unchecked(m)));
-            }
-            for &e in a.get_unchecked(common..) {
-                sa = _mm256_add_pd(sa, term(e));
-            }
-            for &e in b.get_unchecked(common..) {
-                sb = _mm256_add_pd(sb, term(e));
-            }
-            store(&mut two[0], sa);
-            store(&mut two[1], sb);
-        }
-        if let [last] = pairs.into_remainder() {
-            let mut sum = load(last);
-            for &e in entries(particles.end - 1) {
-                sum = _mm256_add_pd(sum, term(e));
-            }
-            store(last, sum);
-        }
+        in_groups(
+            particles,
+            f,
+            |first, out| {
+                let mut sums = out.each_ref().map(&load);
+                interleaved_entries::<CHAINS>(rows, first, |c, e| {
+                    sums[c] = _mm256_add_pd(sums[c], term(e));
+                });
+                for (fp, sum) in out.iter_mut().zip(sums) {
+                    store(fp, sum);
+                }
+            },
+            |p, fp| {
+                let sum = rows
+                    .entries(p)
+                    .iter()
+                    .fold(load(fp), |sum, &e| _mm256_add_pd(sum, term(e)));
+                store(fp, sum);
+            },
+        );
     }
 }

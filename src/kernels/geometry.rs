@@ -19,6 +19,14 @@ pub trait Separation: Sync {
         let d = self.delta(xi, xj);
         super::dot(&d, &d).sqrt()
     }
+
+    /// The minimum-image convention this separation follows, if it is one:
+    /// vector code then forms four separations at once, with the same
+    /// operations as [`Separation::delta`].
+    #[inline(always)]
+    fn minimum_image(&self) -> Option<&MinimumImage> {
+        None
+    }
 }
 
 /// Positions are already the interacting images (LAMMPS ghost atoms, or an
@@ -32,5 +40,96 @@ impl Separation for Unwrapped {
     #[inline(always)]
     fn delta(&self, xi: &[f64; 3], xj: &[f64; 3]) -> [f64; 3] {
         super::sub(xi, xj)
+    }
+}
+
+/// Rounds to the nearest integer (ties to even) with two additions, valid
+/// for |x| < 2^51: SSE2 has no rounding instruction and a libm call per
+/// bond would dominate the bond loop.
+#[inline(always)]
+pub(crate) fn round_nearest(x: f64) -> f64 {
+    (x + ROUNDING_MAGIC) - ROUNDING_MAGIC
+}
+
+/// `2^52 + 2^51`: adding it leaves no fraction bits (see [`round_nearest`]).
+pub(crate) const ROUNDING_MAGIC: f64 = 6_755_399_441_055_744.0;
+
+/// The minimum-image convention of a periodic box (LAMMPS's
+/// restricted-triclinic vectors `a = (lx, 0, 0)`, `b = (xy, ly, 0)`,
+/// `c = (xz, yz, lz)`), prepared for hot loops: inverse lengths are
+/// precomputed and open dimensions have inverse 0, so the separation is
+/// computed without branches.
+#[derive(Clone, Copy, Debug)]
+pub struct MinimumImage {
+    pub(crate) lengths: [f64; 3],
+    pub(crate) tilt: [f64; 3],
+    pub(crate) inv: [f64; 3],
+}
+
+impl MinimumImage {
+    /// The convention of a box with edge `lengths`, `tilt` factors
+    /// `xy, xz, yz`, and periodicity per dimension.
+    pub fn new(lengths: [f64; 3], tilt: [f64; 3], periodic: [bool; 3]) -> Self {
+        let inv = std::array::from_fn(|d| if periodic[d] { 1.0 / lengths[d] } else { 0.0 });
+        Self { lengths, tilt, inv }
+    }
+
+    /// The minimum-image separation `x_i - (x_j + h k)` and the image `k`
+    /// of `j` it picks (as floats), for quantities that depend on which
+    /// image interacts, such as the velocity of a Lees-Edwards image.
+    #[inline(always)]
+    pub fn delta_image(&self, xi: &[f64; 3], xj: &[f64; 3]) -> ([f64; 3], [f64; 3]) {
+        let [lx, ly, lz] = self.lengths;
+        let [xy, xz, yz] = self.tilt;
+        let mut dx = xi[0] - xj[0];
+        let mut dy = xi[1] - xj[1];
+        let mut dz = xi[2] - xj[2];
+        let kz = round_nearest(dz * self.inv[2]);
+        dz -= kz * lz;
+        dy -= kz * yz;
+        dx -= kz * xz;
+        let ky = round_nearest(dy * self.inv[1]);
+        dy -= ky * ly;
+        dx -= ky * xy;
+        let kx = round_nearest(dx * self.inv[0]);
+        dx -= kx * lx;
+        ([dx, dy, dz], [kx, ky, kz])
+    }
+}
+
+impl Separation for MinimumImage {
+    /// Minimum image in LAMMPS's order: z, then y, then x.
+    #[inline(always)]
+    fn delta(&self, xi: &[f64; 3], xj: &[f64; 3]) -> [f64; 3] {
+        self.delta_image(xi, xj).0
+    }
+
+    #[inline(always)]
+    fn minimum_image(&self) -> Option<&MinimumImage> {
+        Some(self)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn branchless_rounding_matches_round_half_even() {
+        for x in [
+            -2.5,
+            -1.5,
+            -0.5000001,
+            -0.49,
+            0.0,
+            0.49,
+            0.5,
+            1.5,
+            2.5,
+            3.7,
+            -1e6 - 0.2,
+        ] {
+            assert_eq!(round_nearest(x), x.round_ties_even(), "{x}");
+        }
     }
 }

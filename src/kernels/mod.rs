@@ -34,7 +34,7 @@ pub use fault::{
     stable_timestep, verlet_limit, Fault, FaultKind, ForcePass, COLLAPSED_BELOW, DEEP_OVERLAP,
     LIMIT_MARGIN, MULTIBODY_LIMIT, OVERSTRETCHED_ABOVE, STIFFEST_MODE,
 };
-pub use geometry::{Separation, Unwrapped};
+pub use geometry::{MinimumImage, Separation, Unwrapped};
 pub use granular::{
     corrected_granular_contact, granular_contact, granular_wall_contact, restitution_prefactor,
     tsuji_prefactor, ContactForce, ContactHistory, GranularCoeffs, GranularMaterial, NormalDamping,

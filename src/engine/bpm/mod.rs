@@ -316,10 +316,14 @@ impl BpmModel {
                     special: [1.0; 4],
                     tally,
                 };
-                self.force_scratch.scatter(team, as_vec3(f), |c, out| {
-                    let rows = neighbours.rows(chunk_range(n, chunks, c));
-                    pair_forces(&sep, &inputs, rows, own, as_rows(out))
-                })
+                // A half list (`j > i`) split by `i`: chunk c writes from
+                // its first `i` on.
+                let first = |c| chunk_range(n, chunks, c).start;
+                self.force_scratch
+                    .scatter(team, as_vec3(f), first, |c, out| {
+                        let rows = neighbours.rows(chunk_range(n, chunks, c));
+                        pair_forces(&sep, &inputs, rows, own, as_rows(out))
+                    })
             }
             _ => ForcePass::default(),
         };
