@@ -52,7 +52,10 @@ fn rough_and_smoother_grains_are_bonded_spheres_and_vibration_smooths_the_surfac
 #[test]
 fn a_small_smoother_grain_squeezed_between_walls_follows_hertz() {
     use bpm::analysis::hertz::{effective_modulus, hertz_deviation, squeeze_curve};
-    use bpm::analysis::moduli::{paper_bulk_modulus, paper_shear_to_bulk, poisson_ratio};
+    use bpm::analysis::moduli::poisson_ratio;
+    use bpm::reference::paper::{
+        bulk_modulus as paper_bulk_modulus, shear_to_bulk as paper_shear_to_bulk,
+    };
     use bpm::scene::protocols::{hertz_squeeze, rotated, uniform_rotation, SqueezeParams};
     let (grain, _) = grain(GrainKind::Smoother);
     let mut grain = grain;

@@ -4,12 +4,11 @@
 //! the study over sizes, seeds and engines ([`calibrate`]), and its tables
 //! and plots ([`write_report`], [`replot`]).
 
-use crate::analysis::moduli::{
-    bulk_modulus, paper_bulk_modulus, paper_shear_to_bulk, poisson_ratio, shear_modulus,
-};
+use crate::analysis::moduli::{bulk_modulus, poisson_ratio, shear_modulus};
 use crate::analysis::plot::PlotError;
 use crate::file_error::FileError;
 use crate::options::{validate_a_b_values, validate_strain_and_rate, InvalidOption};
+use crate::reference::paper;
 use crate::scene::builders::bulk::{build_bulk, BulkParams, BulkSummary};
 use crate::scene::{protocols, ForceField, Scene};
 use crate::verify::engines::{run_native, EngineRun, HarnessError, LammpsLauncher};
@@ -188,8 +187,8 @@ pub fn measure_moduli(
         g,
         g_over_k: g / k,
         nu: poisson_ratio(k, g),
-        paper_k: paper_bulk_modulus(a_b),
-        paper_g_over_k: paper_shear_to_bulk(a_b),
+        paper_k: paper::bulk_modulus(a_b),
+        paper_g_over_k: paper::shear_to_bulk(a_b),
         seconds: c.seconds + s.seconds,
     };
     Ok((moduli, [c, s]))
@@ -355,11 +354,6 @@ fn select<'a>(cases: &'a [Case], f: impl Fn(&Case) -> bool + 'a) -> Vec<&'a Case
     cases.iter().filter(|c| f(c)).collect()
 }
 
-fn paper_nu(a_b: f64) -> f64 {
-    let gk = paper_shear_to_bulk(a_b);
-    (3.0 - 2.0 * gk) / (2.0 * (3.0 + gk))
-}
-
 /// The study's tables as Markdown, and its plots as SVG panels
 /// (`moduli_vs_a_b`, `size_convergence`).
 pub fn study_report(
@@ -425,12 +419,12 @@ pub fn study_report(
             lammps_gk.push((a_b, l.moduli.g_over_k));
             lammps_nu.push((a_b, l.moduli.nu));
         }
-        let pk = paper_bulk_modulus(a_b);
-        let pgk = paper_shear_to_bulk(a_b);
+        let pk = paper::bulk_modulus(a_b);
+        let pgk = paper::shear_to_bulk(a_b);
         let _ = writeln!(
             md,
             "| {a_b} | {k:.4} ± {k_sd:.4} | {g:.4} ± {g_sd:.4} | {gk:.3} ± {gk_sd:.3} | {nu:.3} ± {nu_sd:.3} | {pk:.3} | {pgk:.3} | {:.3} | {:+.1}% | {:+.1}% | {} |",
-            paper_nu(a_b),
+            paper::poisson_ratio(a_b),
             100.0 * (k - pk) / pk,
             100.0 * (gk - pgk) / pgk,
             agreement.map_or("not run".into(), |(a, b)| format!("{a:.1e}, {b:.1e}"))
@@ -537,8 +531,8 @@ pub fn study_report(
             let (g, g_sd) = mean_sd(&sel.iter().map(|c| c.moduli.g).collect::<Vec<_>>());
             let secs = mean_sd(&sel.iter().map(|c| c.moduli.seconds).collect::<Vec<_>>()).0;
             let build = mean_sd(&sel.iter().map(|c| c.build_seconds).collect::<Vec<_>>()).0;
-            let pk = paper_bulk_modulus(a_b);
-            let pg = pk * paper_shear_to_bulk(a_b);
+            let pk = paper::bulk_modulus(a_b);
+            let pg = pk * paper::shear_to_bulk(a_b);
             let _ = writeln!(
                 md,
                 "| {a_b} | {size} | {} | {k:.4} | {k_sd:.4} | {g:.4} | {g_sd:.4} | {:+.2}% | {:+.2}% | {secs:.2} | {build:.1} |",
@@ -606,13 +600,17 @@ pub fn study_report(
     let mut gk_series = vec![
         Series::new(
             "paper fit 0.6 + 0.475 a_B",
-            fit(&paper_shear_to_bulk),
+            fit(&paper::shear_to_bulk),
             Mark::Line,
         ),
         Series::new(format!("native, L = {largest} d"), gk_points, Mark::Points),
     ];
     let mut nu_series = vec![
-        Series::new("from the paper's fits", fit(&paper_nu), Mark::Line),
+        Series::new(
+            "from the paper's fits",
+            fit(&paper::poisson_ratio),
+            Mark::Line,
+        ),
         Series::new(format!("native, L = {largest} d"), nu_points, Mark::Points),
     ];
     if !lammps_gk.is_empty() {
@@ -641,7 +639,7 @@ pub fn study_report(
             series: vec![
                 Series::new(
                     "paper fit 1.365 - 0.14 / (a_B + 1.168)",
-                    fit(&paper_bulk_modulus),
+                    fit(&paper::bulk_modulus),
                     Mark::Line,
                 ),
                 Series::new(format!("native, L = {largest} d"), k_points, Mark::Points),
@@ -727,7 +725,7 @@ pub fn calibrate(
         "threads": threads,
         "options": opts,
         "bulk_protocol": crate::scene::builders::bulk::BulkParams::paper(0.0, 0, 0.0),
-        "reference": "reference_data/paper_fits.json",
+        "reference": paper::FITS_FILE,
         "wall_seconds": start.elapsed().as_secs_f64(),
         "cases": cases,
     });

@@ -22,6 +22,7 @@ pub mod shear;
 
 use crate::engine::{GranularWall, MultiContact, WallSide};
 use crate::kernels::{GranularMaterial, NormalDamping};
+use crate::reference::multicontact;
 use crate::scene::{
     BoxSpec, ForceField, Mass, ModelKind, Particles, Scene, StageOutput, StageSpec,
 };
@@ -55,9 +56,9 @@ pub struct Closures {
 impl Default for Closures {
     fn default() -> Self {
         Self {
-            gamma: 0.82,
-            gamma_advanced: 0.81,
-            mpr: 0.11,
+            gamma: multicontact::STANDARD_GAMMA,
+            gamma_advanced: multicontact::ADVANCED_GAMMA,
+            mpr: multicontact::ADVANCED_MPR,
         }
     }
 }
