@@ -2,7 +2,9 @@
 //! (docs/protocols.md, "Calibration"): least-squares slopes of stress against strain.
 
 use super::fit::least_squares_line;
+use crate::reference::paper;
 use crate::scene::run::StageOutput;
+use serde::{Deserialize, Serialize};
 
 /// Why a modulus could not be measured.
 #[derive(Debug, thiserror::Error)]
@@ -97,6 +99,51 @@ pub fn poisson_ratio(k: f64, g: f64) -> f64 {
 pub fn poisson_ratio_error(k: f64, g: f64, k_error: f64, g_error: f64) -> f64 {
     9.0 * (g * g * k_error * k_error + k * k * g_error * g_error).sqrt()
         / (2.0 * (3.0 * k + g).powi(2))
+}
+
+/// K, G and what follows from them, for one solid and `a_B`.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct Moduli {
+    /// Multibody strength (k d).
+    pub a_b: f64,
+    /// Bulk modulus (k / d).
+    pub k: f64,
+    /// Shear modulus (k / d).
+    pub g: f64,
+    /// G / K.
+    pub g_over_k: f64,
+    /// Poisson's ratio.
+    pub nu: f64,
+    /// The paper's fit of K at this a_B.
+    pub paper_k: f64,
+    /// The paper's fit of G/K at this a_B.
+    pub paper_g_over_k: f64,
+    /// Wall seconds of the two runs.
+    pub seconds: f64,
+}
+
+impl Moduli {
+    /// The moduli of one solid at `a_b` from its compression and shear
+    /// stages (run in `seconds` together), beside the paper's fits.
+    pub fn measured(
+        a_b: f64,
+        compression: &StageOutput,
+        shear: &StageOutput,
+        seconds: f64,
+    ) -> Result<Self, ModulusError> {
+        let k = bulk_modulus(compression)?;
+        let g = shear_modulus(shear)?;
+        Ok(Self {
+            a_b,
+            k,
+            g,
+            g_over_k: g / k,
+            nu: poisson_ratio(k, g),
+            paper_k: paper::bulk_modulus(a_b),
+            paper_g_over_k: paper::shear_to_bulk(a_b),
+            seconds,
+        })
+    }
 }
 
 #[cfg(test)]

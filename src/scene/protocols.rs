@@ -1,6 +1,6 @@
 //! Ready-made protocol stages (docs/protocols.md).
 
-use super::model::{Record, Scene, StageSpec};
+use super::model::{ForceField, Record, Scene, StageSpec};
 use crate::engine::{Deformation, FlatWall, ShearRemap, Tether, TiltFactor, WallSide};
 use serde::{Deserialize, Serialize};
 
@@ -42,6 +42,63 @@ pub fn simple_shear(strain: f64, rate: f64, dt: f64, records: u64) -> StageSpec 
     });
     s.record.every = (steps / records.max(1)).max(1);
     s
+}
+
+/// Strain and rate of the calibration runs.
+#[derive(Clone, Copy, Debug, Serialize, Deserialize)]
+pub struct ModuliLoading {
+    /// Final strain of both runs (volumetric strain is about 3x this).
+    pub strain: f64,
+    /// True strain rate of compression and engineering shear rate (1 / tau).
+    pub rate: f64,
+    /// Time step (tau).
+    pub dt: f64,
+    /// Rows recorded per run.
+    pub records: u64,
+}
+
+impl Default for ModuliLoading {
+    /// 0.5% strain at 1e-5 / tau, dt 0.1, 50 rows (docs/protocols.md "Calibration").
+    fn default() -> Self {
+        Self {
+            strain: 0.005,
+            rate: 1e-5,
+            dt: 0.1,
+            records: 50,
+        }
+    }
+}
+
+/// The compression and shear scenes of `solid` at `a_b`, of the paper's
+/// model or its zero-net-multibody variant.
+pub fn calibration_scenes(
+    solid: &Scene,
+    a_b: f64,
+    zero_net: bool,
+    loading: &ModuliLoading,
+) -> [Scene; 2] {
+    let mut base = solid.clone();
+    base.force_field = ForceField {
+        skin: solid.force_field.skin,
+        zero_net_multibody: zero_net,
+        ..ForceField::paper(a_b)
+    };
+    base.particles.velocities = None;
+    let mut compress = base.clone();
+    compress.stages = vec![isotropic_compression(
+        loading.strain,
+        loading.rate,
+        loading.dt,
+        loading.records,
+    )];
+    let mut shear = base;
+    shear.stages = vec![simple_shear(
+        loading.strain,
+        loading.rate,
+        loading.dt,
+        loading.records,
+    )];
+    [compress, shear]
 }
 
 /// The Hertz squeeze of one grain (docs/protocols.md, "Hertz sphere

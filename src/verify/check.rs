@@ -4,6 +4,7 @@
 use super::compare::CompareError;
 use super::compare::{compaction_deviation, compare_runs, deviation_series};
 use super::engines::{run_native, HarnessError, LammpsLauncher};
+use super::moduli::{measure_moduli, CalibrationEngine};
 use super::scenes::{
     as_trajectory, contact_solid, dem_lattice, dem_trajectory, grain_pair, grain_squeeze,
     small_compaction, with_release, DemLoading,
@@ -12,6 +13,7 @@ use super::single_point::{
     lammps_single_point, max_relative_deviation, native_single_point, SinglePointError,
 };
 use super::tolerances::tolerance;
+use crate::analysis::moduli::Moduli;
 use crate::analysis::plot::{write_svg, Mark, Panel, PlotError, Series};
 use crate::engine::MultiContact;
 use crate::file_error::FileError;
@@ -20,9 +22,8 @@ use crate::options::{validate_a_b_values, InvalidOption};
 use crate::reference::paper;
 use crate::scene::builders::bulk::{build_bulk, BulkParams};
 use crate::scene::builders::grain::{build_grain, GrainKind, GrainParams};
-use crate::scene::protocols::{hertz_squeeze, SqueezeParams};
+use crate::scene::protocols::{hertz_squeeze, ModuliLoading, SqueezeParams};
 use crate::scene::{ForceField, Scene, SceneError};
-use crate::studies::calibration::{measure_moduli, CalibrationEngine, Loading, Moduli};
 use serde::Serialize;
 use std::path::{Path, PathBuf};
 
@@ -474,7 +475,7 @@ pub fn run_check(opts: &CheckOptions) -> Result<CheckReport> {
         false,
     )?
     .0;
-    let loading = Loading::default();
+    let loading = ModuliLoading::default();
     let mut calibration = Vec::new();
     for &a_b in &opts.calibration_a_b {
         let tag = format!("calibration-L{}-aB{a_b}", opts.calibration_size);

@@ -6,6 +6,7 @@ pub mod compare;
 pub mod cross_check;
 pub mod engines;
 pub mod launch;
+pub mod moduli;
 pub mod scenes;
 pub mod single_point;
 pub mod tolerances;
