@@ -1,6 +1,6 @@
 //! Ready-made protocol stages (docs/protocols.md).
 
-use super::model::{ForceField, Record, Scene, StageSpec};
+use super::model::{ForceField, ModelKind, Record, Scene, StageSpec};
 use crate::engine::{Deformation, FlatWall, ShearRemap, Tether, TiltFactor, WallSide};
 use serde::{Deserialize, Serialize};
 
@@ -341,6 +341,19 @@ impl CompactionProtocol {
         }
         stages
     }
+}
+
+/// The compaction scene of a packing: its stages are the protocol's
+/// (DEM spheres have no bonds whose reference the jam could reset).
+pub fn compaction_scene(packing: &Scene, protocol: &CompactionProtocol) -> Scene {
+    let mut scene = packing.clone();
+    scene.stages = protocol.stages();
+    if scene.model == ModelKind::Dem {
+        for stage in &mut scene.stages {
+            stage.reset_reference = false;
+        }
+    }
+    scene
 }
 
 /// Steps of `dt` in `time`, at least 1.

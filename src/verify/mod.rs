@@ -23,8 +23,8 @@ pub use single_point::{
     SinglePointError,
 };
 
-/// Writes `value` as pretty-printed JSON (the studies' and the check's
-/// report files).
+/// Writes `value` as pretty-printed JSON (the check's report files, and
+/// those of the commands built on the harness).
 pub(crate) fn write_json(
     path: &std::path::Path,
     value: &impl serde::Serialize,

@@ -1,7 +1,7 @@
 //! K and G of a solid measured on either engine: the calibration's
 //! compression and shear scenes ([`calibration_scenes`]) run through the
-//! harness, their slopes taken by [`Moduli::measured`]. `bpm check` and
-//! the studies that measure the solid share it.
+//! harness, their slopes taken by [`Moduli::measured`]. `bpm check` uses
+//! it, as does every command that measures the solid.
 
 use super::engines::{run_native, EngineRun, HarnessError, LammpsLauncher};
 use crate::analysis::moduli::Moduli;
