@@ -201,4 +201,13 @@ mod tests {
         assert!((poisson_ratio(1.0, 0.0) - 0.5).abs() < 1e-15);
         assert!(bulk_modulus(&stage(&["lx"], vec![vec![1.0]])).is_err());
     }
+
+    #[test]
+    fn poisson_ratio_is_the_reference_fits_formula_bit_for_bit() {
+        for a_b in [-0.8, -0.5, 0.0, 0.5, 1.0, 3.0] {
+            let (k, nu) = paper::elastic_constants(a_b);
+            let g = paper::shear_to_bulk(a_b) * k;
+            assert_eq!(poisson_ratio(k, g).to_bits(), nu.to_bits(), "a_B = {a_b}");
+        }
+    }
 }

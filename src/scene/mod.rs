@@ -9,6 +9,7 @@ pub mod model;
 pub mod observables;
 pub mod protocols;
 pub mod report;
+pub mod rotation;
 pub mod run;
 pub mod trajectory;
 pub mod validate;
