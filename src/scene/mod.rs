@@ -3,6 +3,7 @@
 //! and the run report.
 
 pub mod builders;
+pub mod cli;
 pub mod datafile;
 pub mod load;
 pub mod model;
