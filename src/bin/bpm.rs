@@ -8,7 +8,6 @@ use bpm::scene::builders::grain::GrainKind;
 use bpm::scene::cli::BuildCommand;
 use bpm::scene::cli::ExportArgs;
 use bpm::scene::cli::ImportArgs;
-use bpm::scene::read_scene;
 use bpm::studies::bench::{self, BenchOptions};
 use bpm::studies::hertz::{
     run_hertz, EngineAgreement, GrainSource, HertzOptions, Moduli, SqueezeEngine,
@@ -16,6 +15,8 @@ use bpm::studies::hertz::{
 use bpm::studies::hertz_sweep::{run_hertz_sweep, SweepOptions};
 use bpm::studies::mcdem::{calibration as mc_calibration, compression, rigid_box};
 use bpm::studies::{accuracy, calibration, compaction, large_strain, stability, upstream};
+use bpm::verify::cli::CheckArgs;
+use bpm::verify::cli::CrossCheckArgs;
 use clap::{Parser, Subcommand, ValueEnum};
 use std::io::IsTerminal;
 use std::path::PathBuf;
@@ -85,57 +86,11 @@ enum Command {
     /// its tolerance. Pointwise agreement holds for damped or short runs;
     /// a long run of a chaotic packing (sheared spheres) drifts apart as
     /// round-off grows
-    CrossCheck {
-        /// The scene (JSON).
-        scene: PathBuf,
-        /// MPI rank counts of the LAMMPS runs.
-        #[arg(long, value_delimiter = ',', default_value = "1,2")]
-        ranks: Vec<usize>,
-        /// LAMMPS's `newton` setting (scenes with the multi-contact closure
-        /// run with newton off whatever this says: their pair style needs
-        /// it).
-        #[arg(long, default_value = "on", value_parser = ["on", "off"])]
-        newton: String,
-        /// Run only the scene's first N steps (later stages dropped, the
-        /// last one cut): many touching spheres drift apart from
-        /// round-off, so long trajectories agree to round-off only so far.
-        #[arg(long)]
-        steps: Option<u64>,
-        /// Output folder.
-        #[arg(short, long)]
-        output: PathBuf,
-    },
+    CrossCheck(CrossCheckArgs),
     /// The main job: built-in scenes through LAMMPS with our plugin and
     /// through the native engine; verdict table, JSON report and plots.
     /// Exits non-zero if any observable is outside its tolerance.
-    Check {
-        /// Output folder (report, plots, LAMMPS inputs and logs).
-        #[arg(short, long, default_value = "results/check")]
-        output: PathBuf,
-        /// Box side of the contact solid (d).
-        #[arg(long, default_value_t = 8.0)]
-        solid_size: f64,
-        /// Radius of each grain of the grain pair (d).
-        #[arg(long, default_value_t = 3.0)]
-        grain_radius: f64,
-        /// Steps of the trajectories.
-        #[arg(long, default_value_t = 500)]
-        steps: u64,
-        /// Box side of the calibration solid (d).
-        #[arg(long, default_value_t = 8.0)]
-        calibration_size: f64,
-        /// a_B values of the calibration cross-check (comma separated).
-        #[arg(
-            long,
-            value_delimiter = ',',
-            allow_hyphen_values = true,
-            default_value = "-0.8,-0.5,0,0.5,1,2,3"
-        )]
-        a_b: Vec<f64>,
-        /// Seed of the built-in scenes.
-        #[arg(long, default_value_t = 1)]
-        seed: u64,
-    },
+    Check(CheckArgs),
     /// Calibration of K and G against a_B (docs/protocols.md "Calibration", paper
     /// Fig. 2): tables against the paper's fits, LAMMPS agreement, a
     /// strain-rate halving check and size convergence, with plots.
@@ -1205,77 +1160,8 @@ fn real_main() -> Result<()> {
                 println!("wrote {} and its plot (.svg)", path.display());
             }
         }
-        Command::CrossCheck {
-            scene: path,
-            ranks,
-            newton,
-            steps,
-            output,
-        } => {
-            let (scene, _) =
-                read_scene(&path).with_context(|| format!("reading scene {}", path.display()))?;
-            let opts = bpm::verify::cross_check::CrossCheckOptions {
-                scene: path,
-                ranks,
-                newton: newton == "on",
-                steps,
-                out_dir: output.clone(),
-                bpm: std::env::current_exe()?,
-            };
-            let report = bpm::verify::cross_check::run_cross_check(&opts, &scene)?;
-            for (ranks, ratio) in &report.time_ratios {
-                println!("LAMMPS on {ranks} rank(s) took {ratio:.2} times the native engine's wall time (1 thread)");
-            }
-            println!("wrote {}", output.join("cross_check.json").display());
-            let failed = report.failures();
-            if failed > 0 {
-                bail!("{failed} of {} checks failed", report.verdicts.len());
-            }
-            println!("all {} checks pass", report.verdicts.len());
-        }
-        Command::Check {
-            output,
-            solid_size,
-            grain_radius,
-            steps,
-            calibration_size,
-            a_b,
-            seed,
-        } => {
-            let exe = std::env::current_exe()?;
-            let opts = bpm::verify::check::CheckOptions {
-                solid_size,
-                grain_radius,
-                steps,
-                calibration_size,
-                calibration_a_b: a_b,
-                seed,
-                out_dir: output.clone(),
-                bpm: exe.clone(),
-                lmp_bpm: exe.with_file_name("lmp-bpm"),
-            };
-            opts.validate()?;
-            let report = bpm::verify::check::run_check(&opts)?;
-            println!();
-            println!(
-                "{:>6} {:>9} {:>9} {:>9} {:>9} {:>7} {:>7}   paper fits: {:>6} {:>6}",
-                "a_B", "K native", "K lammps", "G native", "G lammps", "G/K", "nu", "K", "G/K"
-            );
-            for [n, l] in &report.calibration {
-                println!(
-                    "{:>6.2} {:>9.4} {:>9.4} {:>9.4} {:>9.4} {:>7.3} {:>7.3}   {:>11} {:>6.3} {:>6.3}",
-                    n.a_b, n.k, l.k, n.g, l.g, n.g_over_k, n.nu, "", n.paper_k, n.paper_g_over_k
-                );
-            }
-            for f in &report.files {
-                println!("wrote {f}");
-            }
-            let failed = report.failures();
-            if failed > 0 {
-                bail!("{failed} of {} checks failed", report.verdicts.len());
-            }
-            println!("all {} checks pass", report.verdicts.len());
-        }
+        Command::CrossCheck(args) => args.run()?,
+        Command::Check(args) => args.run()?,
         Command::Calibrate {
             output,
             sizes,

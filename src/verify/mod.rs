@@ -2,6 +2,7 @@
 //! through the native engine, compared observable by observable.
 
 pub mod check;
+pub mod cli;
 pub mod compare;
 pub mod cross_check;
 pub mod engines;
