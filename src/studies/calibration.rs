@@ -5,6 +5,8 @@
 //! engines ([`calibrate`]), and its tables and plots ([`write_report`],
 //! [`replot`]).
 
+pub mod cli;
+
 pub use crate::analysis::moduli::Moduli;
 use crate::analysis::plot::PlotError;
 use crate::file_error::FileError;

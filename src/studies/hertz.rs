@@ -3,6 +3,8 @@
 //! two flat walls in either engine, their force-overlap curves against
 //! Hertz's law, ensemble mean and spread, JSON and plots.
 
+pub mod cli;
+
 use crate::analysis::fit::interpolate;
 use crate::analysis::hertz::{
     effective_modulus, hertz_deviation, hertz_normalised_force, squeeze_curve, HertzDeviation,
