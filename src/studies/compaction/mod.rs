@@ -1142,6 +1142,7 @@ pub fn run_compaction(
     Ok(report)
 }
 
+pub mod cli;
 pub mod compare;
 pub mod dem;
 mod dump;
