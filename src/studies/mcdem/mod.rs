@@ -16,6 +16,7 @@
 //!   the study's Tables D.1 and D.2.
 
 pub mod calibration;
+pub mod cli;
 pub mod compression;
 pub mod rigid_box;
 pub mod shear;
