@@ -52,8 +52,12 @@ fn rough_and_smoother_grains_are_bonded_spheres_and_vibration_smooths_the_surfac
 #[test]
 fn a_small_smoother_grain_squeezed_between_walls_follows_hertz() {
     use bpm::analysis::hertz::{effective_modulus, hertz_deviation, squeeze_curve};
-    use bpm::analysis::moduli::{paper_bulk_modulus, paper_shear_to_bulk, poisson_ratio};
-    use bpm::scene::protocols::{hertz_squeeze, rotated, uniform_rotation, SqueezeParams};
+    use bpm::analysis::moduli::poisson_ratio;
+    use bpm::reference::paper::{
+        bulk_modulus as paper_bulk_modulus, shear_to_bulk as paper_shear_to_bulk,
+    };
+    use bpm::scene::protocols::{hertz_squeeze, SqueezeParams};
+    use bpm::scene::rotation::{rotated, uniform_rotation};
     let (grain, _) = grain(GrainKind::Smoother);
     let mut grain = grain;
     grain.force_field = bpm::scene::ForceField::paper(0.0);
@@ -106,7 +110,8 @@ fn a_small_smoother_grain_squeezed_between_walls_follows_hertz() {
 /// and leave every record bitwise as it was.
 #[test]
 fn discounting_rigid_motion_saves_list_builds_and_changes_no_record() {
-    use bpm::scene::protocols::{hertz_squeeze, rotated, uniform_rotation, SqueezeParams};
+    use bpm::scene::protocols::{hertz_squeeze, SqueezeParams};
+    use bpm::scene::rotation::{rotated, uniform_rotation};
     use bpm::scene::{build_system, run_scene, RunOptions};
     let (mut grain, _) = grain(GrainKind::Smoother);
     grain.force_field = bpm::scene::ForceField::paper(0.0);

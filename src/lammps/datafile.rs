@@ -12,6 +12,15 @@ use crate::scene::Scene;
 use std::fmt::Write as _;
 use std::path::Path;
 
+/// LAMMPS's spelling of a flag.
+pub(crate) fn yes_no(flag: bool) -> &'static str {
+    if flag {
+        "yes"
+    } else {
+        "no"
+    }
+}
+
 /// Input-script variables derived from a scene.
 #[derive(Clone, Debug)]
 pub struct ScriptVars {
@@ -76,10 +85,7 @@ impl ScriptVars {
             ("kB", g(ff.bond.k)),
             ("aB", g(ff.bond.a)),
             ("gB", g(ff.bond.gamma)),
-            (
-                "zeronet",
-                super::script::yes_no(ff.zero_net_multibody).to_string(),
-            ),
+            ("zeronet", yes_no(ff.zero_net_multibody).to_string()),
             ("kP", g(pair.k)),
             ("d", g(pair.d)),
             ("aP", g(pair.a)),

@@ -2,6 +2,7 @@
 //! templates (embedded), and the registration of our styles
 //! (`lammps-plugin/`) in a LAMMPS instance.
 
+pub mod cli;
 pub mod datafile;
 pub mod instance;
 pub mod runner;

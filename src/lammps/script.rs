@@ -11,7 +11,7 @@
 
 use super::datafile::{
     dem_pair_coeff, granular_wall_model, type_masses, uses_closure, write_data_file,
-    write_reference_lengths, ScriptVars,
+    write_reference_lengths, yes_no, ScriptVars,
 };
 use super::templates::{write_templates, FOLDER as TEMPLATE_FOLDER};
 use crate::engine::{ActiveGranularWall, Deformation, ShearRemap, TiltFactor, WallSide};
@@ -211,15 +211,6 @@ fn velocity_dump(v: &[[f64; 3]]) -> String {
         let _ = writeln!(s, "{} {} {} {}", i + 1, g(v[0]), g(v[1]), g(v[2]));
     }
     s
-}
-
-/// LAMMPS's spelling of a flag.
-pub(crate) fn yes_no(flag: bool) -> &'static str {
-    if flag {
-        "yes"
-    } else {
-        "no"
-    }
 }
 
 /// The commands of a stage's force field; `closure_style`: the scene runs

@@ -3,12 +3,14 @@
 //! and the run report.
 
 pub mod builders;
+pub mod cli;
 pub mod datafile;
 pub mod load;
 pub mod model;
 pub mod observables;
 pub mod protocols;
 pub mod report;
+pub mod rotation;
 pub mod run;
 pub mod trajectory;
 pub mod validate;

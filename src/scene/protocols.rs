@@ -1,6 +1,6 @@
 //! Ready-made protocol stages (docs/protocols.md).
 
-use super::model::{Record, Scene, StageSpec};
+use super::model::{ForceField, ModelKind, Record, Scene, StageSpec};
 use crate::engine::{Deformation, FlatWall, ShearRemap, Tether, TiltFactor, WallSide};
 use serde::{Deserialize, Serialize};
 
@@ -42,6 +42,63 @@ pub fn simple_shear(strain: f64, rate: f64, dt: f64, records: u64) -> StageSpec 
     });
     s.record.every = (steps / records.max(1)).max(1);
     s
+}
+
+/// Strain and rate of the calibration runs.
+#[derive(Clone, Copy, Debug, Serialize, Deserialize)]
+pub struct ModuliLoading {
+    /// Final strain of both runs (volumetric strain is about 3x this).
+    pub strain: f64,
+    /// True strain rate of compression and engineering shear rate (1 / tau).
+    pub rate: f64,
+    /// Time step (tau).
+    pub dt: f64,
+    /// Rows recorded per run.
+    pub records: u64,
+}
+
+impl Default for ModuliLoading {
+    /// 0.5% strain at 1e-5 / tau, dt 0.1, 50 rows (docs/protocols.md "Calibration").
+    fn default() -> Self {
+        Self {
+            strain: 0.005,
+            rate: 1e-5,
+            dt: 0.1,
+            records: 50,
+        }
+    }
+}
+
+/// The compression and shear scenes of `solid` at `a_b`, of the paper's
+/// model or its zero-net-multibody variant.
+pub fn calibration_scenes(
+    solid: &Scene,
+    a_b: f64,
+    zero_net: bool,
+    loading: &ModuliLoading,
+) -> [Scene; 2] {
+    let mut base = solid.clone();
+    base.force_field = ForceField {
+        skin: solid.force_field.skin,
+        zero_net_multibody: zero_net,
+        ..ForceField::paper(a_b)
+    };
+    base.particles.velocities = None;
+    let mut compress = base.clone();
+    compress.stages = vec![isotropic_compression(
+        loading.strain,
+        loading.rate,
+        loading.dt,
+        loading.records,
+    )];
+    let mut shear = base;
+    shear.stages = vec![simple_shear(
+        loading.strain,
+        loading.rate,
+        loading.dt,
+        loading.records,
+    )];
+    [compress, shear]
 }
 
 /// The Hertz squeeze of one grain (docs/protocols.md, "Hertz sphere
@@ -115,56 +172,6 @@ pub fn hertz_squeeze(scene: &Scene, p: &SqueezeParams) -> Scene {
     s.record.every = (steps / p.records.max(1)).max(1);
     let mut out = scene.clone();
     out.stages = vec![s];
-    out
-}
-
-/// A rotation matrix uniform over all rotations, from three uniform
-/// numbers in [0, 1) (Shoemake's quaternion method).
-pub fn uniform_rotation(u: [f64; 3]) -> [[f64; 3]; 3] {
-    use std::f64::consts::TAU;
-    let (a, b) = ((1.0 - u[0]).sqrt(), u[0].sqrt());
-    let q = [
-        a * (TAU * u[1]).sin(),
-        a * (TAU * u[1]).cos(),
-        b * (TAU * u[2]).sin(),
-        b * (TAU * u[2]).cos(),
-    ];
-    let [x, y, z, w] = q;
-    [
-        [
-            1.0 - 2.0 * (y * y + z * z),
-            2.0 * (x * y - z * w),
-            2.0 * (x * z + y * w),
-        ],
-        [
-            2.0 * (x * y + z * w),
-            1.0 - 2.0 * (x * x + z * z),
-            2.0 * (y * z - x * w),
-        ],
-        [
-            2.0 * (x * z - y * w),
-            2.0 * (y * z + x * w),
-            1.0 - 2.0 * (x * x + y * y),
-        ],
-    ]
-}
-
-/// `scene` with its particles rotated by `rotation` about their centre of
-/// mass (velocities too); the box is unchanged, so it must leave room.
-pub fn rotated(scene: &Scene, rotation: &[[f64; 3]; 3]) -> Scene {
-    let mut out = scene.clone();
-    let c = super::builders::grain::centre_of(&scene.particles.positions);
-    let apply =
-        |v: &[f64; 3]| [0, 1, 2].map(|r| (0..3).map(|k| rotation[r][k] * v[k]).sum::<f64>());
-    for x in &mut out.particles.positions {
-        let d = apply(&[x[0] - c[0], x[1] - c[1], x[2] - c[2]]);
-        *x = [c[0] + d[0], c[1] + d[1], c[2] + d[2]];
-    }
-    if let Some(v) = &mut out.particles.velocities {
-        for vi in v.iter_mut() {
-            *vi = apply(vi);
-        }
-    }
     out
 }
 
@@ -284,6 +291,19 @@ impl CompactionProtocol {
         }
         stages
     }
+}
+
+/// The compaction scene of a packing: its stages are the protocol's
+/// (DEM spheres have no bonds whose reference the jam could reset).
+pub fn compaction_scene(packing: &Scene, protocol: &CompactionProtocol) -> Scene {
+    let mut scene = packing.clone();
+    scene.stages = protocol.stages();
+    if scene.model == ModelKind::Dem {
+        for stage in &mut scene.stages {
+            stage.reset_reference = false;
+        }
+    }
+    scene
 }
 
 /// Steps of `dt` in `time`, at least 1.

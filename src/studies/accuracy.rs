@@ -13,6 +13,8 @@
 //! Cost is the wall-clock time of the runs and, to compare without the
 //! machine's noise, particles times steps.
 
+pub mod cli;
+
 use crate::analysis::fit::interpolate;
 use crate::analysis::hertz::{effective_modulus, hertz_deviation, squeeze_curve};
 use crate::analysis::plot::{write_svg, Mark, Panel, PlotError, Series};

@@ -1,18 +1,22 @@
 //! The calibration study (`bpm calibrate`, docs/protocols.md
 //! "Calibration", the paper's Fig. 2): K and G of bulk solids against
-//! `a_B` on either engine ([`measure_moduli`], also used by `bpm check`),
-//! the study over sizes, seeds and engines ([`calibrate`]), and its tables
-//! and plots ([`write_report`], [`replot`]).
+//! `a_B` on either engine (measured by [`measure_moduli`], which the
+//! harness owns and `bpm check` uses too), the study over sizes, seeds and
+//! engines ([`calibrate`]), and its tables and plots ([`write_report`],
+//! [`replot`]).
 
-use crate::analysis::moduli::{
-    bulk_modulus, paper_bulk_modulus, paper_shear_to_bulk, poisson_ratio, shear_modulus,
-};
+pub mod cli;
+
+pub use crate::analysis::moduli::Moduli;
 use crate::analysis::plot::PlotError;
 use crate::file_error::FileError;
 use crate::options::{validate_a_b_values, validate_strain_and_rate, InvalidOption};
+use crate::reference::paper;
 use crate::scene::builders::bulk::{build_bulk, BulkParams, BulkSummary};
-use crate::scene::{protocols, ForceField, Scene};
-use crate::verify::engines::{run_native, EngineRun, HarnessError, LammpsLauncher};
+pub use crate::scene::protocols::{calibration_scenes, ModuliLoading as Loading};
+use crate::scene::Scene;
+use crate::verify::engines::{HarnessError, LammpsLauncher};
+pub use crate::verify::moduli::{measure_moduli, CalibrationEngine};
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 
@@ -42,78 +46,6 @@ pub enum CalibrationError {
     },
 }
 
-/// Strain and rate of the calibration runs.
-#[derive(Clone, Copy, Debug, Serialize, Deserialize)]
-pub struct Loading {
-    /// Final strain of both runs (volumetric strain is about 3x this).
-    pub strain: f64,
-    /// True strain rate of compression and engineering shear rate (1 / tau).
-    pub rate: f64,
-    /// Time step (tau).
-    pub dt: f64,
-    /// Rows recorded per run.
-    pub records: u64,
-}
-
-impl Default for Loading {
-    /// 0.5% strain at 1e-5 / tau, dt 0.1, 50 rows (docs/protocols.md "Calibration").
-    fn default() -> Self {
-        Self {
-            strain: 0.005,
-            rate: 1e-5,
-            dt: 0.1,
-            records: 50,
-        }
-    }
-}
-
-/// Which engine runs a calibration.
-#[derive(Clone, Debug)]
-pub enum CalibrationEngine {
-    /// The native engine with this many threads.
-    Native(usize),
-    /// LAMMPS with our styles on this many ranks.
-    Lammps(LammpsLauncher, usize),
-}
-
-impl CalibrationEngine {
-    /// Short name for reports.
-    pub fn name(&self) -> String {
-        match self {
-            Self::Native(_) => "native".into(),
-            Self::Lammps(_, ranks) => format!("lammps-np{ranks}"),
-        }
-    }
-
-    fn run(&self, scene: &Scene, tag: &str) -> Result<EngineRun, HarnessError> {
-        match self {
-            Self::Native(threads) => run_native(scene, tag, *threads),
-            Self::Lammps(launcher, ranks) => launcher.run(scene, tag, *ranks, true),
-        }
-    }
-}
-
-/// K, G and what follows from them, for one solid and `a_B`.
-#[derive(Clone, Debug, Serialize, Deserialize)]
-pub struct Moduli {
-    /// Multibody strength (k d).
-    pub a_b: f64,
-    /// Bulk modulus (k / d).
-    pub k: f64,
-    /// Shear modulus (k / d).
-    pub g: f64,
-    /// G / K.
-    pub g_over_k: f64,
-    /// Poisson's ratio.
-    pub nu: f64,
-    /// The paper's fit of K at this a_B.
-    pub paper_k: f64,
-    /// The paper's fit of G/K at this a_B.
-    pub paper_g_over_k: f64,
-    /// Wall seconds of the two runs.
-    pub seconds: f64,
-}
-
 /// The bulk solid of the paper's protocol (the calibration's, and every
 /// study's that measures the solid), side `size`, seed `seed`; a failed
 /// build names the solid.
@@ -128,71 +60,6 @@ pub fn paper_solid(
             cause,
         }
     })
-}
-
-/// The compression and shear scenes of `solid` at `a_b`, of the paper's
-/// model or its zero-net-multibody variant.
-pub fn calibration_scenes(
-    solid: &Scene,
-    a_b: f64,
-    zero_net: bool,
-    loading: &Loading,
-) -> [Scene; 2] {
-    let mut base = solid.clone();
-    base.force_field = ForceField {
-        skin: solid.force_field.skin,
-        zero_net_multibody: zero_net,
-        ..ForceField::paper(a_b)
-    };
-    base.particles.velocities = None;
-    let mut compress = base.clone();
-    compress.stages = vec![protocols::isotropic_compression(
-        loading.strain,
-        loading.rate,
-        loading.dt,
-        loading.records,
-    )];
-    let mut shear = base;
-    shear.stages = vec![protocols::simple_shear(
-        loading.strain,
-        loading.rate,
-        loading.dt,
-        loading.records,
-    )];
-    [compress, shear]
-}
-
-/// Measures K and G of `solid` at `a_b` (with the zero-net variant or
-/// without) on `engine`; `tag` names the runs. Returns the moduli and the
-/// two runs.
-pub fn measure_moduli(
-    solid: &Scene,
-    a_b: f64,
-    zero_net: bool,
-    loading: &Loading,
-    engine: &CalibrationEngine,
-    tag: &str,
-) -> Result<(Moduli, [EngineRun; 2]), HarnessError> {
-    let [compress, shear] = calibration_scenes(solid, a_b, zero_net, loading);
-    let c = engine.run(&compress, &format!("{tag}-compress"))?;
-    let s = engine.run(&shear, &format!("{tag}-shear"))?;
-    let fail = |e: crate::analysis::moduli::ModulusError| HarnessError::Native {
-        scene: tag.into(),
-        message: e.to_string(),
-    };
-    let k = bulk_modulus(&c.stages[0]).map_err(fail)?;
-    let g = shear_modulus(&s.stages[0]).map_err(fail)?;
-    let moduli = Moduli {
-        a_b,
-        k,
-        g,
-        g_over_k: g / k,
-        nu: poisson_ratio(k, g),
-        paper_k: paper_bulk_modulus(a_b),
-        paper_g_over_k: paper_shear_to_bulk(a_b),
-        seconds: c.seconds + s.seconds,
-    };
-    Ok((moduli, [c, s]))
 }
 
 /// What `bpm calibrate` runs.
@@ -355,11 +222,6 @@ fn select<'a>(cases: &'a [Case], f: impl Fn(&Case) -> bool + 'a) -> Vec<&'a Case
     cases.iter().filter(|c| f(c)).collect()
 }
 
-fn paper_nu(a_b: f64) -> f64 {
-    let gk = paper_shear_to_bulk(a_b);
-    (3.0 - 2.0 * gk) / (2.0 * (3.0 + gk))
-}
-
 /// The study's tables as Markdown, and its plots as SVG panels
 /// (`moduli_vs_a_b`, `size_convergence`).
 pub fn study_report(
@@ -425,12 +287,12 @@ pub fn study_report(
             lammps_gk.push((a_b, l.moduli.g_over_k));
             lammps_nu.push((a_b, l.moduli.nu));
         }
-        let pk = paper_bulk_modulus(a_b);
-        let pgk = paper_shear_to_bulk(a_b);
+        let pk = paper::bulk_modulus(a_b);
+        let pgk = paper::shear_to_bulk(a_b);
         let _ = writeln!(
             md,
             "| {a_b} | {k:.4} ± {k_sd:.4} | {g:.4} ± {g_sd:.4} | {gk:.3} ± {gk_sd:.3} | {nu:.3} ± {nu_sd:.3} | {pk:.3} | {pgk:.3} | {:.3} | {:+.1}% | {:+.1}% | {} |",
-            paper_nu(a_b),
+            paper::poisson_ratio(a_b),
             100.0 * (k - pk) / pk,
             100.0 * (gk - pgk) / pgk,
             agreement.map_or("not run".into(), |(a, b)| format!("{a:.1e}, {b:.1e}"))
@@ -537,8 +399,8 @@ pub fn study_report(
             let (g, g_sd) = mean_sd(&sel.iter().map(|c| c.moduli.g).collect::<Vec<_>>());
             let secs = mean_sd(&sel.iter().map(|c| c.moduli.seconds).collect::<Vec<_>>()).0;
             let build = mean_sd(&sel.iter().map(|c| c.build_seconds).collect::<Vec<_>>()).0;
-            let pk = paper_bulk_modulus(a_b);
-            let pg = pk * paper_shear_to_bulk(a_b);
+            let pk = paper::bulk_modulus(a_b);
+            let pg = pk * paper::shear_to_bulk(a_b);
             let _ = writeln!(
                 md,
                 "| {a_b} | {size} | {} | {k:.4} | {k_sd:.4} | {g:.4} | {g_sd:.4} | {:+.2}% | {:+.2}% | {secs:.2} | {build:.1} |",
@@ -606,13 +468,17 @@ pub fn study_report(
     let mut gk_series = vec![
         Series::new(
             "paper fit 0.6 + 0.475 a_B",
-            fit(&paper_shear_to_bulk),
+            fit(&paper::shear_to_bulk),
             Mark::Line,
         ),
         Series::new(format!("native, L = {largest} d"), gk_points, Mark::Points),
     ];
     let mut nu_series = vec![
-        Series::new("from the paper's fits", fit(&paper_nu), Mark::Line),
+        Series::new(
+            "from the paper's fits",
+            fit(&paper::poisson_ratio),
+            Mark::Line,
+        ),
         Series::new(format!("native, L = {largest} d"), nu_points, Mark::Points),
     ];
     if !lammps_gk.is_empty() {
@@ -641,7 +507,7 @@ pub fn study_report(
             series: vec![
                 Series::new(
                     "paper fit 1.365 - 0.14 / (a_B + 1.168)",
-                    fit(&paper_bulk_modulus),
+                    fit(&paper::bulk_modulus),
                     Mark::Line,
                 ),
                 Series::new(format!("native, L = {largest} d"), k_points, Mark::Points),
@@ -727,7 +593,7 @@ pub fn calibrate(
         "threads": threads,
         "options": opts,
         "bulk_protocol": crate::scene::builders::bulk::BulkParams::paper(0.0, 0, 0.0),
-        "reference": "reference_data/paper_fits.json",
+        "reference": paper::FITS_FILE,
         "wall_seconds": start.elapsed().as_secs_f64(),
         "cases": cases,
     });

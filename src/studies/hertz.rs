@@ -3,16 +3,19 @@
 //! two flat walls in either engine, their force-overlap curves against
 //! Hertz's law, ensemble mean and spread, JSON and plots.
 
+pub mod cli;
+
 use crate::analysis::fit::interpolate;
 use crate::analysis::hertz::{
     effective_modulus, hertz_deviation, hertz_normalised_force, squeeze_curve, HertzDeviation,
     SqueezeCurve, CONTACT_THRESHOLD,
 };
-use crate::analysis::moduli::{paper_bulk_modulus, paper_shear_to_bulk, poisson_ratio};
 use crate::analysis::plot::{write_svg, Mark, Panel, PlotError, Series};
 use crate::file_error::FileError;
+use crate::reference::paper;
 use crate::scene::builders::grain::{build_grain, GrainKind, GrainParams, GrainSummary};
-use crate::scene::protocols::{hertz_squeeze, rotated, uniform_rotation, SqueezeParams};
+use crate::scene::protocols::{hertz_squeeze, SqueezeParams};
+use crate::scene::rotation::{rotated, uniform_rotation};
 use crate::scene::{run_native_report, RunOptions, StageOutput};
 use crate::scene::{ForceField, Scene};
 use crate::verify::single_point::nan_max;
@@ -58,13 +61,11 @@ pub struct Moduli {
 impl Moduli {
     /// The paper's calibration fits at `a_b` (reference_data/paper_fits.json).
     pub fn paper_fits(a_b: f64) -> Self {
-        let k = paper_bulk_modulus(a_b);
+        let (k, nu) = paper::elastic_constants(a_b);
         Self {
             k,
-            nu: poisson_ratio(k, paper_shear_to_bulk(a_b) * k),
-            source: format!(
-                "the paper's calibration fits at a_B = {a_b} (reference_data/paper_fits.json)"
-            ),
+            nu,
+            source: paper::elastic_constants_source(a_b),
         }
     }
 }

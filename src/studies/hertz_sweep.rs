@@ -3,6 +3,8 @@
 //! times of each, so the cost of a smaller error can be read off
 //! (run time against error).
 
+pub mod cli;
+
 use crate::analysis::hertz::HertzDeviation;
 use crate::analysis::plot::{write_svg, Mark, Panel, Series};
 use crate::file_error::FileError;

@@ -15,6 +15,8 @@
 //! the outermost particle centres plus d/2, and the wall's radius gives
 //! the imposed strain.
 
+pub mod cli;
+
 use crate::analysis::plot::{write_svg, Mark, Panel, PlotError, Series};
 use crate::engine::SphereWall;
 use crate::file_error::FileError;

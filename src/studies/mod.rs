@@ -28,3 +28,13 @@ pub mod large_strain;
 pub mod mcdem;
 pub mod stability;
 pub mod upstream;
+
+/// The command line, as recorded in the studies' reports.
+pub fn command_line() -> String {
+    std::env::args().collect::<Vec<_>>().join(" ")
+}
+
+/// Prints one line of a study's running table.
+pub fn print_line(line: &str) {
+    println!("{line}");
+}

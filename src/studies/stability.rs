@@ -24,6 +24,8 @@
 //! a solid that is merely soft, so undamped trials are judged on energy and
 //! faults alone (an undamped blow-up does not calm down).
 
+pub mod cli;
+
 use crate::analysis::plot::{write_svg, Mark, Panel, PlotError, Series};
 use crate::engine::StageDrivers;
 use crate::file_error::FileError;

@@ -9,6 +9,8 @@
 //! (`lammps_inputs/upstream_compare/`, run from the embedded copy written
 //! into the work folder).
 
+pub mod cli;
+
 use crate::engine::SimBox;
 use crate::file_error::FileError;
 use crate::kernels::Separation;

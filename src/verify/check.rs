@@ -4,6 +4,7 @@
 use super::compare::CompareError;
 use super::compare::{compaction_deviation, compare_runs, deviation_series};
 use super::engines::{run_native, HarnessError, LammpsLauncher};
+use super::moduli::{measure_moduli, CalibrationEngine};
 use super::scenes::{
     as_trajectory, contact_solid, dem_lattice, dem_trajectory, grain_pair, grain_squeeze,
     small_compaction, with_release, DemLoading,
@@ -12,16 +13,17 @@ use super::single_point::{
     lammps_single_point, max_relative_deviation, native_single_point, SinglePointError,
 };
 use super::tolerances::tolerance;
+use crate::analysis::moduli::Moduli;
 use crate::analysis::plot::{write_svg, Mark, Panel, PlotError, Series};
 use crate::engine::MultiContact;
 use crate::file_error::FileError;
 use crate::lammps::LammpsVersion;
 use crate::options::{validate_a_b_values, InvalidOption};
+use crate::reference::paper;
 use crate::scene::builders::bulk::{build_bulk, BulkParams};
 use crate::scene::builders::grain::{build_grain, GrainKind, GrainParams};
-use crate::scene::protocols::{hertz_squeeze, SqueezeParams};
+use crate::scene::protocols::{hertz_squeeze, ModuliLoading, SqueezeParams};
 use crate::scene::{ForceField, Scene, SceneError};
-use crate::studies::calibration::{measure_moduli, CalibrationEngine, Loading, Moduli};
 use serde::Serialize;
 use std::path::{Path, PathBuf};
 
@@ -473,7 +475,7 @@ pub fn run_check(opts: &CheckOptions) -> Result<CheckReport> {
         false,
     )?
     .0;
-    let loading = Loading::default();
+    let loading = ModuliLoading::default();
     let mut calibration = Vec::new();
     for &a_b in &opts.calibration_a_b {
         let tag = format!("calibration-L{}-aB{a_b}", opts.calibration_size);
@@ -570,10 +572,6 @@ pub fn calibration_panels(rows: &[[Moduli; 2]], size: f64) -> Vec<Panel> {
             .map(|a| (a, f(a)))
             .collect()
     };
-    let nu_fit = |a: f64| {
-        let gk = crate::analysis::moduli::paper_shear_to_bulk(a);
-        (3.0 - 2.0 * gk) / (2.0 * (3.0 + gk))
-    };
     let pick = |e: usize, f: &dyn Fn(&Moduli) -> f64| -> Vec<(f64, f64)> {
         rows.iter().map(|r| (r[e].a_b, f(&r[e]))).collect()
     };
@@ -585,7 +583,7 @@ pub fn calibration_panels(rows: &[[Moduli; 2]], size: f64) -> Vec<Panel> {
             series: vec![
                 Series::new(
                     "paper fit 0.6 + 0.475 a_B",
-                    fit_line(&crate::analysis::moduli::paper_shear_to_bulk),
+                    fit_line(&paper::shear_to_bulk),
                     Mark::Line,
                 ),
                 Series::new("native", pick(0, &|m| m.g_over_k), Mark::Points),
@@ -598,7 +596,11 @@ pub fn calibration_panels(rows: &[[Moduli; 2]], size: f64) -> Vec<Panel> {
             x_label: "a_B (k d)".into(),
             y_label: "nu".into(),
             series: vec![
-                Series::new("from the paper's fits", fit_line(&nu_fit), Mark::Line),
+                Series::new(
+                    "from the paper's fits",
+                    fit_line(&paper::poisson_ratio),
+                    Mark::Line,
+                ),
                 Series::new("native", pick(0, &|m| m.nu), Mark::Points),
                 Series::new("LAMMPS + plugin", pick(1, &|m| m.nu), Mark::Rings),
             ],

@@ -1,7 +1,7 @@
 //! LAMMPS as a child process: how it starts on one or more MPI ranks, its
 //! time limit, and the message of a failed run.
 //!
-//! Every LAMMPS run of the harness and the studies is a child process:
+//! Every LAMMPS run of the harness and of what is built on it is a child process:
 //! Debian's LAMMPS ends its process on any error, and the caller must turn
 //! that into an error value with LAMMPS's message. [`LammpsChild`] starts
 //! `lmp-bpm` (input templates), `bpm run --engine lammps` (scenes) and the

@@ -2,10 +2,12 @@
 //! through the native engine, compared observable by observable.
 
 pub mod check;
+pub mod cli;
 pub mod compare;
 pub mod cross_check;
 pub mod engines;
 pub mod launch;
+pub mod moduli;
 pub mod scenes;
 pub mod single_point;
 pub mod tolerances;
@@ -22,8 +24,8 @@ pub use single_point::{
     SinglePointError,
 };
 
-/// Writes `value` as pretty-printed JSON (the studies' and the check's
-/// report files).
+/// Writes `value` as pretty-printed JSON (the check's report files, and
+/// those of the commands built on the harness).
 pub(crate) fn write_json(
     path: &std::path::Path,
     value: &impl serde::Serialize,

@@ -279,7 +279,7 @@ pub fn grain_squeeze(
 pub fn small_compaction(seed: u64) -> Result<Scene, SceneError> {
     use crate::scene::builders::grain::GrainKind;
     use crate::scene::builders::packing::{build_packing, PackingParams};
-    use crate::scene::protocols::CompactionProtocol;
+    use crate::scene::protocols::{compaction_scene, CompactionProtocol};
     let mut params = PackingParams::new(16, GrainKind::Rough, 2.0, 0.0, seed);
     params.grain.time_scale = 0.05;
     params.distinct_grains = 2;
@@ -296,9 +296,7 @@ pub fn small_compaction(seed: u64) -> Result<Scene, SceneError> {
         states_per_stage: 2,
         ..CompactionProtocol::paper()
     };
-    Ok(crate::studies::compaction::compaction_scene(
-        &packing, &protocol,
-    ))
+    Ok(compaction_scene(&packing, &protocol))
 }
 
 /// The sphere material of the DEM cross-check scenes: E = 100 k/d, nu =

@@ -123,8 +123,9 @@ impl BulkParams {
     }
 }
 
-/// The protocol stages appended to a built bulk solid.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+/// The protocol stages appended to a built bulk solid (`bpm build bulk
+/// --protocol`: the variants' docs are its help).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
 pub enum BulkProtocol {
     /// No stages: only the solid.
     None,

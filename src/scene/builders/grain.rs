@@ -16,6 +16,7 @@ use crate::engine::SphereWall;
 use crate::kernels::Separation;
 use crate::scene::load::reference_lengths;
 use crate::scene::model::{Bonds, BoxSpec, Scene, StageSpec};
+use crate::scene::rotation::centre_of;
 use crate::scene::validate::{simbox_of, SceneError};
 use serde::{Deserialize, Serialize};
 
@@ -175,18 +176,6 @@ fn fibonacci_directions(n: usize) -> Vec<[f64; 3]> {
             [r * phi.cos(), r * phi.sin(), z]
         })
         .collect()
-}
-
-/// The centre of mass of `x` (unit masses, no periodic images).
-pub fn centre_of(x: &[[f64; 3]]) -> [f64; 3] {
-    let n = x.len().max(1) as f64;
-    let mut c = [0.0; 3];
-    for p in x {
-        for d in 0..3 {
-            c[d] += p[d] / n;
-        }
-    }
-    c
 }
 
 /// The roughness of the grain at `x`, measured from its centre of mass with

@@ -29,12 +29,12 @@
 //! template's centres: step 1 only.
 
 use super::bulk::pairs_within;
-use super::grain::{build_grain, centre_of, GrainKind, GrainParams};
+use super::grain::{build_grain, GrainKind, GrainParams};
 use crate::engine::SimBox;
 use crate::kernels::{GranularMaterial, PairCoeffs, Separation};
 use crate::scene::load::reference_lengths;
 use crate::scene::model::{Bonds, ForceField, Mass, ModelKind, Scene, StageSpec};
-use crate::scene::protocols::uniform_rotation;
+use crate::scene::rotation::{centre_of, uniform_rotation};
 use crate::scene::validate::{simbox_of, SceneError};
 use rand::{Rng, SeedableRng};
 use serde::{Deserialize, Serialize};

@@ -5,6 +5,7 @@
 //! the speed work with its verdict. `bpm bench-lammps`
 //! ([`run_bench_lammps`]) runs the Debian LAMMPS variants alone.
 
+pub mod cli;
 mod packing;
 
 pub use packing::{bench_packing, workload_protocol, PackingBench, PackingWorkload};

@@ -29,7 +29,7 @@ use crate::scene::builders::packing::{
 };
 use crate::scene::datafile::{read_data_file, write_data_file};
 use crate::scene::model::{Mass, ModelKind};
-use crate::scene::protocols::CompactionProtocol;
+use crate::scene::protocols::{compaction_scene, CompactionProtocol};
 use crate::scene::run::Checkpoint;
 use crate::scene::validate::{simbox_of, SceneError};
 use crate::scene::{
@@ -698,19 +698,6 @@ fn simbox_of_checkpoint(c: &Checkpoint, periodic: [bool; 3]) -> SimBox {
     }
 }
 
-/// The compaction scene of a packing: its stages are the protocol's
-/// (DEM spheres have no bonds whose reference the jam could reset).
-pub fn compaction_scene(packing: &Scene, protocol: &CompactionProtocol) -> Scene {
-    let mut scene = packing.clone();
-    scene.stages = protocol.stages();
-    if scene.model == ModelKind::Dem {
-        for stage in &mut scene.stages {
-            stage.reset_reference = false;
-        }
-    }
-    scene
-}
-
 fn column(stage: &StageOutput, name: &str) -> Vec<f64> {
     stage.column(name).unwrap_or_default()
 }
@@ -1155,6 +1142,7 @@ pub fn run_compaction(
     Ok(report)
 }
 
+pub mod cli;
 pub mod compare;
 pub mod dem;
 mod dump;

@@ -16,12 +16,14 @@
 //!   the study's Tables D.1 and D.2.
 
 pub mod calibration;
+pub mod cli;
 pub mod compression;
 pub mod rigid_box;
 pub mod shear;
 
 use crate::engine::{GranularWall, MultiContact, WallSide};
 use crate::kernels::{GranularMaterial, NormalDamping};
+use crate::reference::multicontact;
 use crate::scene::{
     BoxSpec, ForceField, Mass, ModelKind, Particles, Scene, StageOutput, StageSpec,
 };
@@ -55,9 +57,9 @@ pub struct Closures {
 impl Default for Closures {
     fn default() -> Self {
         Self {
-            gamma: 0.82,
-            gamma_advanced: 0.81,
-            mpr: 0.11,
+            gamma: multicontact::STANDARD_GAMMA,
+            gamma_advanced: multicontact::ADVANCED_GAMMA,
+            mpr: multicontact::ADVANCED_MPR,
         }
     }
 }

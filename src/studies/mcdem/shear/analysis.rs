@@ -5,6 +5,7 @@
 use super::protocol::{stage_rates, stiffness};
 use super::{sorted_distinct, ContactLaw, RecordedRun, SeriesSpec, ShearOptions, StageSeries};
 use crate::analysis::jamming::{power_law_at, power_law_with_jamming_point, PowerLaw};
+use crate::reference::multicontact::{PaperLaw, PaperTables};
 use serde::{Deserialize, Serialize};
 
 /// Mean of a series over a strain window, with its standard error from
@@ -209,53 +210,6 @@ impl ShearPoint {
             _ => None,
         }
         .filter(|p| *p > 0.0)
-    }
-}
-
-/// The tables' law at one friction and Poisson's ratio.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
-pub struct PaperLaw {
-    /// Table D.1.
-    pub alpha: f64,
-    /// Table D.2.
-    pub beta: f64,
-}
-
-/// Tables D.1 and D.2 of the multi-contact study.
-#[derive(Clone, Debug, Deserialize)]
-pub struct PaperTables {
-    /// Column heads.
-    pub poisson_ratio: Vec<f64>,
-    /// Row heads.
-    pub friction: Vec<f64>,
-    /// Table D.1, rows by friction.
-    pub alpha_qs: Vec<Vec<f64>>,
-    /// Table D.2, rows by friction.
-    pub beta: Vec<Vec<f64>>,
-}
-
-const PAPER_TABLES_JSON: &str =
-    include_str!("../../../../reference_data/multicontact_shear_tables.json");
-
-impl PaperTables {
-    /// The stored tables.
-    pub fn stored() -> Self {
-        serde_json::from_str(PAPER_TABLES_JSON)
-            .expect("reference_data/multicontact_shear_tables.json is valid (a unit test reads it)")
-    }
-
-    /// The law at `friction` and `poisson_ratio`, if both are a row and
-    /// a column of the tables.
-    pub fn law(&self, friction: f64, poisson_ratio: f64) -> Option<PaperLaw> {
-        let find = |heads: &[f64], x: f64| heads.iter().position(|h| (h - x).abs() < 1e-9);
-        let (row, col) = (
-            find(&self.friction, friction)?,
-            find(&self.poisson_ratio, poisson_ratio)?,
-        );
-        Some(PaperLaw {
-            alpha: self.alpha_qs[row][col],
-            beta: self.beta[row][col],
-        })
     }
 }
 
@@ -583,19 +537,6 @@ fn format_ratios(ratios: &[(f64, f64)]) -> String {
 mod tests {
     use super::*;
     use crate::studies::mcdem::shear::{cube_edge, Grid, Packing, RunKey};
-
-    #[test]
-    fn stored_tables_read_and_look_up_by_row_and_column() {
-        let t = PaperTables::stored();
-        assert_eq!(t.alpha_qs.len(), t.friction.len());
-        assert!(t.alpha_qs.iter().all(|r| r.len() == t.poisson_ratio.len()));
-        let law = t.law(0.0, 0.5).unwrap();
-        assert_eq!((law.alpha, law.beta), (0.916128, 0.916196));
-        let law = t.law(0.5, 0.25).unwrap();
-        assert_eq!((law.alpha, law.beta), (0.145432, 0.702005));
-        assert!(t.law(0.2, 0.25).is_none());
-        assert!(t.law(0.5, 0.33).is_none());
-    }
 
     #[test]
     fn a_window_mean_has_the_block_error_and_sees_drift() {

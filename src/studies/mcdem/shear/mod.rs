@@ -25,8 +25,8 @@ mod protocol;
 mod report;
 
 pub use analysis::{
-    analyse, window_mean, Analysis, PaperLaw, PaperTables, Regime, SeriesResult, ShearPoint,
-    TrendCheck, WindowMean, BLOCKS,
+    analyse, window_mean, Analysis, Regime, SeriesResult, ShearPoint, TrendCheck, WindowMean,
+    BLOCKS,
 };
 pub use protocol::{
     cube_edge, material, prepare_packings, run_point, shear_rate, shear_scene, stage_rates,
@@ -39,14 +39,16 @@ use crate::analysis::fit::interpolate;
 use crate::analysis::plot::PlotError;
 use crate::engine::MultiContact;
 use crate::file_error::FileError;
+use crate::reference::multicontact::ASSUMED_JAMMING_POINTS;
 use crate::scene::{validate, Scene};
 use indicatif::{ProgressBar, ProgressStyle};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 
-/// The contact laws compared.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+/// The contact laws compared (`bpm mc-shear --laws`: the variants' docs
+/// are its help).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize, clap::ValueEnum)]
 #[serde(rename_all = "snake_case")]
 pub enum ContactLaw {
     /// Plain Hertz-Mindlin.
@@ -151,20 +153,6 @@ impl Grid {
         }
     }
 }
-
-/// The jamming point of sheared frictional spheres against the friction
-/// coefficient, from the simple-shear simulations whose contact parameters
-/// the multi-contact study adopted (Chialvo, Sun and Sundaresan, Phys.
-/// Rev. E 85, 021305, 2012); the study's fit of eq. 8 needs it and does
-/// not print it. Friction coefficients between the listed ones are
-/// interpolated linearly, beyond them the last value holds.
-pub const ASSUMED_JAMMING_POINTS: [(f64, f64); 5] = [
-    (0.0, 0.636),
-    (0.1, 0.61),
-    (0.3, 0.596),
-    (0.5, 0.59),
-    (1.0, 0.587),
-];
 
 /// Options of `bpm mc-shear`.
 #[derive(Clone, Debug, PartialEq, Serialize)]

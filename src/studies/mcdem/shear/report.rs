@@ -1,10 +1,11 @@
 //! The study's report as text and plots.
 
 use super::analysis::MIN_DISTANCE;
-use super::{ContactLaw, PaperLaw, Regime, ShearError, ShearReport};
+use super::{ContactLaw, Regime, ShearError, ShearReport};
 use crate::analysis::jamming::PowerLaw;
 use crate::analysis::plot::{write_svg_rows, Mark, Panel, Series};
 use crate::file_error::FileError;
+use crate::reference::multicontact::PaperLaw;
 use crate::scene::Scene;
 use std::path::Path;
 
