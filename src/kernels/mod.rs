@@ -11,6 +11,7 @@
 
 mod bond;
 mod bond_rows;
+mod diagnosis;
 mod fault;
 mod geometry;
 mod granular;
@@ -30,10 +31,8 @@ pub use bond_rows::{
     gather_forces, gather_forces_on, gather_volumes, row_forces, row_forces_on, row_volumes,
     row_volumes_on, BondRows, BondRowsError, RowInputs,
 };
-pub use fault::{
-    stable_timestep, verlet_limit, Fault, FaultKind, ForcePass, COLLAPSED_BELOW, DEEP_OVERLAP,
-    LIMIT_MARGIN, MULTIBODY_LIMIT, OVERSTRETCHED_ABOVE, STIFFEST_MODE,
-};
+pub use diagnosis::{stable_timestep, verlet_limit, LIMIT_MARGIN, MULTIBODY_LIMIT, STIFFEST_MODE};
+pub use fault::{Fault, FaultKind, ForcePass, COLLAPSED_BELOW, DEEP_OVERLAP, OVERSTRETCHED_ABOVE};
 pub use geometry::{MinimumImage, Separation, Unwrapped};
 pub use granular::{
     corrected_granular_contact, granular_contact, granular_wall_contact, restitution_prefactor,
