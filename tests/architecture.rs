@@ -25,7 +25,10 @@ fn every_path_in_the_where_to_add_table_exists() {
             if !roots.iter().any(|r| first.starts_with(r)) || first.contains('<') {
                 continue;
             }
-            assert!(root.join(first).exists(), "{first} (named in docs/architecture.md)");
+            assert!(
+                root.join(first).exists(),
+                "{first} (named in docs/architecture.md)"
+            );
             checked += 1;
         }
     }
