@@ -472,17 +472,13 @@ fn settle_row<const TALLY: bool>(
 const CHAINS: usize = 2;
 
 /// Calls `take(c, e)` for each incidence entry `e` of each particle
-/// `first + c`, `c < N`, every particle's entries in row order. The N
+/// `first + c`, `c < CHAINS`, every particle's entries in row order. The
 /// particles' entries alternate while all have some left: each particle's
 /// sum is one chain of dependent additions, and one chain alone waits on the
-/// adder's latency at every entry, where N chains keep it busy.
+/// adder's latency at every entry, where several keep it busy.
 #[inline(always)]
-fn interleaved_entries<const N: usize>(
-    rows: &BondRows,
-    first: usize,
-    mut take: impl FnMut(usize, u32),
-) {
-    let lists: [&[u32]; N] = std::array::from_fn(|c| rows.entries(first + c));
+fn interleaved_entries(rows: &BondRows, first: usize, mut take: impl FnMut(usize, u32)) {
+    let lists: [&[u32]; CHAINS] = std::array::from_fn(|c| rows.entries(first + c));
     let common = lists.iter().map(|l| l.len()).min().unwrap_or(0);
     for m in 0..common {
         for (c, list) in lists.iter().enumerate() {
@@ -497,8 +493,9 @@ fn interleaved_entries<const N: usize>(
     }
 }
 
-/// Runs `sum::<N>(first, out)` over `particles` in groups of [`CHAINS`],
-/// then on the last few one at a time; `out` holds one value per particle.
+/// Runs `group(first, values)` on the particles `first..first + CHAINS`
+/// of `particles` in turn, then `single(p, value)` on the last few; `out`
+/// holds one value per particle.
 #[inline(always)]
 fn in_groups<T>(
     particles: Range<usize>,
@@ -547,7 +544,7 @@ pub fn gather_forces_on(
     }
     let _ = isa;
     for (p, fp) in particles.zip(f.iter_mut()) {
-        for &e in &rows.incidence[rows.offsets[p]..rows.offsets[p + 1]] {
+        for &e in rows.entries(p) {
             let row = &forces[(e & !AS_J) as usize];
             if e & AS_J == 0 {
                 fp[0] += row[0];
@@ -580,7 +577,7 @@ pub fn gather_volumes(
         vol,
         |first, out| {
             let mut sums = [0.0; CHAINS];
-            interleaved_entries::<CHAINS>(rows, first, |c, e| sums[c] += term(e));
+            interleaved_entries(rows, first, |c, e| sums[c] += term(e));
             *out = sums;
         },
         |p, out| *out = rows.entries(p).iter().fold(0.0, |s, &e| s + term(e)),
@@ -981,7 +978,7 @@ mod avx2 {
             f,
             |first, out| {
                 let mut sums = out.each_ref().map(&load);
-                interleaved_entries::<CHAINS>(rows, first, |c, e| {
+                interleaved_entries(rows, first, |c, e| {
                     sums[c] = _mm256_add_pd(sums[c], term(e));
                 });
                 for (fp, sum) in out.iter_mut().zip(sums) {
