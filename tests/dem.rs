@@ -53,7 +53,7 @@ fn native_end(scene: &bpm::scene::Scene, skin: f64) -> (f64, [f64; 6], usize, u6
         deformation: scene.stages[0].deformation.clone(),
         ..Default::default()
     };
-    sys.setup(&drivers);
+    sys.setup(&drivers).unwrap();
     let start = sys.simbox.clone();
     for step in 1..=scene.stages[0].steps {
         sys.step(&drivers, step, &start).unwrap();
@@ -241,7 +241,7 @@ fn a_uniform_shear_flow_is_homogeneous_under_lees_edwards_boundaries() {
         for (x, v) in sys.particles.x.iter().zip(sys.particles.v.iter_mut()) {
             *v = streaming.streaming_velocity(&sys.simbox, x);
         }
-        sys.setup(&drivers);
+        sys.setup(&drivers).unwrap();
         let largest = sys
             .particles
             .f
@@ -276,7 +276,7 @@ fn a_uniform_shear_flow_is_homogeneous_under_lees_edwards_boundaries() {
 /// granular wall of its own material (`wall`) or two such spheres thrown
 /// at each other.
 fn rebound(wall: bool, speed: f64) -> f64 {
-    use bpm::engine::{ActiveGranularWall, GranularWall, StageDrivers, WallSide};
+    use bpm::engine::{ExternalTerms, GranularWall, StageDrivers, WallSide};
     let material = bpm::verify::dem_check_material(false);
     let (positions, velocities) = if wall {
         (vec![[5.0, 5.0, 1.0 + 1e-9]], vec![[0.0, 0.0, -speed]])
@@ -306,14 +306,13 @@ fn rebound(wall: bool, speed: f64) -> f64 {
     };
     let drivers = StageDrivers {
         dt: 1e-3,
-        granular_walls: if wall {
-            vec![ActiveGranularWall::new(&plane, &material)]
-        } else {
-            Vec::new()
+        external: ExternalTerms {
+            granular_walls: if wall { vec![plane] } else { Vec::new() },
+            ..Default::default()
         },
         ..Default::default()
     };
-    sys.setup(&drivers);
+    sys.setup(&drivers).unwrap();
     let start = sys.simbox.clone();
     let closing = |sys: &bpm::engine::System| {
         let v = &sys.particles.v;
@@ -331,16 +330,24 @@ fn rebound(wall: bool, speed: f64) -> f64 {
         if touched && !pushing {
             if wall {
                 // The wall's recorded force is the sphere's, both zero now.
-                assert_eq!(sys.report.granular_wall_forces, vec![0.0]);
+                assert_eq!(wall_forces(&sys), vec![0.0]);
             }
             return -closing(&sys) / speed;
         }
         if wall && pushing {
-            let f = sys.report.granular_wall_forces[0];
+            let f = wall_forces(&sys)[0];
             assert_eq!(f, sys.particles.f[0][2], "the wall feels what it pushes");
         }
     }
     panic!("no rebound");
+}
+
+/// The normal force on each granular wall at the last evaluation.
+fn wall_forces(sys: &bpm::engine::System) -> Vec<f64> {
+    let dem = sys
+        .model_as::<bpm::engine::DemModel>()
+        .expect("DEM spheres");
+    dem.report().walls.iter().map(|w| w.force).collect()
 }
 
 /// A sphere rebounds from a wall of its own material as it does from an

@@ -2,7 +2,7 @@
 
 mod common;
 
-use bpm::engine::{Barostat, FlatWall, StageDrivers, Tether, WallSide};
+use bpm::engine::{Barostat, ExternalTerms, FlatWall, StageDrivers, Tether, WallSide};
 use bpm::scene::builders::bulk::{build_bulk, BulkParams};
 use bpm::scene::{build_system, run_scene, ForceField, RunOptions, Scene, StageSpec};
 use std::sync::OnceLock;
@@ -157,7 +157,8 @@ fn affine_isotropic_compression_loads_springs_but_not_the_multibody_term() {
         sys.setup(&StageDrivers {
             dt: 0.1,
             ..Default::default()
-        });
+        })
+        .unwrap();
         sys.pressure()
     };
     let p0 = pressure_after_squeeze(0.0);
@@ -220,11 +221,17 @@ fn flat_wall_pushes_with_k_times_overlap_and_reports_it() {
     let mut sys = build_system(&scene, 1);
     let drivers = StageDrivers {
         dt: 0.1,
-        walls: stage.walls.clone(),
+        external: ExternalTerms {
+            walls: stage.walls.clone(),
+            ..Default::default()
+        },
         ..Default::default()
     };
-    sys.setup(&drivers);
-    assert_eq!(sys.report.wall_forces, vec![2.0 * 0.25, 2.0 * 0.25]);
+    sys.setup(&drivers).unwrap();
+    assert_eq!(
+        sys.report.external.wall_forces,
+        vec![2.0 * 0.25, 2.0 * 0.25]
+    );
     assert!(
         sys.particles.f[0][2].abs() < 1e-15,
         "symmetric walls cancel"
@@ -232,16 +239,19 @@ fn flat_wall_pushes_with_k_times_overlap_and_reports_it() {
     // Moving the lower wall up by 0.1 raises its force by k * 0.1.
     sys.compute_forces(
         &StageDrivers {
-            walls: vec![FlatWall {
-                velocity: 1.0,
-                ..stage.walls[0].clone()
-            }],
+            external: ExternalTerms {
+                walls: vec![FlatWall {
+                    velocity: 1.0,
+                    ..stage.walls[0].clone()
+                }],
+                ..Default::default()
+            },
             ..drivers
         },
         0.1,
         true,
     );
-    assert!((sys.report.wall_forces[0] - 2.0 * 0.35).abs() < 1e-14);
+    assert!((sys.report.external.wall_forces[0] - 2.0 * 0.35).abs() < 1e-14);
     assert!((sys.particles.f[0][2] - 2.0 * 0.35).abs() < 1e-14);
 }
 
@@ -457,7 +467,8 @@ fn a_replicated_solid_has_the_same_bonds_and_stress() {
         sys.setup(&bpm::engine::StageDrivers {
             dt: 0.1,
             ..Default::default()
-        });
+        })
+        .unwrap();
         sys.pressure_tensor()
     };
     let (p1, p6) = (strained_pressure(&base), strained_pressure(&big));

@@ -43,7 +43,8 @@ fn in_process_lammps_gives_the_native_forces() {
     sys.setup(&StageDrivers {
         dt: 0.1,
         ..Default::default()
-    });
+    })
+    .unwrap();
     assert!(
         common::max_abs(&sys.particles.f) > 1e-3,
         "the scene must carry forces"

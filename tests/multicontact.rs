@@ -574,12 +574,15 @@ fn the_closure_is_the_same_across_a_tilt_flip() {
             dt: 1e-3,
             ..Default::default()
         };
-        sys.setup(&drivers);
+        sys.setup(&drivers).unwrap();
         let start = sys.simbox.clone();
         for step in 1..=20 {
             sys.step(&drivers, step, &start).unwrap();
         }
-        let closure = sys.report.closure.expect("no closure report");
+        let closure = sys
+            .model_as::<bpm::engine::DemModel>()
+            .and_then(|m| m.report().closure)
+            .expect("no closure report");
         (
             sys.particles.f.clone(),
             closure.largest.max(-closure.smallest),

@@ -1,8 +1,166 @@
-//! External forces: flat and spherical harmonic walls, a centre-of-mass
-//! tether, viscous damping.
+//! Forces from outside the particle models: flat and spherical harmonic
+//! walls, flat granular walls, a centre-of-mass tether, viscous damping and
+//! gravity. [`ExternalTerms`] holds one stage's terms; either particle
+//! model runs under them. All but the granular walls act here, after the
+//! model's forces; granular walls touch spheres through the model's own
+//! contact law, so the model applies them (`ParticleModel::begin_stage`).
 
+use super::particles::Particles;
 use super::simbox::SimBox;
+use crate::kernels::GranularMaterial;
 use serde::{Deserialize, Serialize};
+
+/// One stage's forces from outside the particle model.
+#[derive(Debug, Default)]
+pub struct ExternalTerms {
+    /// Flat harmonic walls.
+    pub walls: Vec<FlatWall>,
+    /// A spherical harmonic wall.
+    pub sphere_wall: Option<SphereWall>,
+    /// Flat granular walls: the model applies them with its contact law.
+    pub granular_walls: Vec<GranularWall>,
+    /// A centre-of-mass tether, resolved against the particles.
+    pub tether: Option<ActiveTether>,
+    /// Viscous damping coefficient (m / tau), 0 for none.
+    pub viscous: f64,
+    /// A uniform acceleration on every particle (d / tau^2).
+    pub gravity: Option<Gravity>,
+}
+
+/// What the external terms did in one force evaluation.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct ExternalReport {
+    /// Normal force on each flat wall (k d units, >= 0).
+    pub wall_forces: Vec<f64>,
+    /// Position of each flat wall.
+    pub wall_positions: Vec<f64>,
+    /// `(wall, particle)`: the first particle found on or behind the plane
+    /// of a flat wall.
+    pub through_wall: Option<(usize, usize)>,
+    /// Summed force magnitude on the spherical wall.
+    pub sphere_wall_force: f64,
+    /// Energy of walls, tether and gravity.
+    pub energy: f64,
+}
+
+impl ExternalTerms {
+    /// Adds the forces of every term but the granular walls to
+    /// `particles.f`, at `elapsed` time into the stage, in a fixed order:
+    /// flat walls, the spherical wall, the tether, viscous damping,
+    /// gravity.
+    pub fn apply(
+        &self,
+        elapsed: f64,
+        simbox: &SimBox,
+        particles: &mut Particles,
+    ) -> ExternalReport {
+        let p = particles;
+        let mut report = ExternalReport::default();
+        for (w, wall) in self.walls.iter().enumerate() {
+            let contact = wall.apply(elapsed, &p.x, &mut p.f);
+            report.wall_forces.push(contact.force);
+            report.wall_positions.push(wall.position_at(elapsed));
+            report.energy += contact.energy;
+            if let (Some(particle), None) = (contact.through, report.through_wall) {
+                report.through_wall = Some((w, particle));
+            }
+        }
+        if let Some(sphere) = &self.sphere_wall {
+            let (force, energy) = sphere.apply(elapsed, &p.x, &mut p.f);
+            report.sphere_wall_force = force;
+            report.energy += energy;
+        }
+        if let Some(tether) = &self.tether {
+            report.energy += tether.apply(simbox, &p.x, &p.image, &mut p.f);
+        }
+        if self.viscous != 0.0 {
+            apply_viscous(self.viscous, &p.v, &mut p.f);
+        }
+        if let Some(gravity) = &self.gravity {
+            report.energy += gravity.apply(&p.x, &p.mass, &mut p.f);
+        }
+        report
+    }
+}
+
+/// A uniform acceleration `g` on every particle: force `m g`, potential
+/// energy `-m g . x` (LAMMPS `fix gravity`, whose energy also takes the
+/// stored positions, wrapped into a periodic box at neighbour rebuilds:
+/// along a periodic dimension the energy jumps when a particle is
+/// wrapped, and only its changes between rebuilds mean anything).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Gravity {
+    /// The acceleration (d / tau^2).
+    pub acceleration: [f64; 3],
+}
+
+impl Gravity {
+    /// The acceleration `g`, formed as LAMMPS's `fix gravity` forms it from
+    /// a magnitude `|g|` and a direction `g`: `|g| (g_d / |g|)`, which
+    /// equals `g_d` up to round-off, so both engines add the same forces
+    /// bit for bit.
+    pub fn new(g: [f64; 3]) -> Self {
+        let magnitude = (g[0] * g[0] + g[1] * g[1] + g[2] * g[2]).sqrt();
+        let acceleration = if magnitude > 0.0 {
+            g.map(|c| magnitude * (c / magnitude))
+        } else {
+            [0.0; 3]
+        };
+        Self { acceleration }
+    }
+
+    /// Adds `m g` to every particle's force; returns the energy.
+    pub fn apply(&self, x: &[[f64; 3]], mass: &[f64], f: &mut [[f64; 3]]) -> f64 {
+        let g = self.acceleration;
+        let mut energy = 0.0;
+        for ((xi, &m), fi) in x.iter().zip(mass).zip(f.iter_mut()) {
+            for d in 0..3 {
+                fi[d] += m * g[d];
+            }
+            energy -= m * (g[0] * xi[0] + g[1] * xi[1] + g[2] * xi[2]);
+        }
+        energy
+    }
+}
+
+/// A flat wall of a granular material: Hertz-Mindlin contacts with the
+/// spheres, with damping, sliding (and optionally rolling and twisting)
+/// friction. A scene's `stages[i].granular_walls`. The particle model
+/// applies it with its contact law (DEM spheres only).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct GranularWall {
+    /// Axis normal to the wall: 0, 1 or 2.
+    pub axis: usize,
+    /// Which side the spheres are on.
+    pub side: WallSide,
+    /// Position along the axis at the start of the stage (d units).
+    pub position: f64,
+    /// Speed along the axis (d / tau); negative moves towards -axis.
+    #[serde(default)]
+    pub velocity: f64,
+    /// The wall's material and the contact's friction: its Young's
+    /// modulus and Poisson's ratio mix with the spheres' by Hertz's and
+    /// Mindlin's rules (a modulus far above the spheres' makes it rigid);
+    /// restitution, damping and friction are those of the sphere-wall
+    /// contact.
+    pub material: GranularMaterial,
+}
+
+impl GranularWall {
+    /// Wall position after `elapsed` time.
+    pub fn position_at(&self, elapsed: f64) -> f64 {
+        self.position + self.velocity * elapsed
+    }
+
+    /// +1 when the spheres are on the +axis side (a `lo` wall), else -1.
+    pub fn sign(&self) -> f64 {
+        match self.side {
+            WallSide::Lo => 1.0,
+            WallSide::Hi => -1.0,
+        }
+    }
+}
 
 /// Which side of a flat wall the particles are on.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]

@@ -5,11 +5,11 @@
 //!   Verlet list and exclusions);
 //! - state: [`particles`] (structure of arrays), [`system`] (one run's
 //!   state and the velocity-Verlet step), [`integrator`];
-//! - models: [`model`] (the contract), [`bpm`] (the bonded particle model);
-//!   a new model is a folder beside `bpm/` implementing
-//!   [`ParticleModel`];
-//! - drivers: [`external`] (walls, tether, viscous damping), [`deform`]
-//!   (box deformation, barostat);
+//! - models: [`model`] (the contract), [`bpm`] (the bonded particle model),
+//!   [`dem`] (DEM spheres and the multi-contact closure); a new model is a
+//!   folder beside them implementing [`ParticleModel`];
+//! - drivers: [`external`] (walls, tether, viscous damping, gravity: terms
+//!   either model runs under), [`deform`] (box deformation, barostat);
 //! - [`parallel`] and [`timers`]: threads and per-part timing.
 
 pub mod bpm;
@@ -29,10 +29,13 @@ pub mod timers;
 pub use bpm::{BondTopology, BpmModel, BpmTerms};
 pub use deform::{Barostat, Deformation, LeesEdwards, ShearRemap, TiltFactor};
 pub use dem::{
-    ActiveGranularWall, BeyondReach, ClosurePass, ClosureReport, ContactStore, DemModel,
-    GranularWall, MultiContact,
+    ActiveGranularWall, BeyondReach, ClosurePass, ClosureReport, ContactStore, DemModel, DemReport,
+    MultiContact,
 };
-pub use external::{ActiveTether, FlatWall, SphereWall, Tether, WallSide};
+pub use external::{
+    ActiveTether, ExternalReport, ExternalTerms, FlatWall, GranularWall, Gravity, SphereWall,
+    Tether, WallSide,
+};
 pub use integrator::Integrator;
 pub use model::{EnergyTerm, ForceInput, ForceOutput, ModelTally, ParticleModel, MAX_ENERGY_TERMS};
 pub use neighbor::{Exclusions, NeighbourList};

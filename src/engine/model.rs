@@ -1,20 +1,22 @@
 //! The contract between the engine and a particle model.
 //!
-//! A model (the bonded particle model in [`super::bpm`], DEM spheres later)
-//! owns its own state (bonds, reference lengths and volumes; radii, contact
-//! history) and adds its forces to the particles. The engine owns what every
+//! A model (the bonded particle model in [`super::bpm`], DEM spheres in
+//! [`super::dem`]) owns its own state (bonds, reference lengths and
+//! volumes; radii, contact history) and adds its forces to the particles;
+//! what only one model measures (the multi-contact closure's corrections)
+//! it keeps in its own report, read through its own type. The engine owns what every
 //! model shares: positions, velocities, forces, masses, the box, the pair
 //! list, the integrator and the external drivers. The engine calls a model
 //! through this trait once per step, never per interaction, so the hot
 //! loops stay monomorphic inside the model.
 
 use super::deform::LeesEdwards;
-use super::dem::{ActiveGranularWall, ClosureReport};
-use super::external::WallContact;
+use super::external::GranularWall;
 use super::neighbor::{Exclusions, NeighbourList};
 use super::simbox::SimBox;
 use super::team::Team;
 use super::timers::Timers;
+use super::EngineError;
 use crate::kernels::{Fault, Tally};
 use std::any::Any;
 
@@ -86,9 +88,6 @@ pub struct ForceInput<'a> {
     pub lees_edwards: Option<LeesEdwards>,
     /// Time into the stage (tau): where moving walls are.
     pub elapsed: f64,
-    /// The stage's flat granular walls (DEM spheres touch them; other
-    /// models have none).
-    pub granular_walls: &'a [ActiveGranularWall],
 }
 
 /// Where a model adds its forces (and torques).
@@ -102,11 +101,6 @@ pub struct ForceOutput<'a> {
     pub timers: &'a mut Timers,
     /// The first interaction outside the model's range, set by the model.
     pub fault: Option<Fault>,
-    /// What each of [`ForceInput::granular_walls`] felt, in order, set by
-    /// the model that touches them.
-    pub granular_walls: Vec<WallContact>,
-    /// The multi-contact closure's pass, if the model has one.
-    pub closure: Option<ClosureReport>,
 }
 
 /// A particle model: its state, its forces, its observables.
@@ -132,13 +126,31 @@ pub trait ParticleModel: std::fmt::Debug + Send + Any {
     /// model's recorded columns.
     fn energy_terms(&self) -> &'static [EnergyTerm];
 
-    /// Called when a stage starts: per-stage state (such as the contact
-    /// histories of a stage's walls, which LAMMPS re-creates each stage)
-    /// starts afresh.
-    fn begin_stage(&mut self) {}
+    /// Called when a stage starts, with the stage's granular walls, which
+    /// touch particles through the model's own contact law: per-stage
+    /// state (such as the walls' contact histories, which LAMMPS
+    /// re-creates each stage) starts afresh. A model without such a law
+    /// refuses walls.
+    fn begin_stage(&mut self, granular_walls: &[GranularWall]) -> Result<(), EngineError> {
+        if granular_walls.is_empty() {
+            Ok(())
+        } else {
+            Err(EngineError::Unsupported {
+                what: "granular walls (they need DEM spheres)",
+            })
+        }
+    }
 
     /// Adds the model's forces for the state in `input` to `out`.
     fn compute(&mut self, input: &ForceInput<'_>, out: &mut ForceOutput<'_>) -> ModelTally;
+
+    /// The model's verdict on its last force evaluation, beyond the
+    /// interactions' faults (for example a sphere through a granular wall):
+    /// an error stops the run at `step`.
+    fn verdict(&self, step: u64) -> Result<(), EngineError> {
+        let _ = step;
+        Ok(())
+    }
 
     /// The likely cause of `fault` at timestep `dt`, in words; `mass` is
     /// the first particle's, `nearest_unbonded` the distance from either

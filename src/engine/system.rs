@@ -6,8 +6,7 @@
 //! (or, for Lees-Edwards shear, none: the images move instead).
 
 use super::deform::{Barostat, Deformation, LeesEdwards};
-use super::dem::{ActiveGranularWall, ClosureReport, DemModel};
-use super::external::{apply_viscous, ActiveTether, FlatWall, SphereWall};
+use super::external::{ExternalReport, ExternalTerms, Gravity};
 use super::integrator::Integrator;
 use super::model::{ForceInput, ForceOutput, ModelTally, ParticleModel};
 use super::neighbor::NeighbourList;
@@ -23,17 +22,8 @@ use crate::kernels::{Fault, Separation, Tally};
 pub struct StageDrivers {
     /// Time step (tau).
     pub dt: f64,
-    /// Flat walls.
-    pub walls: Vec<FlatWall>,
-    /// A spherical wall.
-    pub sphere_wall: Option<SphereWall>,
-    /// Flat granular walls (DEM spheres), resolved against the spheres'
-    /// material.
-    pub granular_walls: Vec<ActiveGranularWall>,
-    /// A centre-of-mass tether, resolved against the particles.
-    pub tether: Option<ActiveTether>,
-    /// Viscous damping coefficient (m / tau), 0 for none.
-    pub viscous: f64,
+    /// Forces from outside the model: walls, tether, damping, gravity.
+    pub external: ExternalTerms,
     /// Box deformation.
     pub deformation: Option<Deformation>,
     /// Barostat.
@@ -54,32 +44,13 @@ impl StageDrivers {
 pub struct StepReport {
     /// Energy per model term and virial.
     pub interactions: ModelTally,
-    /// Normal force on each flat wall (k d units, >= 0).
-    pub wall_forces: Vec<f64>,
-    /// Position of each flat wall.
-    pub wall_positions: Vec<f64>,
-    /// Normal force on each granular wall (k d units, positive when
-    /// pushed).
-    pub granular_wall_forces: Vec<f64>,
-    /// Position of each granular wall.
-    pub granular_wall_positions: Vec<f64>,
-    /// `(wall, sphere)`: the first sphere found on or behind the plane of
-    /// a granular wall.
-    pub through_granular_wall: Option<(usize, usize)>,
-    /// Summed force magnitude on the spherical wall.
-    pub sphere_wall_force: f64,
-    /// Energy of walls and tether.
-    pub external_energy: f64,
+    /// What the external terms did (the model reports its granular walls).
+    pub external: ExternalReport,
     /// Whether energies and virials were summed in this evaluation; when
     /// not, `interactions` is zero and the pressure tensor is not available.
     pub tallied: bool,
-    /// `(wall, particle)`: the first particle found on or behind the plane
-    /// of a flat wall.
-    pub through_wall: Option<(usize, usize)>,
     /// The first interaction outside the model's range.
     pub fault: Option<Fault>,
-    /// The multi-contact closure's corrections, if the model has one.
-    pub closure: Option<ClosureReport>,
 }
 
 /// Particles, box and model, with the state of a run.
@@ -97,6 +68,9 @@ pub struct System {
     pub neighbours: NeighbourList,
     /// Neighbour skin (d units).
     pub skin: f64,
+    /// The force field's gravity, which every stage's external terms
+    /// include.
+    pub gravity: Option<Gravity>,
     /// Threads used for force passes (1 = serial).
     pub threads: usize,
     /// The threads themselves, made anew when `threads` changes.
@@ -137,6 +111,7 @@ impl System {
             model,
             neighbours: NeighbourList::default(),
             skin,
+            gravity: None,
             threads: threads.max(1),
             team: Team::new(threads),
             step: 0,
@@ -282,71 +257,23 @@ impl System {
             tally,
             lees_edwards: self.lees_edwards,
             elapsed,
-            granular_walls: &drivers.granular_walls,
         };
         let mut output = ForceOutput {
             f: &mut p.f,
             torque,
             timers: &mut self.timers,
             fault: None,
-            granular_walls: Vec::new(),
-            closure: None,
         };
         let interactions = self.model.compute(&input, &mut output);
-        let ForceOutput {
-            fault,
-            granular_walls,
-            closure,
-            ..
-        } = output;
-        debug_assert_eq!(
-            granular_walls.len(),
-            drivers.granular_walls.len(),
-            "the model touches the stage's granular walls"
-        );
+        let fault = output.fault;
         let _t = self.timers.start(Stage::External);
-        let mut report = StepReport {
+        let external = drivers.external.apply(elapsed, &self.simbox, p);
+        self.report = StepReport {
             interactions,
+            external,
             tallied: tally,
             fault,
-            closure,
-            ..StepReport::default()
         };
-        for (w, wall) in drivers.walls.iter().enumerate() {
-            let contact = wall.apply(elapsed, &p.x, &mut p.f);
-            report.wall_forces.push(contact.force);
-            report.wall_positions.push(wall.position_at(elapsed));
-            report.external_energy += contact.energy;
-            if let (Some(particle), None) = (contact.through, report.through_wall) {
-                report.through_wall = Some((w, particle));
-            }
-        }
-        for (w, (wall, contact)) in drivers
-            .granular_walls
-            .iter()
-            .zip(granular_walls)
-            .enumerate()
-        {
-            report.granular_wall_forces.push(contact.force);
-            report
-                .granular_wall_positions
-                .push(wall.wall.position_at(elapsed));
-            if let (Some(particle), None) = (contact.through, report.through_granular_wall) {
-                report.through_granular_wall = Some((w, particle));
-            }
-        }
-        if let Some(sphere) = &drivers.sphere_wall {
-            let (force, energy) = sphere.apply(elapsed, &p.x, &mut p.f);
-            report.sphere_wall_force = force;
-            report.external_energy += energy;
-        }
-        if let Some(tether) = &drivers.tether {
-            report.external_energy += tether.apply(&self.simbox, &p.x, &p.image, &mut p.f);
-        }
-        if drivers.viscous != 0.0 {
-            apply_viscous(drivers.viscous, &p.v, &mut p.f);
-        }
-        self.report = report;
     }
 
     /// Makes the team anew if `threads` changed since it was made.
@@ -356,16 +283,19 @@ impl System {
         }
     }
 
-    /// Prepares a stage: forces the list build and evaluates forces once.
-    pub fn setup(&mut self, drivers: &StageDrivers) {
+    /// Prepares a stage: hands the model the stage's granular walls (an
+    /// error if it cannot apply them), forces the list build and evaluates
+    /// forces once.
+    pub fn setup(&mut self, drivers: &StageDrivers) -> Result<(), EngineError> {
         self.stage_start_time = self.time;
         self.lees_edwards = drivers
             .deformation
             .as_ref()
             .and_then(|d| d.lees_edwards(&self.simbox));
-        self.model.begin_stage();
+        self.model.begin_stage(&drivers.external.granular_walls)?;
         self.update_neighbours(true);
         self.compute_forces(drivers, 0.0, true);
+        Ok(())
     }
 
     /// One velocity-Verlet step; `stage_step` counts steps within the stage
@@ -465,49 +395,19 @@ impl System {
             .fold(f64::INFINITY, f64::min)
     }
 
-    /// The verdict of the last force evaluation's walls and contact
-    /// closure: an error if a particle was on or behind a wall's plane, or
-    /// the multi-contact corrections went beyond their reach.
+    /// The verdict of the last force evaluation's walls and of the
+    /// model's own checks: an error if a particle was on or behind a
+    /// wall's plane or, for DEM spheres, the multi-contact corrections
+    /// went beyond their reach.
     pub fn check_walls(&self) -> Result<(), EngineError> {
-        if let Some((wall, particle)) = self.report.through_wall {
+        if let Some((wall, particle)) = self.report.external.through_wall {
             return Err(EngineError::ThroughWall {
                 step: self.step,
                 wall,
                 particle,
             });
         }
-        if let Some((wall, particle)) = self.report.through_granular_wall {
-            return Err(EngineError::ThroughGranularWall {
-                step: self.step,
-                wall,
-                particle,
-            });
-        }
-        if let Some((sphere, ratio)) = self.report.closure.and_then(|c| c.collapsed) {
-            return Err(EngineError::ClosureCollapsed {
-                step: self.step,
-                sphere,
-                ratio,
-            });
-        }
-        if let Some(beyond) = self.report.closure.and_then(|c| c.beyond_reach) {
-            let reach = self
-                .model_as::<DemModel>()
-                .and_then(|m| m.multicontact())
-                .map_or(f64::NAN, |m| m.reach);
-            return Err(EngineError::ClosureBeyondReach {
-                step: self.step,
-                sphere: beyond.sphere,
-                partner: if beyond.wall {
-                    format!("granular wall {}", beyond.partner)
-                } else {
-                    format!("sphere {}", beyond.partner)
-                },
-                ratio: beyond.ratio,
-                reach,
-            });
-        }
-        Ok(())
+        self.model.verdict(self.step)
     }
 
     /// The box against the pair interactions' range, as the box deforms.

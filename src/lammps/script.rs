@@ -269,6 +269,7 @@ fn external_commands(
     stage: &StageSpec,
     spheres: Option<&GranularMaterial>,
     closure: bool,
+    gravity: Option<[f64; 3]>,
 ) -> ExternalCommands {
     let mut begin = Vec::new();
     let mut end = Vec::new();
@@ -378,6 +379,23 @@ fn external_commands(
         end.push("group           bpm_tether delete".into());
         energies.push("v_bpm_tether_energy".into());
     }
+    // Last, as the native engine adds gravity after the other terms. LAMMPS
+    // takes a magnitude and a direction and multiplies them back, as
+    // `Gravity::new` does.
+    if let Some(a) = gravity {
+        let magnitude = (a[0] * a[0] + a[1] * a[1] + a[2] * a[2]).sqrt();
+        if magnitude > 0.0 {
+            begin.push(format!(
+                "fix             bpm_gravity all gravity {} vector {} {} {}",
+                g(magnitude),
+                g(a[0]),
+                g(a[1]),
+                g(a[2])
+            ));
+            end.push("unfix           bpm_gravity".into());
+            energies.push("f_bpm_gravity".into());
+        }
+    }
     let variables = vec![format!(
         "variable        bpm_eext equal {}",
         energies.join("+")
@@ -466,6 +484,7 @@ pub fn write_driver(
     // Whether the closure is on at each stage, as the native engine records
     // its columns.
     let mut closure_on = scene.force_field.multicontact.is_some();
+    let mut gravity = scene.force_field.gravity;
     if uses_closure(scene) {
         cmd(
             &mut lines,
@@ -524,7 +543,10 @@ pub fn write_driver(
         {
             spheres = Some(m);
         }
-        let external = external_commands(stage, spheres, uses_closure(scene));
+        if let Some(ff) = &stage.force_field {
+            gravity = ff.gravity;
+        }
+        let external = external_commands(stage, spheres, uses_closure(scene), gravity);
         lines.extend(external.variables.into_iter().map(DriverLine::Command));
         if let Some(ff) = &stage.force_field {
             closure_on = ff.multicontact.is_some();

@@ -3,7 +3,7 @@
 use super::model::{ModelKind, Scene};
 use super::validate::{simbox_of, validate, SceneError};
 use crate::engine::particles::DEFAULT_RADIUS;
-use crate::engine::{BondTopology, BpmModel, DemModel, ParticleModel, Particles, System};
+use crate::engine::{BondTopology, BpmModel, DemModel, Gravity, ParticleModel, Particles, System};
 use crate::kernels::Separation;
 use std::path::Path;
 
@@ -165,11 +165,13 @@ pub fn final_scene(scene: &Scene, sys: &System) -> Scene {
 
 /// Builds the engine system of a validated scene.
 pub fn build_system(scene: &Scene, threads: usize) -> System {
-    System::new(
+    let mut sys = System::new(
         simbox_of(scene),
         particles_of(scene),
         model_of(scene),
         scene.force_field.skin,
         threads,
-    )
+    );
+    sys.gravity = scene.force_field.gravity.map(Gravity::new);
+    sys
 }

@@ -171,6 +171,11 @@ pub struct ForceField {
     /// Hertz.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub multicontact: Option<MultiContact>,
+    /// A uniform acceleration on every particle (gravity), in the scene's
+    /// units of length over time squared (d / tau^2 in reduced units), e.g.
+    /// `[0, 0, -9.81]` for an SI scene; absent for none.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub gravity: Option<[f64; 3]>,
 }
 
 fn default_skin() -> f64 {
@@ -196,6 +201,7 @@ impl ForceField {
             zero_net_multibody: false,
             granular: None,
             multicontact: None,
+            gravity: None,
         }
     }
 
@@ -208,6 +214,7 @@ impl ForceField {
             zero_net_multibody: false,
             granular: Some(material),
             multicontact: None,
+            gravity: None,
         }
     }
 }

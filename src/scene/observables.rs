@@ -9,7 +9,7 @@
 //! lists column names.
 
 use super::model::StageSpec;
-use crate::engine::{EnergyTerm, System};
+use crate::engine::{DemModel, EnergyTerm, System};
 use serde::{Deserialize, Serialize};
 
 /// What a column measures.
@@ -207,6 +207,7 @@ impl Column {
     pub fn native_value(&self, sys: &System, pressure: &[f64; 6]) -> f64 {
         let b = &sys.simbox;
         let r = &sys.report;
+        let dem = sys.model_as::<DemModel>().map(DemModel::report);
         match self.quantity {
             Quantity::Step => sys.step as f64,
             Quantity::Time => sys.time,
@@ -217,14 +218,18 @@ impl Column {
             Quantity::ModelEnergy(k) => r.interactions.terms[k].energy,
             Quantity::Kinetic => sys.kinetic_energy(),
             Quantity::Rotational => sys.particles.rotational_energy(),
-            Quantity::External => r.external_energy,
-            Quantity::WallForce(w) => r.wall_forces[w],
-            Quantity::WallPosition(w) => r.wall_positions[w],
-            Quantity::SphereWallForce => r.sphere_wall_force,
-            Quantity::GranularWallForce(w) => r.granular_wall_forces[w],
-            Quantity::GranularWallPosition(w) => r.granular_wall_positions[w],
-            Quantity::LargestCorrection => r.closure.map_or(0.0, |c| c.largest),
-            Quantity::SwitchedOff => r.closure.map_or(0.0, |c| c.switched_off as f64),
+            Quantity::External => r.external.energy,
+            Quantity::WallForce(w) => r.external.wall_forces[w],
+            Quantity::WallPosition(w) => r.external.wall_positions[w],
+            Quantity::SphereWallForce => r.external.sphere_wall_force,
+            // Validation admits granular walls and the closure only with
+            // DEM spheres, whose report holds them.
+            Quantity::GranularWallForce(w) => dem.map_or(f64::NAN, |d| d.walls[w].force),
+            Quantity::GranularWallPosition(w) => dem.map_or(f64::NAN, |d| d.wall_positions[w]),
+            Quantity::LargestCorrection => dem.and_then(|d| d.closure).map_or(0.0, |c| c.largest),
+            Quantity::SwitchedOff => dem
+                .and_then(|d| d.closure)
+                .map_or(0.0, |c| c.switched_off as f64),
         }
     }
 

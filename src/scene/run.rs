@@ -4,7 +4,8 @@ use super::model::{Scene, StageSpec, VelocityInit};
 use super::observables::{closure_columns, column_names, native_row, stage_columns, Column};
 use super::trajectory::{DumpWriter, Frame, ThermoWriter, TrajectoryError};
 use crate::engine::{
-    ActiveGranularWall, ActiveTether, BpmModel, DemModel, EngineError, Stage, StageDrivers, System,
+    ActiveTether, BpmModel, DemModel, EngineError, ExternalTerms, Gravity, Stage, StageDrivers,
+    System,
 };
 use indicatif::{ProgressBar, ProgressStyle};
 use rand::{Rng, SeedableRng};
@@ -282,6 +283,7 @@ pub fn run_stage(
             .into());
         }
         sys.skin = ff.skin;
+        sys.gravity = ff.gravity.map(Gravity::new);
     }
     if spec.reset_reference {
         let (simbox, x) = (sys.simbox.clone(), sys.particles.x.clone());
@@ -305,28 +307,22 @@ pub fn run_stage(
         .tether
         .as_ref()
         .map(|t| ActiveTether::new(t, &p.grain, &sys.simbox, &p.x, &p.image));
-    // Validation admits granular walls only with DEM spheres.
-    let granular_walls = match sys.model_as::<DemModel>() {
-        Some(dem) => spec
-            .granular_walls
-            .iter()
-            .map(|w| ActiveGranularWall::new(w, dem.material()))
-            .collect(),
-        None => Vec::new(),
-    };
     let drivers = StageDrivers {
         dt: spec.dt,
-        walls: spec.walls.clone(),
-        sphere_wall: spec.sphere_wall.clone(),
-        granular_walls,
-        tether,
-        viscous: spec.viscous,
+        external: ExternalTerms {
+            walls: spec.walls.clone(),
+            sphere_wall: spec.sphere_wall.clone(),
+            granular_walls: spec.granular_walls.clone(),
+            tether,
+            viscous: spec.viscous,
+            gravity: sys.gravity,
+        },
         deformation: spec.deformation.clone(),
         barostat: spec.barostat.clone(),
         tally_every: spec.record.every,
     };
     let stage_box = sys.simbox.clone();
-    sys.setup(&drivers);
+    sys.setup(&drivers)?;
     let mut columns = stage_columns(sys.model.energy_terms(), sys.model.rotational(), spec);
     if sys
         .model_as::<DemModel>()

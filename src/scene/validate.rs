@@ -196,6 +196,11 @@ fn check_force_field(
         non_negative(&format!("{prefix}.pair.gamma"), p.gamma)?;
     }
     non_negative(&format!("{prefix}.skin"), ff.skin)?;
+    if let Some(g) = &ff.gravity {
+        for (d, c) in g.iter().enumerate() {
+            finite(&format!("{prefix}.gravity[{d}]"), *c)?;
+        }
+    }
     Ok(())
 }
 

@@ -466,7 +466,8 @@ fn system_at(solid: &Scene, a_b: f64, gamma: f64) -> crate::engine::System {
     sys.setup(&StageDrivers {
         dt: 0.1,
         ..StageDrivers::default()
-    });
+    })
+    .expect("a stage without granular walls sets up on any model");
     sys
 }
 

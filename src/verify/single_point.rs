@@ -201,7 +201,8 @@ pub fn native_single_point(scene: &Scene) -> SinglePoint {
     sys.setup(&StageDrivers {
         dt: 0.1,
         ..Default::default()
-    });
+    })
+    .expect("a stage without granular walls sets up on any model");
     let terms = &sys.report.interactions.terms;
     SinglePoint {
         forces: sys.particles.f.clone(),

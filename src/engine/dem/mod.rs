@@ -16,13 +16,14 @@ mod wall;
 
 pub use contacts::ContactStore;
 pub use multicontact::{BeyondReach, ClosurePass, ClosureReport, MultiContact};
-pub use wall::{ActiveGranularWall, GranularWall};
+pub use wall::ActiveGranularWall;
 
-use super::external::WallSide;
+use super::external::{GranularWall, WallContact, WallSide};
 use super::model::{EnergyTerm, ForceInput, ForceOutput, ModelTally, ParticleModel};
 use super::neighbor::Exclusions;
 use super::simbox::MinimumImage;
 use super::timers::Stage;
+use super::EngineError;
 use crate::kernels::{
     corrected_granular_contact, ContactForce, ContactHistory, GranularCoeffs, GranularMaterial,
     Sphere, Tally,
@@ -37,6 +38,8 @@ pub struct DemModel {
     /// closure `2 max_radius (1 + reach)`.
     max_radius: f64,
     contacts: ContactStore,
+    /// The stage's granular walls, resolved against the material.
+    walls: Vec<ActiveGranularWall>,
     /// Per granular wall of the stage, one contact history per sphere.
     wall_histories: Vec<Vec<ContactHistory>>,
     /// Each wall's axis and side, for carrying loads across stages.
@@ -45,6 +48,20 @@ pub struct DemModel {
     stage_start: bool,
     /// The multi-contact closure, if on.
     closure: Option<ClosurePass>,
+    /// What the last force evaluation found.
+    report: DemReport,
+}
+
+/// What DEM spheres report of one force evaluation, beyond forces and
+/// stress.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct DemReport {
+    /// What each granular wall of the stage felt, in order.
+    pub walls: Vec<WallContact>,
+    /// Each granular wall's position.
+    pub wall_positions: Vec<f64>,
+    /// The multi-contact closure's pass, if the model has one.
+    pub closure: Option<ClosureReport>,
 }
 
 impl DemModel {
@@ -60,11 +77,24 @@ impl DemModel {
             coeffs: GranularCoeffs::of(&material),
             max_radius,
             contacts: ContactStore::default(),
+            walls: Vec::new(),
             wall_histories: Vec::new(),
             wall_planes: Vec::new(),
             stage_start: true,
             closure: multicontact.map(|m| ClosurePass::new(m, &material)),
+            report: DemReport::default(),
         }
+    }
+
+    /// What the last force evaluation found: the granular walls' loads
+    /// and the closure's corrections.
+    pub fn report(&self) -> &DemReport {
+        &self.report
+    }
+
+    /// The stage's granular walls, resolved against the material.
+    pub fn walls(&self) -> &[ActiveGranularWall] {
+        &self.walls
     }
 
     /// The material.
@@ -183,10 +213,13 @@ impl DemModel {
     /// the multi-contact closure, which would otherwise lose the walls'
     /// forces for the stage's first evaluation (it does not enter the
     /// contact force itself).
-    fn renew_wall_histories(&mut self, walls: &[ActiveGranularWall], n: usize) {
-        let planes: Vec<(usize, WallSide)> =
-            walls.iter().map(|w| (w.wall.axis, w.wall.side)).collect();
-        let fresh = (0..walls.len())
+    fn renew_wall_histories(&mut self, n: usize) {
+        let planes: Vec<(usize, WallSide)> = self
+            .walls
+            .iter()
+            .map(|w| (w.wall.axis, w.wall.side))
+            .collect();
+        let fresh = (0..self.walls.len())
             .map(|w| {
                 let mut history = vec![ContactHistory::default(); n];
                 let same = self.wall_planes.get(w) == Some(&planes[w]);
@@ -227,44 +260,94 @@ impl ParticleModel for DemModel {
         &[]
     }
 
-    fn begin_stage(&mut self) {
+    fn begin_stage(&mut self, granular_walls: &[GranularWall]) -> Result<(), EngineError> {
+        self.walls = granular_walls
+            .iter()
+            .map(|w| ActiveGranularWall::new(w, &self.material))
+            .collect();
         self.stage_start = true;
+        Ok(())
+    }
+
+    fn verdict(&self, step: u64) -> Result<(), EngineError> {
+        let through = self.report.walls.iter().enumerate();
+        if let Some((wall, particle)) = through
+            .filter_map(|(w, c)| c.through.map(|i| (w, i)))
+            .next()
+        {
+            return Err(EngineError::ThroughGranularWall {
+                step,
+                wall,
+                particle,
+            });
+        }
+        let Some(closure) = &self.report.closure else {
+            return Ok(());
+        };
+        if let Some((sphere, ratio)) = closure.collapsed {
+            return Err(EngineError::ClosureCollapsed {
+                step,
+                sphere,
+                ratio,
+            });
+        }
+        if let Some(beyond) = closure.beyond_reach {
+            return Err(EngineError::ClosureBeyondReach {
+                step,
+                sphere: beyond.sphere,
+                partner: if beyond.wall {
+                    format!("granular wall {}", beyond.partner)
+                } else {
+                    format!("sphere {}", beyond.partner)
+                },
+                ratio: beyond.ratio,
+                reach: self.multicontact().map_or(f64::NAN, |m| m.reach),
+            });
+        }
+        Ok(())
     }
 
     fn compute(&mut self, input: &ForceInput<'_>, out: &mut ForceOutput<'_>) -> ModelTally {
         let _t = out.timers.start(Stage::Pairs);
         let sep = input.simbox.minimum_image();
-        let walls = input.granular_walls;
         let n = input.x.len();
         if std::mem::take(&mut self.stage_start)
-            || self.wall_histories.len() != walls.len()
+            || self.wall_histories.len() != self.walls.len()
             || self.wall_histories.iter().any(|h| h.len() != n)
         {
-            self.renew_wall_histories(walls, n);
+            self.renew_wall_histories(n);
         }
         self.contacts.align(input.neighbours);
+        let mut report = std::mem::take(&mut self.report);
+        report.closure = None;
         if let Some(closure) = &mut self.closure {
             closure.update(
                 &sep,
                 input,
                 &self.contacts.history,
-                walls,
+                &self.walls,
                 &self.wall_histories,
             );
-            out.closure = Some(*closure.report());
+            report.closure = Some(*closure.report());
         }
         let mut tally = ModelTally::default();
         tally.terms[0] = self.forces(&sep, input, out.f, out.torque.as_deref_mut());
-        for (w, (wall, history)) in walls.iter().zip(&mut self.wall_histories).enumerate() {
+        report.walls.clear();
+        report.wall_positions.clear();
+        for (w, (wall, history)) in self.walls.iter().zip(&mut self.wall_histories).enumerate() {
             let corrections = self.closure.as_ref().map(|c| c.wall_corrections(w));
-            out.granular_walls.push(wall.apply(
+            report.walls.push(wall.apply(
                 input,
                 out.f,
                 out.torque.as_deref_mut(),
                 history,
                 corrections,
             ));
+            report
+                .wall_positions
+                .push(wall.wall.position_at(input.elapsed));
         }
+        self.report = report;
         tally
     }
 

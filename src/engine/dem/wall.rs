@@ -3,50 +3,11 @@
 //! contact law as sphere pairs (`kernels::granular_wall_contact`), with
 //! one contact history per sphere.
 
-use super::super::external::{WallContact, WallSide};
+use super::super::external::{GranularWall, WallContact};
 use super::super::model::ForceInput;
 use crate::kernels::{
     granular_wall_contact, ContactHistory, GranularCoeffs, GranularMaterial, Sphere, WallPlane,
 };
-use serde::{Deserialize, Serialize};
-
-/// A flat wall of a granular material: Hertz-Mindlin contacts with the
-/// spheres, with damping, sliding (and optionally rolling and twisting)
-/// friction. A scene's `stages[i].granular_walls`.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct GranularWall {
-    /// Axis normal to the wall: 0, 1 or 2.
-    pub axis: usize,
-    /// Which side the spheres are on.
-    pub side: WallSide,
-    /// Position along the axis at the start of the stage (d units).
-    pub position: f64,
-    /// Speed along the axis (d / tau); negative moves towards -axis.
-    #[serde(default)]
-    pub velocity: f64,
-    /// The wall's material and the contact's friction: its Young's
-    /// modulus and Poisson's ratio mix with the spheres' by Hertz's and
-    /// Mindlin's rules (a modulus far above the spheres' makes it rigid);
-    /// restitution, damping and friction are those of the sphere-wall
-    /// contact.
-    pub material: GranularMaterial,
-}
-
-impl GranularWall {
-    /// Wall position after `elapsed` time.
-    pub fn position_at(&self, elapsed: f64) -> f64 {
-        self.position + self.velocity * elapsed
-    }
-
-    /// +1 when the spheres are on the +axis side (a `lo` wall), else -1.
-    fn sign(&self) -> f64 {
-        match self.side {
-            WallSide::Lo => 1.0,
-            WallSide::Hi => -1.0,
-        }
-    }
-}
 
 /// A granular wall resolved for one stage against the spheres' material.
 #[derive(Clone, Debug, PartialEq)]
