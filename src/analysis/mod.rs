@@ -4,6 +4,7 @@ pub mod distribution;
 pub mod fit;
 pub mod hertz;
 pub mod jamming;
+pub mod lid_force;
 pub mod moduli;
 pub mod packing;
 pub mod plot;

@@ -3,7 +3,7 @@
 
 use crate::reference::multicontact;
 use crate::studies::mcdem::shear::{self, ContactLaw, Grid, SeriesSpec, ShearOptions};
-use crate::studies::mcdem::{calibration as mc_calibration, compression, rigid_box, Closures};
+use crate::studies::mcdem::{calibration as mc_calibration, compression, lid, rigid_box, Closures};
 use crate::studies::{command_line, print_line};
 use anyhow::{bail, Context, Result};
 use clap::ValueEnum;
@@ -139,9 +139,10 @@ pub struct McCompressArgs {
     /// Young's modulus of the box's walls (Pa).
     #[arg(long, default_value_t = 5e7)]
     wall_modulus: f64,
-    /// Time step (tau = sqrt(m / (E d)), d the mean diameter).
-    #[arg(long, default_value_t = 0.05)]
-    dt: f64,
+    /// Time step (tau = sqrt(m / (E d)), d the mean diameter; with
+    /// --packing, in the data file's time unit, and required).
+    #[arg(long)]
+    dt: Option<f64>,
     /// Recorded states per pass of the lid.
     #[arg(long, default_value_t = 200)]
     records: u64,
@@ -150,11 +151,65 @@ pub struct McCompressArgs {
     seed: u64,
     #[command(flatten)]
     closures: ClosureArgs,
+    #[command(flatten)]
+    packing: PackingArgs,
+}
+
+/// `bpm mc-compress --packing`: the lid protocol on a bed from a data
+/// file, every quantity in the file's units (SI for a LIGGGHTS bed). It
+/// runs plain Hertz and the standard closure (--gamma); --lid-speed,
+/// --cycles, --wall-modulus and --dt apply too, in the file's units.
+#[derive(Clone, Debug, clap::Args)]
+pub struct PackingArgs {
+    /// A bed of spheres as a LAMMPS or LIGGGHTS data file (atom_style
+    /// sphere): instead of building one.
+    #[arg(long, value_name = "FILE.data")]
+    packing: Option<PathBuf>,
+    /// With --packing: the side walls, at x = 0 and X, y = 0 and Y (the
+    /// floor is z = 0).
+    #[arg(long, value_delimiter = ',', value_name = "X,Y")]
+    base: Vec<f64>,
+    /// With --packing: the lid's height at the start of each compression.
+    #[arg(long)]
+    lid_start: Option<f64>,
+    /// With --packing: the height where the lid turns back.
+    #[arg(long)]
+    lid_end: Option<f64>,
+    /// With --packing: the spheres' Young's modulus [default: 23.3e3].
+    #[arg(long)]
+    youngs_modulus: Option<f64>,
+    /// With --packing: Poisson's ratio of spheres and walls [default: 0.5].
+    #[arg(long)]
+    poisson_ratio: Option<f64>,
+    /// With --packing: the restitution coefficient of every contact
+    /// [default: 0.95].
+    #[arg(long)]
+    restitution: Option<f64>,
+    /// With --packing: the sliding friction coefficient of every contact
+    /// [default: 0.03].
+    #[arg(long)]
+    friction: Option<f64>,
+    /// With --packing: gravity, an acceleration GX,GY,GZ (e.g.
+    /// 0,0,-9.81); none by default.
+    #[arg(
+        long,
+        value_delimiter = ',',
+        allow_hyphen_values = true,
+        value_name = "GX,GY,GZ"
+    )]
+    gravity: Vec<f64>,
+    /// With --packing: steps between recorded rows [default: 100].
+    #[arg(long)]
+    record_every: Option<u64>,
+    /// With --packing: the neighbour skin (default: a tenth of the mean
+    /// diameter).
+    #[arg(long)]
+    skin: Option<f64>,
 }
 
 impl McCompressArgs {
     /// `bpm mc-compress`.
-    pub fn run(self) -> Result<()> {
+    pub fn run(self, threads: usize) -> Result<()> {
         let Self {
             output,
             spheres,
@@ -169,7 +224,49 @@ impl McCompressArgs {
             records,
             seed,
             closures,
+            packing,
         } = self;
+        if let Some(file) = &packing.packing {
+            let lid = lid_options(
+                &packing,
+                file,
+                lid_speed,
+                cycles,
+                wall_modulus,
+                dt,
+                &closures,
+            )?;
+            let progress = std::io::stderr().is_terminal();
+            let (report, scenes) = lid::run_lid(&lid, &command_line(), threads, progress)?;
+            lid::write_lid_report(&report, &scenes, &output)?;
+            println!(
+                "{} spheres, {} steps per pass, lid at {:e} per time unit, skin {}",
+                report.spheres, report.steps_per_pass, report.lid_velocity, report.skin
+            );
+            print!("{}", lid::lid_table(&report));
+            println!(
+                "wrote {}/lid.json, lid.svg and scene-*.json",
+                output.display()
+            );
+            return Ok(());
+        }
+        let p = &packing;
+        let given = [
+            ("--base", !p.base.is_empty()),
+            ("--lid-start", p.lid_start.is_some()),
+            ("--lid-end", p.lid_end.is_some()),
+            ("--youngs-modulus", p.youngs_modulus.is_some()),
+            ("--poisson-ratio", p.poisson_ratio.is_some()),
+            ("--restitution", p.restitution.is_some()),
+            ("--friction", p.friction.is_some()),
+            ("--gravity", !p.gravity.is_empty()),
+            ("--record-every", p.record_every.is_some()),
+            ("--skin", p.skin.is_some()),
+        ];
+        if let Some((option, _)) = given.iter().find(|(_, given)| *given) {
+            bail!("{option} belongs to the lid protocol on a bed from a data file: give --packing FILE.data too");
+        }
+        let dt = dt.unwrap_or(0.05);
         let [bx, by, bz] = box_size[..] else {
             bail!("--box takes three lengths x,y,z (got {})", box_size.len());
         };
@@ -198,6 +295,62 @@ impl McCompressArgs {
         );
         Ok(())
     }
+}
+
+/// The lid protocol's options from `bpm mc-compress --packing`'s
+/// arguments; the error names a missing or malformed option.
+fn lid_options(
+    p: &PackingArgs,
+    file: &std::path::Path,
+    lid_speed: f64,
+    cycles: usize,
+    wall_modulus: f64,
+    dt: Option<f64>,
+    closures: &ClosureArgs,
+) -> Result<lid::LidOptions> {
+    let [x, y] = p.base[..] else {
+        bail!(
+            "--packing needs --base X,Y, the side walls' positions (got {} values)",
+            p.base.len()
+        );
+    };
+    let gravity = match p.gravity[..] {
+        [] => [0.0; 3],
+        [gx, gy, gz] => [gx, gy, gz],
+        _ => bail!(
+            "--gravity takes three components GX,GY,GZ (got {})",
+            p.gravity.len()
+        ),
+    };
+    let Some(lid_start) = p.lid_start else {
+        bail!("--packing needs --lid-start, the lid's height at the start of each compression");
+    };
+    let Some(lid_end) = p.lid_end else {
+        bail!("--packing needs --lid-end, the height where the lid turns back");
+    };
+    let Some(dt) = dt else {
+        bail!("--packing needs --dt, the time step in the data file's time unit");
+    };
+    let opts = lid::LidOptions {
+        packing: file.to_path_buf(),
+        base: [x, y],
+        lid_start,
+        lid_end,
+        lid_speed,
+        cycles,
+        dt,
+        youngs_modulus: p.youngs_modulus.unwrap_or(23.3e3),
+        wall_modulus,
+        poisson_ratio: p.poisson_ratio.unwrap_or(0.5),
+        restitution: p.restitution.unwrap_or(0.95),
+        friction: p.friction.unwrap_or(0.03),
+        gamma: closures.gamma,
+        gravity,
+        record_every: p.record_every.unwrap_or(100),
+        skin: p.skin,
+    };
+    opts.validate()?;
+    Ok(opts)
 }
 
 /// The arguments of `bpm mc-calibrate`.

@@ -18,6 +18,7 @@
 pub mod calibration;
 pub mod cli;
 pub mod compression;
+pub mod lid;
 pub mod rigid_box;
 pub mod shear;
 
