@@ -216,7 +216,7 @@ pub struct ImportArgs {
     /// Neighbour-list skin, in the file's length unit (force_field.skin).
     /// Default 0.3, or 0.15 x the mean sphere diameter when that lies
     /// outside [0.5, 2] (see below).
-    #[arg(long, value_name = "S")]
+    #[arg(long, value_name = "S", allow_negative_numbers = true)]
     skin: Option<f64>,
     /// Gravity, as three numbers GX GY GZ in the file's units of length
     /// over time squared (force_field.gravity), e.g. `--gravity 0 0 -9.81`
