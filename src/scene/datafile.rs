@@ -103,7 +103,9 @@ struct Atom {
 
 /// Reads a data file as a scene with `boundary` periodicity (data files do
 /// not record it), the force field `force_field`, no stages and the given
-/// seed.
+/// seed. A sphere file needs `force_field.granular`; its scene keeps the
+/// rest of `force_field` (skin, gravity, multi-contact closure) and drops
+/// only the bonded model's terms (`bond`, `pair`, `zero_net_multibody`).
 pub fn read_data_file(
     path: &Path,
     periodic: [bool; 3],
