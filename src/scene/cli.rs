@@ -257,7 +257,7 @@ pub fn skin_for_diameter(mean_diameter: f64) -> Option<f64> {
     if !(mean_diameter > 0.0 && mean_diameter.is_finite()) || (0.5..=2.0).contains(&mean_diameter) {
         return None;
     }
-    Some(three_digits(0.15 * mean_diameter))
+    Some(three_digits(0.15 * mean_diameter)).filter(|s| s.is_finite() && *s > 0.0)
 }
 
 /// `x > 0` rounded to 3 significant digits, through exact powers of ten.
