@@ -323,3 +323,188 @@ fn bench_prints_every_goal_and_writes_them_as_json() {
             && !c["name"].as_str().unwrap().contains("stopped")));
     assert_eq!(report["packing_workload"]["grains"], 13);
 }
+
+/// A LIGGGHTS sphere file (header as LIGGGHTS writes it), spheres of
+/// diameter about 0.02 (SI metres), atom ids not 1..N.
+const LIGGGHTS_SPHERES: &str = "LIGGGHTS data file
+
+ 3  atoms
+
+ 1  atom types
+
+ -0.0101  0.1701 xlo xhi
+ -0.0101  0.1701 ylo yhi
+ -0.0101  0.4101 zlo zhi
+
+Atoms
+
+4 1 0.0192 2500 0.0281955 0.15621 0.0747432
+9 1 0.0216 2500 0.0872805 0.139893 0.04861
+2 1 0.0210 2500 0.137187 0.0207118 0.104042
+";
+
+const MATERIAL: &str = r#"{"youngs_modulus": 5e6, "poisson_ratio": 0.25, "restitution": 0.5, "tangential_damping": 1, "sliding_friction": 0.3}"#;
+
+/// `bpm import` of small spheres: the skin follows their size (and says
+/// so) unless `--skin` is given; `--gravity` sets the scene's gravity; bad
+/// values of either are refused with the option named, never a panic.
+#[test]
+fn import_sizes_the_skin_to_the_spheres_and_takes_skin_and_gravity() {
+    let data = tmp("spheres.data");
+    let scene = tmp("spheres.json");
+    std::fs::write(&data, LIGGGHTS_SPHERES).unwrap();
+    let (d, s) = (data.to_str().unwrap(), scene.to_str().unwrap());
+    let import = |extra: &[&str]| {
+        let mut args = vec!["import", d, "--granular", MATERIAL, "-o", s];
+        args.extend_from_slice(extra);
+        bpm().args(&args).output().unwrap()
+    };
+    let read = || bpm::scene::read_scene_unvalidated(&scene).unwrap();
+    // Mean diameter 0.0206: skin 0.15 x 0.0206 = 0.00309.
+    let out = import(&[]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let printed = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        printed.contains(
+            "skin set to 0.00309 (0.15 of the mean diameter 0.0206); override with --skin"
+        ),
+        "{printed}"
+    );
+    let imported = read();
+    assert_eq!(imported.force_field.skin, 0.00309);
+    assert_eq!(imported.force_field.gravity, None);
+    assert_eq!(imported.particles.ids.as_deref(), Some(&[2, 4, 9][..]));
+    // --skin overrides, silently; --gravity takes three numbers.
+    let out = import(&["--skin", "0.005", "--gravity", "0", "0", "-9.81"]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(!String::from_utf8_lossy(&out.stdout).contains("skin set"));
+    let imported = read();
+    assert_eq!(imported.force_field.skin, 0.005);
+    assert_eq!(imported.force_field.gravity, Some([0.0, 0.0, -9.81]));
+    for (bad, named) in [
+        (&["--skin", "0"][..], "--skin"),
+        (&["--skin", "-1"], "--skin"),
+        (&["--skin", "inf"], "--skin"),
+        (&["--gravity", "0", "nan", "1"], "--gravity"),
+        (&["--gravity", "0", "1"], "--gravity"),
+        (&["--gravity", "0", "x", "1"], "--gravity"),
+    ] {
+        let out = import(bad);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(!out.status.success(), "{bad:?} accepted");
+        assert!(err.contains(named), "{bad:?}: {err}");
+        assert!(!err.contains("panicked"), "{bad:?}: {err}");
+    }
+    // The rule: 0.15 x the mean diameter to 3 digits, outside [0.5, 2] only.
+    use bpm::scene::cli::skin_for_diameter;
+    for inside in [0.5, 1.0, 2.0] {
+        assert_eq!(skin_for_diameter(inside), None);
+    }
+    assert_eq!(skin_for_diameter(3.0), Some(0.45));
+    assert_eq!(skin_for_diameter(0.0123456), Some(0.00185));
+    assert_eq!(skin_for_diameter(12345.0), Some(1850.0));
+    // The help says how ids, the skin and gravity are handled.
+    let help = bpm().args(["import", "--help"]).output().unwrap();
+    let help = String::from_utf8_lossy(&help.stdout);
+    for words in [
+        "--skin",
+        "--gravity <GX> <GY> <GZ>",
+        "particles.ids",
+        "LIGGGHTS",
+        "Angles",
+    ] {
+        assert!(help.contains(words), "`{words}` missing from:\n{help}");
+    }
+}
+
+/// A bonded data file with atom ids 3, 8, 20: `bpm import` keeps them, and
+/// a run on either engine writes them in its dump (the LAMMPS harness's
+/// own data file numbers the atoms 1..N); the native final scene keeps
+/// them too.
+#[test]
+fn imported_atom_ids_survive_a_run_on_either_engine() {
+    let data = tmp("ids.data");
+    let scene = tmp("ids.json");
+    std::fs::write(
+        &data,
+        "LAMMPS data file\n\n3 atoms\n2 bonds\n1 atom types\n1 bond types\n\n0 8 xlo xhi\n0 8 ylo yhi\n0 8 zlo zhi\n\nAtoms # bond\n\n20 1 1 3.9 3 3\n3 1 1 3 3 3\n8 1 1 3 3.95 3\n\nBonds\n\n1 1 3 20\n2 1 8 3\n",
+    )
+    .unwrap();
+    let out = bpm()
+        .arg("import")
+        .arg(&data)
+        .arg("-o")
+        .arg(&scene)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let mut doc: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(&scene).unwrap()).unwrap();
+    assert_eq!(doc["particles"]["ids"], serde_json::json!([3, 8, 20]));
+    doc["stages"] = serde_json::json!([{"name": "hold", "steps": 20, "dt": 0.01}]);
+    std::fs::write(&scene, doc.to_string()).unwrap();
+    for engine in ["native", "lammps"] {
+        let dump = tmp(&format!("ids-{engine}.dump"));
+        let fin = tmp(&format!("ids-{engine}-final.json"));
+        let work = tmp(&format!("ids-{engine}-work"));
+        let mut args: Vec<std::ffi::OsString> = vec![
+            "run".into(),
+            scene.clone().into(),
+            "-o".into(),
+            tmp(&format!("ids-{engine}.out.json")).into(),
+            "--engine".into(),
+            engine.into(),
+            "--dump".into(),
+            dump.clone().into(),
+            "--dump-every".into(),
+            "10".into(),
+            "--workdir".into(),
+            work.clone().into(),
+        ];
+        if engine == "native" {
+            args.extend(["--final-scene".into(), fin.clone().into()]);
+        }
+        let out = bpm().args(&args).output().unwrap();
+        assert!(
+            out.status.success(),
+            "{engine}: {}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let frames = bpm::scene::trajectory::read_dump(&dump).unwrap();
+        assert_eq!(frames.len(), 3, "{engine}");
+        // Atom 20, the last particle, starts at x = 3.9.
+        assert_eq!(frames[0].x[2], [3.9, 3.0, 3.0], "{engine}");
+        for f in &frames {
+            assert_eq!(
+                f.id.as_deref(),
+                Some(&[3, 8, 20][..]),
+                "{engine} step {}",
+                f.step
+            );
+        }
+        if engine == "native" {
+            let fin = bpm::scene::read_scene_unvalidated(&fin).unwrap();
+            assert_eq!(fin.particles.ids.as_deref(), Some(&[3, 8, 20][..]));
+        } else {
+            let run_data = std::fs::read_dir(&work)
+                .unwrap()
+                .map(|e| e.unwrap().path())
+                .find(|p| p.extension().is_some_and(|e| e == "data"))
+                .expect("the harness writes its data file");
+            let text = std::fs::read_to_string(run_data).unwrap();
+            assert!(text.contains("\nBonds\n\n1 1 1 3\n2 1 2 1\n"), "{text}");
+        }
+    }
+}

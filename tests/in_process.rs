@@ -4,7 +4,9 @@
 mod common;
 
 use bpm::engine::StageDrivers;
-use bpm::lammps::{write_data_file, write_reference_lengths, write_templates, Lammps, ScriptVars};
+use bpm::lammps::{
+    write_reference_lengths, write_run_data_file, write_templates, Lammps, ScriptVars,
+};
 use bpm::scene::builders::bulk::{build_bulk, BulkParams};
 use bpm::scene::{build_system, ForceField};
 use bpm::verify::max_relative_deviation;
@@ -22,7 +24,7 @@ fn in_process_lammps_gives_the_native_forces() {
     scene.simbox.lengths = scene.simbox.lengths.map(|l| l * 0.99);
     let dir = common::scratch_dir("inproc");
     let data = dir.join("s.data");
-    std::fs::write(&data, write_data_file(&scene)).unwrap();
+    std::fs::write(&data, write_run_data_file(&scene)).unwrap();
     std::fs::write(
         format!("{}.r0", data.display()),
         write_reference_lengths(&scene),

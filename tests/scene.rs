@@ -308,3 +308,49 @@ fn lees_edwards_shear_needs_dem_spheres() {
     doc["stages"][0]["deformation"] = json!({"simple_shear": {"tilt": "xy", "rate": 0.01}});
     check(doc).unwrap();
 }
+
+/// `particles.ids` (the atom ids an imported data file gave): one per
+/// particle, from 1, strictly increasing; absent or `1..N` it is not
+/// written, so scenes without ids of their own read and write as before.
+#[test]
+fn particle_ids_are_checked_and_written_only_when_not_one_to_n() {
+    rejects(|d| d["particles"]["ids"] = json!([2, 5]), "particles.ids");
+    rejects(
+        |d| d["particles"]["ids"] = json!([0, 5, 9]),
+        "particles.ids[0]",
+    );
+    rejects(
+        |d| d["particles"]["ids"] = json!([2, 9, 5]),
+        "particles.ids[2]",
+    );
+    rejects(
+        |d| d["particles"]["ids"] = json!([2, 5, 5]),
+        "particles.ids[2]",
+    );
+    let err = serde_json::from_value::<bpm::scene::Scene>({
+        let mut d = valid();
+        d["particles"]["ids"] = json!([-1, 5, 9]);
+        d
+    });
+    assert!(err.is_err(), "a negative id must not load");
+    let mut doc = valid();
+    doc["particles"]["ids"] = json!([2, 5, 90]);
+    check(doc.clone()).unwrap();
+    let scene: bpm::scene::Scene = serde_json::from_value(doc).unwrap();
+    assert_eq!(scene.particles.id(2), 90);
+    let text = serde_json::to_string(&scene).unwrap();
+    assert!(text.contains(r#""ids":[2,5,90]"#), "{text}");
+    assert_eq!(
+        serde_json::from_str::<bpm::scene::Scene>(&text).unwrap(),
+        scene
+    );
+    // 1..N, given or not, writes the same bytes as a scene without ids.
+    let plain: bpm::scene::Scene = serde_json::from_value(valid()).unwrap();
+    assert_eq!(plain.particles.id(2), 3);
+    let mut numbered = plain.clone();
+    numbered.particles.ids = Some(vec![1, 2, 3]);
+    check(serde_json::to_value(&numbered).unwrap()).unwrap();
+    let plain_text = serde_json::to_string(&plain).unwrap();
+    assert!(!plain_text.contains("ids"), "{plain_text}");
+    assert_eq!(serde_json::to_string(&numbered).unwrap(), plain_text);
+}

@@ -80,9 +80,10 @@ enum Command {
     /// per radius, built once and squeezed at every a_B; writes
     /// DIR/sweep.json, DIR/sweep.svg, one folder per case and the grains.
     HertzSweep(HertzSweepArgs),
-    /// Read a LAMMPS data file as a scene: atom_style bond (molecule ids
-    /// become grains, reference lengths are the file's bond lengths), or
-    /// atom_style sphere (DEM spheres: give --granular).
+    /// Read a LAMMPS or LIGGGHTS data file as a scene, keeping its atom ids:
+    /// atom_style bond (molecule ids become grains, reference lengths are
+    /// the file's bond lengths), or atom_style sphere (DEM spheres: give
+    /// --granular).
     Import(ImportArgs),
     /// Write a scene as a LAMMPS data file (atom_style bond; atom_style
     /// sphere for DEM spheres).

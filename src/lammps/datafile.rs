@@ -6,11 +6,21 @@ use crate::engine::MultiContact;
 use crate::kernels::{
     GranularCoeffs, GranularMaterial, MprSwitch, MprTest, NormalDamping, Twisting,
 };
-pub use crate::scene::datafile::{type_masses, write_data_file};
+pub use crate::scene::datafile::type_masses;
+use crate::scene::datafile::{write_data_file_with_ids, AtomIds};
 use crate::scene::load::reference_lengths;
 use crate::scene::Scene;
 use std::fmt::Write as _;
 use std::path::Path;
+
+/// The data file of a LAMMPS run of `scene` (the harness's, the cross
+/// checks'): atoms numbered `1..=N` in particle order, whatever the
+/// scene's `particles.ids`, so LAMMPS's atom `i + 1` is particle `i` when
+/// its state is gathered back (dump frames then get the scene's ids
+/// again, see `scene::run::Recorders::with_ids`).
+pub fn write_run_data_file(scene: &Scene) -> String {
+    write_data_file_with_ids(scene, AtomIds::Sequential)
+}
 
 /// LAMMPS's spelling of a flag.
 pub(crate) fn yes_no(flag: bool) -> &'static str {

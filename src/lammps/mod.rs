@@ -10,7 +10,7 @@ pub mod script;
 pub mod sys;
 pub mod templates;
 
-pub use datafile::{write_data_file, write_reference_lengths, ScriptVars};
+pub use datafile::{write_reference_lengths, write_run_data_file, ScriptVars};
 pub use instance::{Lammps, LammpsError, LammpsVersion};
 pub use runner::{run_scene_lammps, LammpsRun, LammpsRunError};
 pub use script::{write_driver, Driver, ScriptError};

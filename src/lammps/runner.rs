@@ -67,8 +67,10 @@ pub fn run_scene_lammps(
     let rank = lmp.setting("world_rank");
     let ranks = lmp.setting("world_size");
     let lammps_version = lmp.version();
+    // LAMMPS numbers the atoms 1..N in particle order (the run's data
+    // file); frames are written with the scene's own ids.
     let mut recorders = if rank == 0 {
-        Recorders::open(files)?
+        Recorders::open(files)?.with_ids(scene.particles.ids.clone())
     } else {
         Recorders::default()
     };
@@ -136,6 +138,7 @@ fn run_stage(
             if let Some((_, forces)) = frame_wanted {
                 let frame = Frame {
                     step: step0 + k,
+                    id: None,
                     simbox: crate::engine::SimBox {
                         lo,
                         lengths,
@@ -161,7 +164,7 @@ fn run_stage(
                         None
                     },
                 };
-                recorders.write_frame(&frame)?;
+                recorders.write_frame(frame)?;
             }
             if plan.positions_every > 0 && k % plan.positions_every == 0 {
                 checkpoints.push(Checkpoint {

@@ -10,8 +10,8 @@
 //! checkpoints) and reads the recorded rows back after each.
 
 use super::datafile::{
-    dem_pair_coeff, granular_wall_model, type_masses, uses_closure, write_data_file,
-    write_reference_lengths, yes_no, ScriptVars,
+    dem_pair_coeff, granular_wall_model, type_masses, uses_closure, write_reference_lengths,
+    write_run_data_file, yes_no, ScriptVars,
 };
 use super::templates::{write_templates, FOLDER as TEMPLATE_FOLDER};
 use crate::engine::{ActiveGranularWall, Deformation, ShearRemap, TiltFactor, WallSide};
@@ -429,7 +429,7 @@ pub fn write_driver(
         cause,
     })?;
     let data = dir.join(format!("{tag}.data"));
-    write(&data, &write_data_file(scene))?;
+    write(&data, &write_run_data_file(scene))?;
     let dem = scene.model == ModelKind::Dem;
     if !dem {
         write(

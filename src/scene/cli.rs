@@ -192,8 +192,10 @@ impl GrainArgs {
 
 /// The arguments of `bpm import`.
 #[derive(clap::Args)]
+#[command(after_help = IMPORT_NOTES)]
 pub struct ImportArgs {
-    /// The data file.
+    /// The data file (LAMMPS or LIGGGHTS `write_data`: `atom_style bond` or
+    /// `atom_style sphere`).
     data: PathBuf,
     /// Periodicity per dimension, as LAMMPS's boundary (data files do
     /// not record it): e.g. `p p p` or `f f f`.
@@ -211,9 +213,63 @@ pub struct ImportArgs {
     /// "tangential_damping": 1, "sliding_friction": 0.3}'.
     #[arg(long, value_name = "JSON")]
     granular: Option<String>,
+    /// Neighbour-list skin, in the file's length unit (force_field.skin).
+    /// Default 0.3, or 0.15 x the mean sphere diameter when that lies
+    /// outside [0.5, 2] (see below).
+    #[arg(long, value_name = "S", allow_negative_numbers = true)]
+    skin: Option<f64>,
+    /// Gravity, as three numbers GX GY GZ in the file's units of length
+    /// over time squared (force_field.gravity), e.g. `--gravity 0 0 -9.81`
+    /// for an SI file. Default none.
+    #[arg(
+        long,
+        num_args = 3,
+        value_names = ["GX", "GY", "GZ"],
+        allow_negative_numbers = true
+    )]
+    gravity: Option<Vec<f64>>,
     /// Output scene (JSON).
     #[arg(short, long)]
     output: PathBuf,
+}
+
+/// What `bpm import --help` adds after the options.
+const IMPORT_NOTES: &str = "\
+Atom ids are kept: the particles are ordered by id and the scene records the
+ids (particles.ids; left out when they are 1..N), so data files and dumps
+written from it carry them again.
+
+Units: a data file's lengths and times are taken as the scene's. The default
+skin 0.3 is meant for the bonded model's unit length d ~ 1: when the
+imported spheres' mean diameter lies outside [0.5, 2], the skin becomes
+0.15 x the mean diameter (3 significant digits) and the command says so.
+--skin overrides either.
+
+Refused, with a message: Pair Coeffs, PairIJ Coeffs or Bond Coeffs that differ
+between types (a scene holds one material), Angles, Dihedrals, Impropers and
+body sections, duplicate atom ids, unknown sections.";
+
+/// The skin of imported spheres of mean diameter `mean_diameter` when the
+/// default skin (0.3, sized for the bonded model's d ~ 1) does not suit
+/// them: 0.15 x the mean diameter, to 3 significant digits, when that
+/// diameter lies outside [0.5, 2]; `None` inside.
+pub fn skin_for_diameter(mean_diameter: f64) -> Option<f64> {
+    if !(mean_diameter > 0.0 && mean_diameter.is_finite()) || (0.5..=2.0).contains(&mean_diameter) {
+        return None;
+    }
+    Some(three_digits(0.15 * mean_diameter)).filter(|s| s.is_finite() && *s > 0.0)
+}
+
+/// `x > 0` rounded to 3 significant digits, through exact powers of ten.
+fn three_digits(x: f64) -> f64 {
+    let shift = 2 - x.log10().floor() as i32;
+    if shift >= 0 {
+        let p = 10f64.powi(shift);
+        (x * p).round() / p
+    } else {
+        let p = 10f64.powi(-shift);
+        (x / p).round() * p
+    }
 }
 
 impl ImportArgs {
@@ -225,12 +281,24 @@ impl ImportArgs {
             a_b,
             seed,
             granular,
+            skin,
+            gravity,
             output,
         } = self;
         let periodic = parse_boundary(&boundary)?;
         if !a_b.is_finite() {
             bail!("--a-b must be finite, got {a_b}");
         }
+        if let Some(s) = skin {
+            if !(s > 0.0 && s.is_finite()) {
+                bail!("--skin must be a finite number > 0, got {s}");
+            }
+        }
+        let gravity = match gravity.as_deref() {
+            None => None,
+            Some(&[x, y, z]) if [x, y, z].iter().all(|g| g.is_finite()) => Some([x, y, z]),
+            Some(g) => bail!("--gravity takes three finite numbers GX GY GZ, got {g:?}"),
+        };
         let mut force_field = ForceField::paper(a_b);
         if let Some(g) = granular {
             let text = if g.trim_start().starts_with('{') {
@@ -243,7 +311,22 @@ impl ImportArgs {
                     "--granular is not a sphere material (force_field.granular)"
                 })?);
         }
-        let scene = read_data_file(&data, periodic, force_field, seed)?;
+        force_field.gravity = gravity;
+        if let Some(s) = skin {
+            force_field.skin = s;
+        }
+        let mut scene = read_data_file(&data, periodic, force_field, seed)?;
+        let radius = scene.particles.radius.as_deref().filter(|r| !r.is_empty());
+        if let (None, Some(r)) = (skin, radius) {
+            let mean_diameter = 2.0 * r.iter().sum::<f64>() / r.len() as f64;
+            if let Some(s) = skin_for_diameter(mean_diameter) {
+                scene.force_field.skin = s;
+                println!(
+                    "skin set to {s} (0.15 of the mean diameter {}); override with --skin",
+                    three_digits(mean_diameter)
+                );
+            }
+        }
         write_scene(&output, &scene)?;
         if scene.model == ModelKind::Dem {
             println!(

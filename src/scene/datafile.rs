@@ -2,20 +2,30 @@
 //! in and out, so users can bring their own grains and packings and take
 //! scenes to LAMMPS.
 //!
-//! Reading accepts what LAMMPS's `write_data` produces: any header lines
-//! (counts, box, tilt; others are skipped), coefficient sections (skipped:
-//! the scene's force field is set separately), `Masses`, `Atoms` (`id mol
-//! type x y z`, optional image flags `ix iy iz`; or, for spheres, `id type
-//! diameter density x y z [ix iy iz]`, recognised by the `# sphere` comment
-//! or by its 7 or 10 columns), `Velocities` (spheres: with angular
-//! velocities `wx wy wz`) and `Bonds`,
-//! atom ids in any order and not necessarily 1..N. Molecule ids become
-//! grain ids (the distinct molecule ids in increasing order become grains
-//! 0, 1, ...). Reference lengths are the bond lengths in the file (minimum
-//! image). Malformed input is an error naming the line.
+//! Reading accepts what LAMMPS's and LIGGGHTS's `write_data` produce: any
+//! header lines (counts, box, tilt; others are skipped), coefficient
+//! sections (skipped: the scene's force field is set separately; but
+//! `Pair Coeffs`, `PairIJ Coeffs` and `Bond Coeffs` that differ between
+//! types are refused, since a scene holds one material), `Masses`, `Atoms`
+//! (`id mol type x y z`, optional image flags `ix iy iz`; or, for spheres,
+//! `id type diameter density x y z [ix iy iz]`, recognised by the `#
+//! sphere` (LIGGGHTS: `# granular`) comment or by its 7 or 10 columns),
+//! `Velocities` (spheres: with angular velocities `wx wy wz`) and `Bonds`,
+//! atom ids in any order and not necessarily 1..N. The particles are
+//! ordered by atom id and the scene keeps the ids (`particles.ids`, left
+//! out when they are 1..N). Molecule ids become grain ids (the distinct
+//! molecule ids in increasing order become grains 0, 1, ...). Reference
+//! lengths are the bond lengths in the file (minimum image). What a scene
+//! cannot hold is refused with a message saying so: `Angles`, `Dihedrals`,
+//! `Impropers` and body sections (`Ellipsoids`, `Lines`, `Triangles`,
+//! `Bodies`), duplicate atom ids, unknown sections. Malformed input is an
+//! error naming the line.
 
-use super::model::{Bonds, BoxSpec, ForceField, Mass, ModelKind, Particles, Scene};
+use super::model::{
+    is_default_numbering, Bonds, BoxSpec, ForceField, Mass, ModelKind, Particles, Scene,
+};
 use crate::engine::Deformation;
+use crate::kernels::BondCoeffs;
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
 use std::path::Path;
@@ -23,22 +33,63 @@ use std::path::Path;
 /// Why a data file could not be read.
 pub use crate::file_error::TextFileError as DataFileError;
 
-const SKIPPED_SECTIONS: [&str; 14] = [
-    "Pair Coeffs",
-    "PairIJ Coeffs",
-    "Bond Coeffs",
+/// The sections read.
+const READ_SECTIONS: [&str; 4] = ["Masses", "Atoms", "Velocities", "Bonds"];
+
+/// Coefficient sections whose values must agree between types (a scene
+/// holds one bond law and one contact law), then skipped.
+const UNIFORM_SECTIONS: [&str; 3] = ["Pair Coeffs", "PairIJ Coeffs", "Bond Coeffs"];
+
+/// Coefficient sections of interactions the scene has no use for: skipped.
+const SKIPPED_SECTIONS: [&str; 10] = [
     "Angle Coeffs",
     "Dihedral Coeffs",
     "Improper Coeffs",
     "BondBond Coeffs",
     "BondAngle Coeffs",
+    "MiddleBondTorsion Coeffs",
+    "EndBondTorsion Coeffs",
+    "AngleTorsion Coeffs",
+    "AngleAngleTorsion Coeffs",
+    "BondBond13 Coeffs",
+];
+
+/// Sections of what a scene cannot hold (many-body interactions, bodies of
+/// other shapes): refused.
+const REFUSED_SECTIONS: [&str; 7] = [
     "Angles",
     "Dihedrals",
     "Impropers",
     "Ellipsoids",
     "Lines",
     "Triangles",
+    "Bodies",
 ];
+
+/// A section keyword line: it starts with a word (data and header lines
+/// start with numbers; `nan` and `inf` are numbers gone wrong, not
+/// keywords).
+fn is_keyword_line(l: &str) -> bool {
+    l.starts_with(|c: char| c.is_ascii_alphabetic())
+        && l.split_whitespace()
+            .next()
+            .is_some_and(|w| w.parse::<f64>().is_err())
+}
+
+/// The section a keyword line opens (`Pair Coeffs # bpm/contact` opens
+/// `Pair Coeffs`), if it is one this reader knows.
+fn known_section(l: &str) -> Option<&'static str> {
+    READ_SECTIONS
+        .iter()
+        .chain(UNIFORM_SECTIONS.iter())
+        .chain(SKIPPED_SECTIONS.iter())
+        .chain(REFUSED_SECTIONS.iter())
+        .copied()
+        .find(|s| {
+            l.strip_prefix(s)
+                .is_some_and(|rest| rest.is_empty() || rest.starts_with(char::is_whitespace))
+        })
+}
 
 /// One atom line.
 struct Atom {
@@ -52,7 +103,9 @@ struct Atom {
 
 /// Reads a data file as a scene with `boundary` periodicity (data files do
 /// not record it), the force field `force_field`, no stages and the given
-/// seed.
+/// seed. A sphere file needs `force_field.granular`; its scene keeps the
+/// rest of `force_field` (skin, gravity, multi-contact closure) and drops
+/// only the bonded model's terms (`bond`, `pair`, `zero_net_multibody`).
 pub fn read_data_file(
     path: &Path,
     periodic: [bool; 3],
@@ -99,14 +152,8 @@ fn parse(
     let mut lo = [f64::NAN; 3];
     let mut hi = [f64::NAN; 3];
     let mut tilt = [0.0; 3];
-    let is_section = |l: &str| {
-        ["Masses", "Atoms", "Velocities", "Bonds"]
-            .iter()
-            .chain(SKIPPED_SECTIONS.iter())
-            .any(|s| l == *s || l.starts_with(&format!("{s} ")))
-    };
     let mut i = 1;
-    while i < lines.len() && !is_section(lines[i].1) {
+    while i < lines.len() && !is_keyword_line(lines[i].1) {
         let (k, l) = lines[i];
         i += 1;
         let w: Vec<&str> = l.split_whitespace().collect();
@@ -177,16 +224,42 @@ fn parse(
         if l.is_empty() {
             continue;
         }
-        if !is_section(l) {
+        if !is_keyword_line(l) {
             return Err(bad(k, format!("expected a section keyword, found `{l}`")));
         }
-        let name = l.split_whitespace().next().unwrap_or("");
+        let Some(name) = known_section(l) else {
+            return Err(bad(
+                k,
+                format!(
+                    "unknown section `{l}`: bpm reads {}, and coefficient sections",
+                    READ_SECTIONS.join(", ")
+                ),
+            ));
+        };
+        if REFUSED_SECTIONS.contains(&name) {
+            return Err(bad(
+                k,
+                format!(
+                    "section `{name}`: a scene holds particles, bonds between two of them and spheres; it has no {}",
+                    match name {
+                        "Angles" => "angles",
+                        "Dihedrals" => "dihedrals",
+                        "Impropers" => "impropers",
+                        _ => "ellipsoids, lines, triangles or bodies",
+                    }
+                ),
+            ));
+        }
         let mut body = Vec::new();
-        while i < lines.len() && !is_section(lines[i].1) {
+        while i < lines.len() && !is_keyword_line(lines[i].1) {
             if !lines[i].1.is_empty() {
                 body.push(lines[i]);
             }
             i += 1;
+        }
+        if UNIFORM_SECTIONS.contains(&name) {
+            uniform_coefficients(name, &body).map_err(|(k, reason)| bad(k, reason))?;
+            continue;
         }
         match name {
             "Masses" => {
@@ -214,7 +287,8 @@ fn parse(
                     .first()
                     .map_or(0, |(_, l)| l.split_whitespace().count());
                 sphere = match style {
-                    Some("sphere") => true,
+                    // LIGGGHTS calls its sphere style `granular`.
+                    Some("sphere") | Some("granular") => true,
                     Some("bond") | Some("molecular") => false,
                     Some(style) => {
                         return Err(bad(
@@ -283,8 +357,12 @@ fn parse(
                         x[1] + image[1] as f64 * l[1] + image[2] as f64 * tilt[2],
                         x[2] + image[2] as f64 * l[2],
                     ];
+                    let id = integer(k, w[0])?;
+                    if id < 1 {
+                        return Err(bad(k, format!("atom id {id}: ids count from 1")));
+                    }
                     atoms.push(Atom {
-                        id: integer(k, w[0])?,
+                        id,
                         mol,
                         kind: kind as u32,
                         x,
@@ -406,8 +484,15 @@ fn parse(
     if sphere && !pairs.is_empty() {
         return Err(bad(0, "a sphere (DEM) data file has no bonds".into()));
     }
+    // The file decides the model; everything else of the caller's force
+    // field (skin, gravity, the multi-contact closure) stays.
     let force_field = match (sphere, force_field.granular) {
-        (true, Some(material)) => ForceField::dem(material),
+        (true, Some(_)) => ForceField {
+            bond: BondCoeffs::default(),
+            pair: None,
+            zero_net_multibody: false,
+            ..force_field
+        },
         (true, None) => {
             return Err(bad(
                 0,
@@ -458,6 +543,8 @@ fn parse(
                     .collect()
             }),
             kind: Some(atoms.iter().map(|a| a.kind).collect()),
+            ids: Some(atoms.iter().map(|a| a.id as u64).collect())
+                .filter(|ids: &Vec<u64>| !is_default_numbering(ids)),
         },
         bonds: Bonds { pairs, r0: None },
         force_field,
@@ -470,6 +557,44 @@ fn parse(
         scene.bonds.r0 = Some(r0);
     }
     Ok(scene)
+}
+
+/// Checks that the lines of coefficient section `name` give every type
+/// (`Pair Coeffs`, `Bond Coeffs`: `type c1 c2 ...`) or pair of types
+/// (`PairIJ Coeffs`: `i j c1 c2 ...`) the same coefficients; the error
+/// names the first line that differs from the first.
+fn uniform_coefficients(name: &str, body: &[(usize, &str)]) -> Result<(), (usize, String)> {
+    let skip = if name == "PairIJ Coeffs" { 2 } else { 1 };
+    // Numbers compare as numbers (`1` and `1.0` agree), words as words.
+    let values = |l: &str| -> Vec<Result<f64, String>> {
+        l.split_whitespace()
+            .skip(skip)
+            .map(|w| w.parse::<f64>().map_err(|_| w.to_string()))
+            .collect()
+    };
+    let Some(&(_, first)) = body.first() else {
+        return Ok(());
+    };
+    let reference = values(first);
+    for &(k, l) in &body[1..] {
+        if values(l) != reference {
+            let types = |l: &str| {
+                l.split_whitespace()
+                    .take(skip)
+                    .collect::<Vec<_>>()
+                    .join(" ")
+            };
+            return Err((
+                k,
+                format!(
+                    "`{name}` differ between types ({} and {}): a scene holds one material for all particles; give its force field on the command line",
+                    types(first),
+                    types(l)
+                ),
+            ));
+        }
+    }
+    Ok(())
 }
 
 /// Whether LAMMPS needs a triclinic box for `scene` (tilted, or sheared later).
@@ -501,15 +626,36 @@ pub fn type_masses(scene: &Scene) -> Option<Vec<f64>> {
     Some(by_type.into_iter().map(|m| m.unwrap_or(1.0)).collect())
 }
 
+/// How a written data file numbers its atoms.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum AtomIds {
+    /// The scene's `particles.ids` (`1..=N` when it has none): files for
+    /// users, which read back to the same scene.
+    Scene,
+    /// `1..=N` in particle order, whatever the scene's ids: the LAMMPS
+    /// harness's run files, whose atoms LAMMPS hands back by id.
+    Sequential,
+}
+
 /// The data file text of `scene`: atoms (id, grain + 1 as molecule, type,
-/// x y z), velocities and bonds (type 1). Particle `i` is atom `i + 1`.
-/// Masses are per type ([`type_masses`]; the harness refuses scenes where
-/// that fails, and here the first particle's mass stands in).
+/// x y z), velocities and bonds (type 1), with the scene's atom ids
+/// (`particles.ids`, else particle `i` is atom `i + 1`). Masses are per
+/// type ([`type_masses`]; the harness refuses scenes where that fails, and
+/// here the first particle's mass stands in).
 pub fn write_data_file(scene: &Scene) -> String {
-    if scene.model == ModelKind::Dem {
-        return write_sphere_data_file(scene);
-    }
+    write_data_file_with_ids(scene, AtomIds::Scene)
+}
+
+/// [`write_data_file`] with the atoms numbered as `ids` says.
+pub fn write_data_file_with_ids(scene: &Scene, ids: AtomIds) -> String {
     let pa = &scene.particles;
+    let id = |i: usize| match ids {
+        AtomIds::Scene => pa.id(i),
+        AtomIds::Sequential => i as u64 + 1,
+    };
+    if scene.model == ModelKind::Dem {
+        return write_sphere_data_file(scene, id);
+    }
     let n = pa.positions.len();
     let masses = type_masses(scene).unwrap_or_else(|| vec![pa.mass.values(n)[0]]);
     let mut s = header(
@@ -531,7 +677,7 @@ pub fn write_data_file(scene: &Scene) -> String {
         let _ = writeln!(
             s,
             "{} {} {kind} {:.17e} {:.17e} {:.17e}",
-            i + 1,
+            id(i),
             grain + 1,
             x[0],
             x[1],
@@ -541,13 +687,13 @@ pub fn write_data_file(scene: &Scene) -> String {
     if let Some(v) = &pa.velocities {
         let _ = writeln!(s, "\nVelocities\n");
         for (i, v) in v.iter().enumerate() {
-            let _ = writeln!(s, "{} {:.17e} {:.17e} {:.17e}", i + 1, v[0], v[1], v[2]);
+            let _ = writeln!(s, "{} {:.17e} {:.17e} {:.17e}", id(i), v[0], v[1], v[2]);
         }
     }
     if !scene.bonds.pairs.is_empty() {
         let _ = writeln!(s, "\nBonds\n");
         for (k, [i, j]) in scene.bonds.pairs.iter().enumerate() {
-            let _ = writeln!(s, "{} 1 {} {}", k + 1, i + 1, j + 1);
+            let _ = writeln!(s, "{} 1 {} {}", k + 1, id(*i), id(*j));
         }
     }
     s
@@ -586,8 +732,8 @@ const SPHERE_VOLUME_FACTOR: f64 = 4.0 * std::f64::consts::PI / 3.0;
 /// type, diameter, density, x y z), and velocities with angular velocities.
 /// LAMMPS keeps a mass per sphere, made from the density; the density
 /// written is the scene's mass over the sphere's volume, so LAMMPS's mass
-/// matches the scene's to round-off.
-fn write_sphere_data_file(scene: &Scene) -> String {
+/// matches the scene's to round-off. Particle `i` is atom `id(i)`.
+fn write_sphere_data_file(scene: &Scene, id: impl Fn(usize) -> u64) -> String {
     let pa = &scene.particles;
     let n = pa.positions.len();
     let ntypes = pa
@@ -607,7 +753,7 @@ fn write_sphere_data_file(scene: &Scene) -> String {
         let _ = writeln!(
             s,
             "{} {kind} {:.17e} {:.17e} {:.17e} {:.17e} {:.17e}",
-            i + 1,
+            id(i),
             2.0 * r,
             density,
             x[0],
@@ -623,7 +769,7 @@ fn write_sphere_data_file(scene: &Scene) -> String {
             let _ = writeln!(
                 s,
                 "{} {:.17e} {:.17e} {:.17e} {:.17e} {:.17e} {:.17e}",
-                i + 1,
+                id(i),
                 v[0],
                 v[1],
                 v[2],

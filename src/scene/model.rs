@@ -104,6 +104,32 @@ pub struct Particles {
     /// Type per particle, from 1 (LAMMPS atom types); default all 1.
     #[serde(default, rename = "type", skip_serializing_if = "Option::is_none")]
     pub kind: Option<Vec<u32>>,
+    /// Atom id per particle (LAMMPS atom ids, as the imported data file
+    /// numbered them): positive and strictly increasing, since particles
+    /// are kept in id order. Default `1..=N` (particle `i` is atom
+    /// `i + 1`), and then not written, so scenes without ids of their own
+    /// read and write as before. Data files and dumps written from the
+    /// scene carry these ids.
+    #[serde(default, skip_serializing_if = "ids_are_default")]
+    pub ids: Option<Vec<u64>>,
+}
+
+/// Whether `ids` are the default numbering `1..=N` (absent, or `k + 1`
+/// at index `k`): then the scene does not write them.
+fn ids_are_default(ids: &Option<Vec<u64>>) -> bool {
+    ids.as_deref().is_none_or(is_default_numbering)
+}
+
+/// Whether `ids` are `1..=N` (`k + 1` at index `k`).
+pub(crate) fn is_default_numbering(ids: &[u64]) -> bool {
+    ids.iter().enumerate().all(|(k, &id)| id == k as u64 + 1)
+}
+
+impl Particles {
+    /// The atom id of particle `i`: `ids[i]`, or `i + 1` by default.
+    pub fn id(&self, i: usize) -> u64 {
+        self.ids.as_ref().map_or(i as u64 + 1, |ids| ids[i])
+    }
 }
 
 /// Particle masses: one value for all, or one per particle.

@@ -157,6 +157,8 @@ pub enum RunError {
 pub struct Recorders {
     thermo: Option<ThermoWriter>,
     dump: Option<(DumpWriter, u64, bool)>,
+    /// The scene's atom ids, written in dump frames that carry none.
+    ids: Option<Vec<u64>>,
 }
 
 impl Recorders {
@@ -172,7 +174,17 @@ impl Recorders {
                 Some(d) if d.every > 0 => Some((DumpWriter::create(&d.path)?, d.every, d.forces)),
                 _ => None,
             },
+            ids: None,
         })
+    }
+
+    /// Dump frames written from here on carry the atom ids `ids` (a
+    /// scene's `particles.ids`; `None` for `1..=N`), whatever numbering the
+    /// engine used: the LAMMPS harness numbers atoms `1..=N`, in particle
+    /// order.
+    pub fn with_ids(mut self, ids: Option<Vec<u64>>) -> Self {
+        self.ids = ids;
+        self
     }
 
     /// The thermo writer, if rows are streamed.
@@ -187,20 +199,28 @@ impl Recorders {
             .map(|(_, every, forces)| (*every, *forces))
     }
 
-    /// Writes `frame` to the dump.
-    pub fn write_frame(&mut self, frame: &Frame) -> Result<(), TrajectoryError> {
+    /// Writes `frame` to the dump, with the atom ids of [`Self::with_ids`]
+    /// if the frame has none of its own.
+    pub fn write_frame(&mut self, mut frame: Frame) -> Result<(), TrajectoryError> {
         match &mut self.dump {
-            Some((w, _, _)) => w.write(frame),
+            Some((w, _, _)) => {
+                if frame.id.is_none() {
+                    frame.id.clone_from(&self.ids);
+                }
+                w.write(&frame)
+            }
             None => Ok(()),
         }
     }
 }
 
-/// The native system's current state as a dump frame.
+/// The native system's current state as a dump frame (atom ids `1..=N`;
+/// [`Recorders::write_frame`] puts in the scene's).
 pub fn frame_of(sys: &System, forces: bool) -> Frame {
     let p = &sys.particles;
     Frame {
         step: sys.step,
+        id: None,
         simbox: sys.simbox.clone(),
         grain: p.grain.clone(),
         kind: p.kind.clone(),
@@ -369,7 +389,7 @@ pub fn run_stage(
         }
         if let Some((every, forces)) = dump {
             if sys.step % every == 0 {
-                files.write_frame(&frame_of(sys, forces))?;
+                files.write_frame(frame_of(sys, forces))?;
             }
         }
         Ok(())
@@ -451,7 +471,7 @@ pub fn run_scene(
     opts: &RunOptions,
 ) -> (Vec<StageOutput>, Option<RunError>) {
     let mut files = match Recorders::open(&opts.files) {
-        Ok(f) => f,
+        Ok(f) => f.with_ids(scene.particles.ids.clone()),
         Err(e) => return (Vec::new(), Some(e.into())),
     };
     let mut done = Vec::with_capacity(scene.stages.len());

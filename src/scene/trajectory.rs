@@ -16,11 +16,14 @@ use std::path::{Path, PathBuf};
 /// Why a trajectory or thermo file could not be written or read.
 pub use crate::file_error::TextFileError as TrajectoryError;
 
-/// One state of the particles. Particle `i` is atom id `i + 1`.
+/// One state of the particles, in atom id order.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Frame {
     /// Global step.
     pub step: u64,
+    /// Atom id per particle (the scene's `particles.ids`), increasing;
+    /// `None` for `1..=N` (particle `i` is atom `i + 1`).
+    pub id: Option<Vec<u64>>,
     /// The box.
     pub simbox: SimBox,
     /// Grain id per particle (molecule id minus 1).
@@ -147,7 +150,7 @@ pub fn dump_text(frame: &Frame) -> String {
         let _ = write!(
             s,
             "{} {} {} {} {} {} {} {} {} {} {} {}",
-            i + 1,
+            frame.id.as_ref().map_or(i as u64 + 1, |id| id[i]),
             frame.grain[i] + 1,
             frame.kind[i],
             num(x[0]),
@@ -169,11 +172,12 @@ pub fn dump_text(frame: &Frame) -> String {
 }
 
 /// One atom line of a dump: id, grain, type, x, image, v, f.
-type DumpAtom = (i64, u32, u32, [f64; 3], [i32; 3], [f64; 3], [f64; 3]);
+type DumpAtom = (u64, u32, u32, [f64; 3], [i32; 3], [f64; 3], [f64; 3]);
 
 /// Reads every frame of a LAMMPS text dump with at least the columns
 /// `id x y z` (any order; `mol`, `type`, `ix iy iz`, `vx vy vz`, `fx fy
-/// fz` when present). Atoms are ordered by id; ids need not be 1..N.
+/// fz` when present). Atoms are ordered by id; ids need not be 1..N
+/// (they are kept in [`Frame::id`]), but are positive.
 pub fn read_dump(path: &Path) -> Result<Vec<Frame>, TrajectoryError> {
     let file = std::fs::File::open(path).map_err(io_error(path))?;
     let mut lines = std::io::BufReader::new(file).lines().enumerate();
@@ -307,8 +311,12 @@ pub fn read_dump(path: &Path) -> Result<Vec<Frame>, TrajectoryError> {
             if mol < 1 || kind < 1 {
                 return Err(bad(k, "molecule ids and types count from 1".into()));
             }
+            let atom_id = int(id)?;
+            if atom_id < 1 {
+                return Err(bad(k, format!("atom id {atom_id}: ids count from 1")));
+            }
             atoms.push((
-                int(id)?,
+                atom_id as u64,
                 (mol - 1) as u32,
                 kind as u32,
                 [f(cx)?, f(cy)?, f(cz)?],
@@ -327,8 +335,11 @@ pub fn read_dump(path: &Path) -> Result<Vec<Frame>, TrajectoryError> {
                 ),
             ));
         }
+        let ids: Vec<u64> = atoms.iter().map(|a| a.0).collect();
+        let id = Some(ids).filter(|ids| !crate::scene::model::is_default_numbering(ids));
         frames.push(Frame {
             step,
+            id,
             simbox,
             grain: atoms.iter().map(|a| a.1).collect(),
             kind: atoms.iter().map(|a| a.2).collect(),
@@ -398,6 +409,7 @@ mod tests {
     fn frame(tilt: [f64; 3], forces: bool) -> Frame {
         Frame {
             step: 42,
+            id: Some(vec![3, 8, 20]),
             simbox: SimBox {
                 lo: [-1.0, 0.5, 2.0],
                 lengths: [10.0, 8.0, 6.0],
@@ -461,6 +473,7 @@ mod tests {
         .unwrap();
         let frames = read_dump(&path).unwrap();
         assert_eq!(frames[0].x, vec![[2.0; 3], [1.0; 3]]);
+        assert_eq!(frames[0].id, Some(vec![9, 20]));
         std::fs::write(
             &path,
             "ITEM: TIMESTEP\n7\nITEM: NUMBER OF ATOMS\n2\nITEM: BOX BOUNDS pp pp pp\n0 5\n0 5\n0 5\nITEM: ATOMS id x y z\n1 1 1 1\n2 2 x 2\n",

@@ -499,6 +499,25 @@ pub fn validate(scene: &Scene) -> Result<(), SceneError> {
             ));
         }
     }
+    if let Some(ids) = &pa.ids {
+        per_particle("particles.ids", ids.len())?;
+        if ids.first() == Some(&0) {
+            return Err(invalid(
+                "particles.ids[0]",
+                "atom ids count from 1 (as LAMMPS atom ids)",
+            ));
+        }
+        if let Some(k) = ids.windows(2).position(|w| w[1] <= w[0]) {
+            return Err(invalid(
+                format!("particles.ids[{}]", k + 1),
+                format!(
+                    "atom ids must increase strictly, in particle order (id {} follows {})",
+                    ids[k + 1],
+                    ids[k]
+                ),
+            ));
+        }
+    }
     if let Some(v) = &pa.velocities {
         if v.len() != n {
             return Err(invalid(

@@ -14,7 +14,7 @@ pub mod cli;
 use crate::engine::SimBox;
 use crate::file_error::FileError;
 use crate::kernels::Separation;
-use crate::lammps::{write_data_file, write_templates};
+use crate::lammps::{write_run_data_file, write_templates};
 use crate::scene::{Scene, SceneError};
 use crate::verify::compare::max_position_deviation;
 use crate::verify::launch::{LammpsChild, LaunchError, Work};
@@ -301,7 +301,7 @@ pub fn run_style(
         if ours { "ours" } else { "upstream" }
     );
     let data = dir.join(format!("{tag}.data"));
-    std::fs::write(&data, write_data_file(&config.scene))
+    std::fs::write(&data, write_run_data_file(&config.scene))
         .map_err(FileError::on("writing", &data))?;
     let dump = dir.join(format!("{tag}.dump"));
     let inputs = write_templates(dir).map_err(|cause| UpstreamError::Templates { cause })?;

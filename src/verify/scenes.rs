@@ -150,6 +150,7 @@ pub fn grain_pair(radius: f64, seed: u64, a_b: f64) -> Result<Scene, SceneError>
             mass: crate::scene::Mass::Uniform(1.0),
             radius: None,
             kind: None,
+            ids: None,
         },
         bonds: crate::scene::Bonds {
             pairs,
@@ -198,6 +199,11 @@ fn keep_particles(scene: &Scene, keep: impl Fn(usize) -> bool) -> Scene {
         .grain
         .as_ref()
         .map(|g| kept.iter().map(|&i| g[i]).collect());
+    out.particles.ids = scene
+        .particles
+        .ids
+        .as_ref()
+        .map(|ids| kept.iter().map(|&i| ids[i]).collect());
     let r0 = crate::scene::load::reference_lengths(scene);
     let bonds: Vec<(usize, [usize; 2])> = scene
         .bonds

@@ -3,7 +3,7 @@
 use super::launch::{LammpsChild, LaunchError, Work};
 use crate::engine::StageDrivers;
 use crate::file_error::FileError;
-use crate::lammps::{write_data_file, write_reference_lengths, write_templates, ScriptVars};
+use crate::lammps::{write_reference_lengths, write_run_data_file, write_templates, ScriptVars};
 use crate::scene::{build_system, ModelKind, Scene};
 use serde::Serialize;
 use std::path::Path;
@@ -62,7 +62,7 @@ pub fn run_lmp_bpm(
     steps: u64,
 ) -> Result<String, SinglePointError> {
     let data = dir.join(format!("{tag}.data"));
-    std::fs::write(&data, write_data_file(scene)).map_err(FileError::on("writing", &data))?;
+    std::fs::write(&data, write_run_data_file(scene)).map_err(FileError::on("writing", &data))?;
     if scene.model == ModelKind::Bpm {
         let r0 = Path::new(&format!("{}.r0", data.display())).to_path_buf();
         std::fs::write(&r0, write_reference_lengths(scene))

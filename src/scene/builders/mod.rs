@@ -41,6 +41,7 @@ pub(crate) fn periodic_cube(
             mass: crate::scene::Mass::Uniform(1.0),
             radius: None,
             kind: None,
+            ids: None,
         },
         bonds: crate::scene::model::Bonds::default(),
         force_field,

@@ -83,6 +83,13 @@ pub fn analyse_dump(
                 f.step
             )));
         }
+        if f.id != scene.particles.ids {
+            return Err(CompactionError::Packing(format!(
+                "{} step {}: the atom ids differ from the data file's",
+                dump.display(),
+                f.step
+            )));
+        }
         if f.grain != grain {
             return Err(CompactionError::Packing(format!(
                 "{} step {}: the molecule ids differ from the data file's",

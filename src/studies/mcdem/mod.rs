@@ -187,6 +187,7 @@ impl WalledBox {
                 mass,
                 radius: Some(radius),
                 kind: None,
+                ids: None,
             },
             bonds: Default::default(),
             force_field,
