@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Regenerate the LIGGGHTS hydrogel_multicontact reference data in this folder.
 #
-#   ./regenerate.sh                 # all four variants, serially (~16 min on one core)
+#   ./regenerate.sh                 # all four variants, serially (~17 min CPU on one core)
 #   ./regenerate.sh hertz_gravity   # only the named variant(s)
 #   ./regenerate.sh --decks-only    # only rebuild the in.* decks from the shipped deck
 #
@@ -137,7 +137,10 @@ run_variant() {
     } > "$HERE/lid_${v}.txt"
     cp "$d/positions_${v}_step0.txt" "$d/positions_${v}_step30000.txt" "$HERE/"
     cp "$d/log.liggghts" "$HERE/log_${v}.txt"
-    local line="${v}: wall ${wall} (m:ss), finished $(date -Is) on $(uname -n) ($(nproc) cores), command: cd $d && /usr/bin/time -v $cmd"
+    local user cpu
+    user=$(grep 'User time' "$d/time.txt" | sed 's/.*: //')
+    cpu=$(grep 'Percent of CPU' "$d/time.txt" | sed 's/.*: //')
+    local line="${v}: wall ${wall} (m:ss), user ${user} s, CPU ${cpu}, finished $(date -Is) on $(uname -n) ($(nproc) cores), command: cd $d && /usr/bin/time -v $cmd"
     {
         echo "# wall times of the runs, one run at a time (serial); the Elapsed (wall clock) of /usr/bin/time -v"
         [[ -f "$HERE/walltimes.txt" ]] && grep -v -e '^#' -e "^${v}:" "$HERE/walltimes.txt" || true
