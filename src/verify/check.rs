@@ -4,6 +4,7 @@
 use super::compare::CompareError;
 use super::compare::{compaction_deviation, compare_runs, deviation_series};
 use super::engines::{run_native, HarnessError, LammpsLauncher};
+use super::liggghts::{lid_cross_check, LiggghtsError, LiggghtsLaw};
 use super::moduli::{measure_moduli, CalibrationEngine};
 use super::scenes::{
     as_trajectory, contact_solid, dem_lattice, dem_trajectory, grain_pair, grain_squeeze,
@@ -52,6 +53,9 @@ pub enum CheckError {
     /// A file or folder could not be created, written or read.
     #[error(transparent)]
     File(#[from] FileError),
+    /// The LIGGGHTS cross-check could not run.
+    #[error(transparent)]
+    Liggghts(#[from] LiggghtsError),
 }
 
 type Result<T> = std::result::Result<T, CheckError>;
@@ -464,6 +468,21 @@ pub fn run_check(opts: &CheckOptions) -> Result<CheckReport> {
             &d.observable,
             d.max_deviation,
             (native.seconds, lammps.seconds),
+        );
+        print_verdict(&v);
+        verdicts.push(v);
+    }
+
+    // LIGGGHTS's hydrogel tutorial under its lid, against LIGGGHTS's own
+    // lid force (committed; verify::liggghts).
+    for law in [LiggghtsLaw::Hertz, LiggghtsLaw::Closure] {
+        let check = lid_cross_check(law, 2, &work, 1)?;
+        let v = verdict(
+            "LIGGGHTS hydrogel tutorial, 514 beads, gravity",
+            "LIGGGHTS 3.8",
+            &format!("lid force vs LIGGGHTS, {}", law.name()),
+            check.comparison.rms_of_peak,
+            (check.seconds, 0.0),
         );
         print_verdict(&v);
         verdicts.push(v);

@@ -7,6 +7,7 @@ pub mod compare;
 pub mod cross_check;
 pub mod engines;
 pub mod launch;
+pub mod liggghts;
 pub mod moduli;
 pub mod scenes;
 pub mod single_point;

@@ -2,6 +2,7 @@
 //! mc-shear`: the multi-contact studies from the command line.
 
 use crate::reference::multicontact;
+use crate::scene::protocols::lid::LidOptions;
 use crate::studies::mcdem::shear::{self, ContactLaw, Grid, SeriesSpec, ShearOptions};
 use crate::studies::mcdem::{calibration as mc_calibration, compression, lid, rigid_box, Closures};
 use crate::studies::{command_line, print_line};
@@ -307,7 +308,7 @@ fn lid_options(
     wall_modulus: f64,
     dt: Option<f64>,
     closures: &ClosureArgs,
-) -> Result<lid::LidOptions> {
+) -> Result<LidOptions> {
     let [x, y] = p.base[..] else {
         bail!(
             "--packing needs --base X,Y, the side walls' positions (got {} values)",
@@ -331,7 +332,7 @@ fn lid_options(
     let Some(dt) = dt else {
         bail!("--packing needs --dt, the time step in the data file's time unit");
     };
-    let opts = lid::LidOptions {
+    let opts = LidOptions {
         packing: file.to_path_buf(),
         base: [x, y],
         lid_start,

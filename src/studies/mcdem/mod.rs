@@ -22,9 +22,10 @@ pub mod lid;
 pub mod rigid_box;
 pub mod shear;
 
-use crate::engine::{GranularWall, MultiContact, WallSide};
-use crate::kernels::{GranularMaterial, NormalDamping};
+use crate::engine::MultiContact;
+use crate::kernels::GranularMaterial;
 use crate::reference::multicontact;
+pub use crate::scene::protocols::lid::WalledBox;
 use crate::scene::{
     BoxSpec, ForceField, Mass, ModelKind, Particles, Scene, StageOutput, StageSpec,
 };
@@ -99,19 +100,6 @@ impl Closures {
     }
 }
 
-/// A closed box of granular walls: a floor at 0, four side walls around
-/// the base `[0, lx] x [0, ly]`, and a lid; all of one material.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct WalledBox {
-    /// Base edges `[lx, ly]` (d).
-    pub base: [f64; 2],
-    /// The lid's highest position (d): the simulation box reaches above
-    /// it.
-    pub height: f64,
-    /// The walls' material.
-    pub material: GranularMaterial,
-}
-
 impl WalledBox {
     /// A box of base `base` and highest lid `height` whose walls have the
     /// spheres' material but for a modulus of `wall_modulus` Pa.
@@ -124,28 +112,6 @@ impl WalledBox {
                 ..hydrogel.material()
             },
         }
-    }
-
-    /// The walls with the lid at `lid` moving at `velocity` (d / tau):
-    /// floor 0, lid 1, side walls 2 to 5 (x lo, x hi, y lo, y hi), as
-    /// [`BoxWalls::read`] reads them.
-    pub fn walls(&self, lid: f64, velocity: f64) -> Vec<GranularWall> {
-        let wall = |axis, side, position, velocity| GranularWall {
-            axis,
-            side,
-            position,
-            velocity,
-            material: self.material,
-        };
-        let mut walls = vec![
-            wall(2, WallSide::Lo, 0.0, 0.0),
-            wall(2, WallSide::Hi, lid, velocity),
-        ];
-        for axis in 0..2 {
-            walls.push(wall(axis, WallSide::Lo, 0.0, 0.0));
-            walls.push(wall(axis, WallSide::Hi, self.base[axis], 0.0));
-        }
-        walls
     }
 
     /// A scene of hydrogel spheres at `positions` with `radius` and
@@ -342,23 +308,8 @@ impl Hydrogel {
 }
 
 /// Spheres of Young's modulus 1 with the contact law of the closures'
-/// reference implementation (LIGGGHTS's Hertz model): the restitution form
-/// of the damping, tangential damping `sqrt(2 (1 - nu) / (2 - nu))` times
-/// the normal one (its tangential dashpot in this contact law), sliding
-/// friction only.
-pub fn reference_material(poisson_ratio: f64, restitution: f64, friction: f64) -> GranularMaterial {
-    let nu = poisson_ratio;
-    GranularMaterial {
-        youngs_modulus: 1.0,
-        poisson_ratio: nu,
-        restitution,
-        damping: NormalDamping::CoeffRestitution,
-        tangential_damping: (2.0 * (1.0 - nu) / (2.0 - nu)).sqrt(),
-        sliding_friction: friction,
-        rolling: None,
-        twisting: Default::default(),
-    }
-}
+/// reference implementation (LIGGGHTS's Hertz model).
+pub use crate::scene::protocols::lid::liggghts_hertz_material as reference_material;
 
 #[cfg(test)]
 mod tests {

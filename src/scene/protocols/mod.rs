@@ -1,5 +1,7 @@
 //! Ready-made protocol stages (docs/protocols.md).
 
+pub mod lid;
+
 use super::model::{ForceField, ModelKind, Record, Scene, StageSpec};
 use crate::engine::{Deformation, FlatWall, ShearRemap, Tether, TiltFactor, WallSide};
 use serde::{Deserialize, Serialize};
