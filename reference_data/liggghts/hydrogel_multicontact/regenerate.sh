@@ -222,13 +222,17 @@ make_first_step_deck() {
 #   - the lid mesh is placed at endZ = 0.1375165625 and does not move;
 #   - no gravity and no integrator (fix nve/sphere left out): the spheres stay where
 #     they are and every step re-evaluates the forces at the same positions;
-#   - run ${FIRST_STEP_STEPS} steps; per-atom forces dumped at every step, lid force every step.
+#   - run ${FIRST_STEP_STEPS} steps; per-atom forces dumped at every step, lid force every step;
+#   - 'atom_modify sort 0 0.0': no spatial sort of the atoms at the set-up, so the local order
+#     is the data file's (ids 1..N) and a pair is computed from its lower id (the closure's
+#     pair effective radius and contact point depend on which sphere of a pair comes first).
 # Why not 'run 0': the set-up force evaluation of a run stores no contact history
 # (shearupdate = 0), so the closure sees the normal forces only from step 1 on:
 # steps 0 and 1 are plain Hertz also with the closure, step k has k - 1 closure iterations.
 # ---------------------------------------------------------------------------
 atom_style	sphere
 atom_modify	map array
+atom_modify	sort 0 0.0
 boundary	f f f
 newton		off
 soft_particles yes
