@@ -6,13 +6,18 @@
 
 use bpm::verify::liggghts::{lid_cross_check, LiggghtsLaw};
 
+// One thread: a run of this test on two threads, beside the other test on
+// two more, once hung in the thread team (a worker asleep while the caller
+// waited for it; not reproduced since), and a standing check must not
+// depend on that.
+
 fn work(name: &str) -> std::path::PathBuf {
     std::env::temp_dir().join(format!("bpm-liggghts-{name}-{}", std::process::id()))
 }
 
 #[test]
 fn hertz_lid_force_follows_liggghts_over_both_cycles() {
-    let check = lid_cross_check(LiggghtsLaw::Hertz, 2, &work("hertz"), 2).unwrap();
+    let check = lid_cross_check(LiggghtsLaw::Hertz, 2, &work("hertz"), 1).unwrap();
     let c = check.comparison;
     assert!(c.loaded_rows > 1000, "{c:?}");
     assert!(c.rms_of_peak <= 0.02, "{c:?}");
@@ -28,7 +33,7 @@ fn hertz_lid_force_follows_liggghts_over_both_cycles() {
 /// (`bpm check` runs both).
 #[test]
 fn closure_lid_force_follows_liggghts_over_the_first_cycle() {
-    let check = lid_cross_check(LiggghtsLaw::Closure, 1, &work("closure"), 2).unwrap();
+    let check = lid_cross_check(LiggghtsLaw::Closure, 1, &work("closure"), 1).unwrap();
     let c = check.comparison;
     assert!(c.loaded_rows > 500, "{c:?}");
     assert!(c.rms_of_peak <= 0.02, "{c:?}");

@@ -21,10 +21,11 @@
 //! but not on the bed: a residual (RMS 7% of the per-atom forces,
 //! largest at spheres on the floor and side walls) is not explained.
 
+use bpm::engine::MultiContact;
 use bpm::engine::{DemModel, ExternalTerms, StageDrivers, System};
 use bpm::kernels::{pair_contact_points, surface_corrections, Closure, ContactPoint, HalfSpace};
 use bpm::scene::build_system;
-use bpm::studies::mcdem::lid::{lid_scene, LidOptions};
+use bpm::scene::protocols::lid::{lid_scene, LidOptions};
 use std::collections::BTreeMap;
 use std::path::PathBuf;
 
@@ -113,7 +114,8 @@ fn options(gamma: f64, wall_modulus: f64) -> LidOptions {
 /// `evaluations` force evaluations at fixed positions, the walls held
 /// still (`variant` 0: Hertz, 1: the standard closure).
 fn native(opts: &LidOptions, variant: usize, evaluations: usize) -> Vec<(Forces, f64)> {
-    let scene = lid_scene(opts, &opts.variants()[variant]).unwrap();
+    let closure = (variant == 1).then(|| MultiContact::standard(opts.gamma));
+    let scene = lid_scene(opts, closure, "first step").unwrap();
     let mut walls = scene.stages[0].granular_walls.clone();
     for w in &mut walls {
         w.velocity = 0.0;
