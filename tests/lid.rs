@@ -53,7 +53,7 @@ fn lid_run(bed: &Path, out: &Path, extra: &[(&str, &str)]) -> Output {
         .arg("-o")
         .arg(out);
     for (option, value) in options {
-        cmd.arg(option).arg(value);
+        cmd.arg(option).args(value.split_whitespace());
     }
     cmd.output().unwrap()
 }
@@ -180,7 +180,7 @@ fn under_gravity_the_floor_carries_the_weight_and_the_lid_less() {
         &bed,
         &dir.join("out"),
         &[
-            ("--gravity", "0,0,-9.81"),
+            ("--gravity", "0 0 -9.81"),
             ("--lid-start", &start_text),
             ("--lid-end", &end_text),
             ("--lid-speed", "0.001"),
@@ -237,7 +237,7 @@ fn the_lid_protocol_names_each_missing_or_malformed_option() {
     let dir = scratch("options");
     let bed = write_bed(&dir);
     let refusals = [
-        (("--gravity", "0,-9.81"), "--gravity takes three components"),
+        (("--gravity", "0 -9.81"), "--gravity <GX> <GY> <GZ>"),
         (("--base", "0.1"), "--base X,Y"),
         (("--lid-end", "0.03"), "--lid-end"),
         (("--poisson-ratio", "0.7"), "--poisson-ratio"),

@@ -190,13 +190,13 @@ pub struct PackingArgs {
     /// [default: 0.03].
     #[arg(long)]
     friction: Option<f64>,
-    /// With --packing: gravity, an acceleration GX,GY,GZ (e.g.
-    /// 0,0,-9.81); none by default.
+    /// With --packing: gravity, an acceleration as three numbers GX GY GZ
+    /// (e.g. `--gravity 0 0 -9.81`); none by default.
     #[arg(
         long,
-        value_delimiter = ',',
-        allow_hyphen_values = true,
-        value_name = "GX,GY,GZ"
+        num_args = 3,
+        value_names = ["GX", "GY", "GZ"],
+        allow_negative_numbers = true
     )]
     gravity: Vec<f64>,
     /// With --packing: steps between recorded rows [default: 100].
@@ -319,7 +319,7 @@ fn lid_options(
         [] => [0.0; 3],
         [gx, gy, gz] => [gx, gy, gz],
         _ => bail!(
-            "--gravity takes three components GX,GY,GZ (got {})",
+            "--gravity takes three components GX GY GZ (got {})",
             p.gravity.len()
         ),
     };
