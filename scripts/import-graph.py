@@ -11,7 +11,8 @@ inline `crate::`/`super::` path). A `pub use` in a mod.rs or lib.rs is a
 facade, not a dependency: names reached through it are followed to the file
 that defines them, so a module re-exporting its children does not make a
 cycle with each child that uses its parent. Exits non-zero if any cycle
-between files is found.
+between files, or between the folders of src/, is found
+(tests/architecture.rs runs it).
 """
 
 import re
@@ -285,7 +286,7 @@ def main():
     print(f"\nfolder cycles: {len(folder_cycles)}")
     for comp in folder_cycles:
         print("  " + " -> ".join(a_cycle(folder_graph, comp)))
-    return 1 if cycles else 0
+    return 1 if cycles or folder_cycles else 0
 
 
 if __name__ == "__main__":

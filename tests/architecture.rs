@@ -1,5 +1,5 @@
 //! `docs/architecture.md` stays true: every path its "Where to add" table
-//! names exists.
+//! names exists, and the layers it draws have no cycle.
 
 use std::path::Path;
 
@@ -33,4 +33,22 @@ fn every_path_in_the_where_to_add_table_exists() {
         }
     }
     assert!(checked >= 25, "only {checked} paths found in the table");
+}
+
+/// The layers point one way: no file of `src/` depends on itself through
+/// others, and no folder does (`scripts/import-graph.py`, test modules
+/// aside).
+#[test]
+fn no_file_or_folder_of_the_crate_depends_on_itself() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let out = std::process::Command::new("python3")
+        .arg(root.join("scripts/import-graph.py"))
+        .output()
+        .expect("python3 runs scripts/import-graph.py");
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(out.status.success(), "{text}");
+    assert!(
+        text.contains("file cycles: 0") && text.contains("folder cycles: 0"),
+        "{text}"
+    );
 }

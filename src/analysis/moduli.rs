@@ -2,8 +2,8 @@
 //! (docs/protocols.md, "Calibration"): least-squares slopes of stress against strain.
 
 use super::fit::least_squares_line;
+use super::Recorded;
 use crate::reference::paper;
-use crate::scene::run::StageOutput;
 use serde::{Deserialize, Serialize};
 
 /// Why a modulus could not be measured.
@@ -27,26 +27,26 @@ pub enum ModulusError {
     },
 }
 
-fn column(stage: &StageOutput, name: &'static str) -> Result<Vec<f64>, ModulusError> {
+fn column(stage: &impl Recorded, name: &'static str) -> Result<Vec<f64>, ModulusError> {
     stage.column(name).ok_or(ModulusError::MissingColumn {
-        stage: stage.name.clone(),
+        stage: stage.name().into(),
         column: name,
     })
 }
 
-fn slope(stage: &StageOutput, x: &[f64], y: &[f64]) -> Result<f64, ModulusError> {
+fn slope(stage: &impl Recorded, x: &[f64], y: &[f64]) -> Result<f64, ModulusError> {
     least_squares_line(x, y)
         .map(|l| l.slope)
         .filter(|s| s.is_finite())
         .ok_or(ModulusError::NoSlope {
-            stage: stage.name.clone(),
+            stage: stage.name().into(),
             rows: x.len(),
         })
 }
 
 /// Volumetric strain `(V0 - V) / V0` (from the first row) and pressure of
 /// an isotropic compression stage.
-pub fn compression_series(stage: &StageOutput) -> Result<(Vec<f64>, Vec<f64>), ModulusError> {
+pub fn compression_series(stage: &impl Recorded) -> Result<(Vec<f64>, Vec<f64>), ModulusError> {
     let (lx, ly, lz) = (
         column(stage, "lx")?,
         column(stage, "ly")?,
@@ -55,7 +55,7 @@ pub fn compression_series(stage: &StageOutput) -> Result<(Vec<f64>, Vec<f64>), M
     let p = column(stage, "pressure")?;
     let volume: Vec<f64> = (0..lx.len()).map(|k| lx[k] * ly[k] * lz[k]).collect();
     let v0 = *volume.first().ok_or(ModulusError::NoSlope {
-        stage: stage.name.clone(),
+        stage: stage.name().into(),
         rows: 0,
     })?;
     let strain: Vec<f64> = volume.iter().map(|v| (v0 - v) / v0).collect();
@@ -64,7 +64,7 @@ pub fn compression_series(stage: &StageOutput) -> Result<(Vec<f64>, Vec<f64>), M
 
 /// Shear strain `xy / ly` and shear stress `-P_xy` of a simple-shear stage
 /// (LAMMPS's pressure tensor is minus the stress).
-pub fn shear_series(stage: &StageOutput) -> Result<(Vec<f64>, Vec<f64>), ModulusError> {
+pub fn shear_series(stage: &impl Recorded) -> Result<(Vec<f64>, Vec<f64>), ModulusError> {
     let (xy, ly, pxy) = (
         column(stage, "xy")?,
         column(stage, "ly")?,
@@ -77,14 +77,14 @@ pub fn shear_series(stage: &StageOutput) -> Result<(Vec<f64>, Vec<f64>), Modulus
 
 /// Bulk modulus `K`: slope of the pressure against the volumetric strain
 /// `(V0 - V) / V0` of an isotropic compression stage.
-pub fn bulk_modulus(stage: &StageOutput) -> Result<f64, ModulusError> {
+pub fn bulk_modulus(stage: &impl Recorded) -> Result<f64, ModulusError> {
     let (strain, p) = compression_series(stage)?;
     slope(stage, &strain, &p)
 }
 
 /// Shear modulus `G`: slope of `-P_xy` against the shear strain `xy / ly`
 /// of a simple-shear stage.
-pub fn shear_modulus(stage: &StageOutput) -> Result<f64, ModulusError> {
+pub fn shear_modulus(stage: &impl Recorded) -> Result<f64, ModulusError> {
     let (strain, stress) = shear_series(stage)?;
     slope(stage, &strain, &stress)
 }
@@ -127,8 +127,8 @@ impl Moduli {
     /// stages (run in `seconds` together), beside the paper's fits.
     pub fn measured(
         a_b: f64,
-        compression: &StageOutput,
-        shear: &StageOutput,
+        compression: &impl Recorded,
+        shear: &impl Recorded,
         seconds: f64,
     ) -> Result<Self, ModulusError> {
         let k = bulk_modulus(compression)?;
@@ -150,21 +150,27 @@ impl Moduli {
 mod tests {
     use super::*;
 
-    fn stage(columns: &[&str], rows: Vec<Vec<f64>>) -> StageOutput {
-        StageOutput {
-            name: "t".into(),
-            steps: 0,
-            columns: columns
-                .iter()
-                .map(|c| crate::scene::observables::standard_column(c).expect("a standard column"))
-                .collect(),
+    /// A recorded table: named columns, one row per record.
+    struct Table {
+        columns: Vec<&'static str>,
+        rows: Vec<Vec<f64>>,
+    }
+
+    impl Recorded for Table {
+        fn name(&self) -> &str {
+            "t"
+        }
+
+        fn column(&self, name: &str) -> Option<Vec<f64>> {
+            let k = self.columns.iter().position(|c| *c == name)?;
+            Some(self.rows.iter().map(|r| r[k]).collect())
+        }
+    }
+
+    fn stage(columns: &[&'static str], rows: Vec<Vec<f64>>) -> Table {
+        Table {
+            columns: columns.to_vec(),
             rows,
-            rows_file: None,
-            checkpoints: vec![],
-            wall_seconds: 0.0,
-            timers: Default::default(),
-            neighbour_builds: 0,
-            stopped_at: None,
         }
     }
 

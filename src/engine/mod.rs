@@ -38,7 +38,7 @@ pub use external::{
 };
 pub use integrator::Integrator;
 pub use model::{EnergyTerm, ForceInput, ForceOutput, ModelTally, ParticleModel, MAX_ENERGY_TERMS};
-pub use neighbor::{Exclusions, NeighbourList};
+pub use neighbor::{pairs_within, Exclusions, NeighbourList};
 pub use particles::{Particles, Rotation};
 pub use simbox::{MinimumImage, SimBox};
 pub use system::{StageDrivers, StepReport, System};

@@ -327,6 +327,21 @@ fn rigid_image(from: &[[f64; 3]], to: &[[f64; 3]]) -> Vec<[f64; 3]> {
         .collect()
 }
 
+/// Every pair of `x` in `simbox` closer than `cutoff`, once with
+/// `i < j`, with its (minimum-image) distance.
+pub fn pairs_within(simbox: &SimBox, x: &[[f64; 3]], cutoff: f64) -> Vec<(usize, usize, f64)> {
+    let mut list = NeighbourList::default();
+    list.build(simbox, x, cutoff, 0.0, None);
+    let mut pairs = Vec::new();
+    for i in 0..x.len() {
+        for &j in list.of(i) {
+            let j = j as usize;
+            pairs.push((i, j, simbox.distance(&x[i], &x[j])));
+        }
+    }
+    pairs
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

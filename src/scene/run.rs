@@ -50,6 +50,16 @@ impl StageOutput {
     }
 }
 
+impl crate::analysis::Recorded for StageOutput {
+    fn name(&self) -> &str {
+        &self.name
+    }
+
+    fn column(&self, name: &str) -> Option<Vec<f64>> {
+        StageOutput::column(self, name)
+    }
+}
+
 /// Positions at one step.
 #[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct Checkpoint {

@@ -2,7 +2,7 @@
 
 use crate::engine::SimBox;
 use crate::kernels::Separation;
-use crate::scene::builders::bulk::pairs_within;
+use crate::engine::pairs_within;
 
 /// Grain pairs `(a, b)`, `a < b`, with at least one particle of `a` closer
 /// than `contact` to one of `b` (the pair force's range): grains that

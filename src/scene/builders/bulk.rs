@@ -5,9 +5,8 @@
 //! speed 0.03, a quench with pair damping restored, then bonds between all
 //! pairs closer than 1.5 d and zero velocities.
 
-use crate::engine::{BondTopology, NeighbourList, SimBox, System};
+use crate::engine::{pairs_within, BondTopology, System};
 use crate::kernels::PairCoeffs;
-use crate::kernels::Separation;
 use crate::options::{validate_strain_and_rate, InvalidOption};
 use crate::scene::model::{Bonds, ForceField, Scene, StageSpec, VelocityInit};
 use crate::scene::protocols;
@@ -342,21 +341,6 @@ pub fn sort_spatially(x: &mut [[f64; 3]], simbox: &crate::engine::SimBox, cell: 
         (row * nb[0] + xk, s[0].to_bits())
     };
     x.sort_by_key(key);
-}
-
-/// Every pair of `x` in `simbox` closer than `cutoff`, once with
-/// `i < j`, with its (minimum-image) distance.
-pub fn pairs_within(simbox: &SimBox, x: &[[f64; 3]], cutoff: f64) -> Vec<(usize, usize, f64)> {
-    let mut list = NeighbourList::default();
-    list.build(simbox, x, cutoff, 0.0, None);
-    let mut pairs = Vec::new();
-    for i in 0..x.len() {
-        for &j in list.of(i) {
-            let j = j as usize;
-            pairs.push((i, j, simbox.distance(&x[i], &x[j])));
-        }
-    }
-    pairs
 }
 
 /// Bonds every pair of `sys` closer than `cutoff`, with that distance as `r0`.

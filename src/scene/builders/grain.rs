@@ -11,7 +11,8 @@
 //! at rest, with no protocol stages; studies (the Hertz squeeze, packings)
 //! add their own.
 
-use super::bulk::{build_bulk, pairs_within, BulkParams};
+use super::bulk::{build_bulk, BulkParams};
+use crate::engine::pairs_within;
 use crate::engine::SphereWall;
 use crate::kernels::Separation;
 use crate::scene::load::reference_lengths;

@@ -28,8 +28,8 @@
 //! DEM spheres for the comparison ([`build_sphere_packing`]) sit at the
 //! template's centres: step 1 only.
 
-use super::bulk::pairs_within;
 use super::grain::{build_grain, GrainKind, GrainParams};
+use crate::engine::pairs_within;
 use crate::engine::SimBox;
 use crate::kernels::{GranularMaterial, PairCoeffs, Separation};
 use crate::scene::load::reference_lengths;
