@@ -1,8 +1,8 @@
 //! Contacts between grains and the coordination number without rattlers.
 
+use crate::engine::pairs_within;
 use crate::engine::SimBox;
 use crate::kernels::Separation;
-use crate::engine::pairs_within;
 
 /// Grain pairs `(a, b)`, `a < b`, with at least one particle of `a` closer
 /// than `contact` to one of `b` (the pair force's range): grains that
