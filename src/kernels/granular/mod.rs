@@ -29,65 +29,30 @@
 //! The history (`xi`, the rolling displacement, the twist angle) belongs to
 //! the contact: it starts at zero when the spheres touch, is rotated into
 //! the tangent plane as the contact turns, and is cleared when they part.
+//!
+//! The sub-models live in their own files, as LAMMPS's GRANULAR package
+//! splits them: `normal.rs` (Hertz), `damping.rs` (Tsuji, coefficient of
+//! restitution), `tangential.rs` (Mindlin's history spring, sliding
+//! friction), `rolling.rs` (SDS) and `twisting.rs` (Marshall, SDS). Their
+//! forces are still formed together, in one pass, by `contact_law` here.
 
 // Vector components are written `for d in 0..3` over several arrays at
 // once, as the equations read.
 #![allow(clippy::needless_range_loop)]
 
+mod damping;
+mod normal;
+mod rolling;
+mod tangential;
+mod twisting;
+
+pub use damping::{restitution_prefactor, tsuji_prefactor, NormalDamping};
+pub use rolling::SpringDashpotSlider;
+pub use twisting::Twisting;
+
+use normal::youngs_compliance;
 use serde::{Deserialize, Serialize};
-
-/// Below this, a history component out of the tangent plane is left as is
-/// (LAMMPS's `EPSILON` in the frame update test).
-const FRAME_EPSILON: f64 = 1e-10;
-
-/// How the normal damping coefficient follows from the restitution
-/// coefficient `e`. Both scale as `sqrt(m_eff k_n a)`, which keeps `e`
-/// independent of the impact speed for Hertzian contacts.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum NormalDamping {
-    /// Tsuji, Tanaka and Ishida: `c_e` is a sixth-order polynomial fitted
-    /// so that a Hertzian collision rebounds with `e` (LAMMPS `damping
-    /// tsuji`).
-    #[default]
-    Tsuji,
-    /// `c_e = sqrt(5) |ln e| / sqrt(ln^2 e + pi^2)` (LIGGGHTS's Hertz
-    /// model; LAMMPS `damping coeff_restitution`, which the Debian LAMMPS of
-    /// 2021 lacks): two spheres rebound with `e` (measured to 1e-4, at any
-    /// impact speed).
-    CoeffRestitution,
-}
-
-/// A spring-dashpot-slider on rolling or twisting motion.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct SpringDashpotSlider {
-    /// Spring stiffness (k units for rolling; k d^2 for twisting).
-    pub stiffness: f64,
-    /// Dashpot coefficient (sqrt(k m) units for rolling; d^2 sqrt(k m)
-    /// for twisting).
-    pub damping: f64,
-    /// Friction coefficient: the spring force (torque for twisting) is
-    /// capped at this times the total normal force `|F_n|`, damping
-    /// included (for twisting the coefficient is a length, d).
-    pub friction: f64,
-}
-
-/// Twisting resistance about the contact normal.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum Twisting {
-    /// None.
-    #[default]
-    None,
-    /// Marshall's model: stiffness `k_t a^2 / 2` with the contact's
-    /// tangential stiffness `k_t = 8 G_eff a` (so it grows as `a^3`),
-    /// damping `eta_t a^2 / 2` and friction `2/3 a mu_s` (LAMMPS 2021
-    /// `twisting marshall`).
-    Marshall,
-    /// Explicit coefficients (LAMMPS `twisting sds`).
-    Sds(SpringDashpotSlider),
-}
+use tangential::{rotate_into_plane, shear_compliance, slider};
 
 /// Material and friction of DEM spheres of one material: the scene's
 /// `force_field.granular`.
@@ -118,25 +83,6 @@ pub struct GranularMaterial {
 
 fn is_no_twisting(t: &Twisting) -> bool {
     *t == Twisting::None
-}
-
-/// Tsuji, Tanaka and Ishida's damping prefactor for restitution `e`, the
-/// polynomial LAMMPS's `damping tsuji` uses.
-pub fn tsuji_prefactor(e: f64) -> f64 {
-    // Powers formed and summed as LAMMPS forms them, so both round alike.
-    let sq = e * e;
-    let cu = sq * e;
-    let p4 = sq * sq;
-    let p5 = e * p4;
-    let p6 = sq * p4;
-    1.2728 - 4.2783 * e + 11.087 * sq - 22.348 * cu + 27.467 * p4 - 18.022 * p5 + 4.8218 * p6
-}
-
-/// The linear-spring damping prefactor `sqrt(5) |ln e| / sqrt(ln^2 e +
-/// pi^2)` for restitution `e`.
-pub fn restitution_prefactor(e: f64) -> f64 {
-    let l = e.ln();
-    5f64.sqrt() * l.abs() / (l * l + std::f64::consts::PI * std::f64::consts::PI).sqrt()
 }
 
 /// The coefficients of one kind of contact (two spheres, or a sphere and
@@ -199,19 +145,6 @@ impl GranularCoeffs {
     }
 }
 
-/// One body's share `(1 - nu^2) / E` of the Hertz contact compliance:
-/// `E_eff = 1 / (sum of both shares)`.
-fn youngs_compliance(e: f64, nu: f64) -> f64 {
-    (1.0 - nu * nu) / e
-}
-
-/// One body's share `(2 - nu) / G = 2 (2 - nu) (1 + nu) / E` of Mindlin's
-/// tangential compliance (formed as LAMMPS forms it): `G_eff = 1 / (sum of
-/// both shares)`.
-fn shear_compliance(e: f64, nu: f64) -> f64 {
-    2.0 * (2.0 - nu) * (1.0 + nu) / e
-}
-
 /// What a contact remembers between steps.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct ContactHistory {
@@ -258,55 +191,6 @@ fn cross(a: &[f64; 3], b: &[f64; 3]) -> [f64; 3] {
         a[2] * b[0] - a[0] * b[2],
         a[0] * b[1] - a[1] * b[0],
     ]
-}
-
-#[inline(always)]
-fn norm(a: &[f64; 3]) -> f64 {
-    (a[0] * a[0] + a[1] * a[1] + a[2] * a[2]).sqrt()
-}
-
-/// Turns a history vector into the tangent plane of `n`, keeping its
-/// length, when its normal part is not negligible (`|h . n| scale >
-/// FRAME_EPSILON limit`).
-#[inline(always)]
-fn rotate_into_plane(h: &mut [f64; 3], n: &[f64; 3], scale: f64, limit: f64) {
-    let along = h[0] * n[0] + h[1] * n[1] + h[2] * n[2];
-    if along.abs() * scale > FRAME_EPSILON * limit {
-        let before = norm(h);
-        for d in 0..3 {
-            h[d] -= along * n[d];
-        }
-        let after = norm(h);
-        let s = if after > 0.0 { before / after } else { 0.0 };
-        for c in h.iter_mut() {
-            *c *= s;
-        }
-    }
-}
-
-/// A spring-dashpot-slider on a history vector `h` moving at velocity `w`
-/// with stiffness `k`, dashpot `eta` and cap `limit`: returns the force
-/// and, when the cap is reached, resets `h` to the spring stretch that
-/// gives the capped force (sliding).
-#[inline(always)]
-fn slider(h: &mut [f64; 3], w: &[f64; 3], k: f64, eta: f64, limit: f64) -> [f64; 3] {
-    let mut f = [
-        -k * h[0] - eta * w[0],
-        -k * h[1] - eta * w[1],
-        -k * h[2] - eta * w[2],
-    ];
-    let magnitude = norm(&f);
-    if magnitude > limit {
-        if norm(h) != 0.0 {
-            for d in 0..3 {
-                h[d] = -1.0 / k * (limit * f[d] / magnitude + eta * w[d]);
-                f[d] *= limit / magnitude;
-            }
-        } else {
-            f = [0.0; 3];
-        }
-    }
-    f
 }
 
 /// What the contact law reads of one contact, whatever its two bodies
@@ -660,9 +544,10 @@ fn contact_law(
 
 #[cfg(test)]
 mod tests {
+    use super::tangential::norm;
     use super::*;
 
-    fn material() -> GranularMaterial {
+    pub(super) fn material() -> GranularMaterial {
         GranularMaterial {
             youngs_modulus: 30.0,
             poisson_ratio: 0.25,
@@ -675,7 +560,7 @@ mod tests {
         }
     }
 
-    fn at_rest(radius: f64, mass: f64) -> Sphere {
+    pub(super) fn at_rest(radius: f64, mass: f64) -> Sphere {
         Sphere {
             v: [0.0; 3],
             omega: [0.0; 3],
@@ -684,291 +569,16 @@ mod tests {
         }
     }
 
-    fn dot3(a: &[f64; 3], b: &[f64; 3]) -> f64 {
+    pub(super) fn dot3(a: &[f64; 3], b: &[f64; 3]) -> f64 {
         a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
     }
 
     /// `E_eff` and `G_eff` of two spheres of one material, by their
     /// textbook definitions.
-    fn effective(m: &GranularMaterial) -> (f64, f64) {
+    pub(super) fn effective(m: &GranularMaterial) -> (f64, f64) {
         let (e, nu) = (m.youngs_modulus, m.poisson_ratio);
         let g = e / (2.0 * (1.0 + nu));
         (e / (2.0 * (1.0 - nu * nu)), g / (2.0 * (2.0 - nu)))
-    }
-
-    #[test]
-    fn static_normal_force_is_hertz_and_derives_from_the_hertz_energy() {
-        let m = material();
-        let c = GranularCoeffs::of(&m);
-        let (ri, rj) = (1.0, 3.0);
-        let reff = ri * rj / (ri + rj);
-        let (e_eff, _) = effective(&m);
-        let energy = |r: f64| {
-            let delta = ri + rj - r;
-            8.0 / 15.0 * e_eff * reff.sqrt() * delta.powf(2.5)
-        };
-        for overlap in [1e-4, 1e-2, 0.3] {
-            let dir = [0.48, -0.6, 0.64];
-            let del = dir.map(|d| d * (ri + rj - overlap));
-            // The overlap the kernel sees, without the round-off of
-            // forming `del` (which the subtraction would magnify).
-            let r = norm(&del);
-            let delta = ri + rj - r;
-            let mut h = ContactHistory::default();
-            let out = granular_contact(
-                &c,
-                &del,
-                &at_rest(ri, 1.0),
-                &at_rest(rj, 2.0),
-                &mut h,
-                0.01,
-                true,
-            );
-            let hertz = 4.0 / 3.0 * e_eff * reff.sqrt() * delta.powf(1.5);
-            let along = dot3(&out.force, &dir);
-            assert!((along - hertz).abs() < 1e-13 * hertz, "{along} vs {hertz}");
-            // F = -dU/dr by central differences.
-            let step = 1e-6 * delta;
-            let fd = -(energy(r + step) - energy(r - step)) / (2.0 * step);
-            assert!((along - fd).abs() < 1e-6 * hertz, "{along} vs {fd}");
-            assert_eq!(out.torque_i, [0.0; 3]);
-            assert!((h.normal_force - hertz).abs() < 1e-13 * hertz);
-            assert_eq!(
-                h,
-                ContactHistory {
-                    normal_force: h.normal_force,
-                    ..ContactHistory::default()
-                },
-                "no tangential motion, no history but the normal force"
-            );
-        }
-    }
-
-    #[test]
-    fn moved_surfaces_change_the_overlap_and_arms_but_not_the_effective_radius() {
-        let m = material();
-        let c = GranularCoeffs::of(&m);
-        let (ri, rj) = (0.5, 0.8);
-        let reff = ri * rj / (ri + rj);
-        let (e_eff, _) = effective(&m);
-        let del = [1.27, 0.0, 0.0];
-        let (di, dj) = (0.02, -0.01);
-        let delta = ri + di + rj + dj - del[0];
-        let spin = Sphere {
-            omega: [0.0, 0.0, 0.3],
-            ..at_rest(ri, 1.0)
-        };
-        let mut h = ContactHistory::default();
-        let out = corrected_granular_contact(
-            &c,
-            &del,
-            &spin,
-            &at_rest(rj, 2.0),
-            [di, dj],
-            &mut h,
-            0.01,
-            true,
-        );
-        let hertz = 4.0 / 3.0 * e_eff * (reff * delta).sqrt() * delta;
-        assert!((out.force[0] - hertz).abs() < 1e-13 * hertz);
-        assert!((h.normal_force - hertz).abs() < 1e-13 * hertz);
-        // The spin drags the contact point, (R_i + Delta_i) from the
-        // centre; the tangential force's moments balance about the contact
-        // point: arm_i + arm_j = |del|.
-        let ft = out.force[1];
-        assert!(ft != 0.0);
-        let arm_i = -out.torque_i[2] / ft;
-        let arm_j = -out.torque_j[2] / ft;
-        assert!((arm_i - (ri + di - 0.5 * delta)).abs() < 1e-14);
-        assert!((arm_i + arm_j - del[0]).abs() < 1e-14);
-        // Zero corrections are the plain contact, bit for bit.
-        let (mut a, mut b) = (ContactHistory::default(), ContactHistory::default());
-        let plain = granular_contact(&c, &del, &spin, &at_rest(rj, 2.0), &mut a, 0.01, true);
-        let zero = corrected_granular_contact(
-            &c,
-            &del,
-            &spin,
-            &at_rest(rj, 2.0),
-            [0.0; 2],
-            &mut b,
-            0.01,
-            true,
-        );
-        assert_eq!((plain, a), (zero, b));
-    }
-
-    /// A head-on collision of two equal spheres, integrated with velocity
-    /// Verlet at a step far below the contact time: the rebound speed over
-    /// the impact speed.
-    fn restitution_of(m: &GranularMaterial, speed: f64) -> f64 {
-        let c = GranularCoeffs::of(m);
-        let (radius, mass) = (0.5, 1.0);
-        let mut x = 1.0 - 1e-12; // just touching
-        let mut v = -speed; // x = x_i - x_j, v = v_i - v_j
-        let meff = 0.5 * mass;
-        // Contact time ~ 3 (meff^2 / (k_n^2 R v)) ^ (1/5).
-        let kn = c.normal_stiffness;
-        let t_contact = 3.2 * (meff * meff / (kn * kn * 0.25 * speed)).powf(0.2);
-        let dt = t_contact / 20000.0;
-        let force = |x: f64, v: f64| {
-            let si = Sphere {
-                v: [v, 0.0, 0.0],
-                ..at_rest(radius, mass)
-            };
-            let mut h = ContactHistory::default();
-            if x >= 2.0 * radius {
-                return 0.0;
-            }
-            granular_contact(
-                &c,
-                &[x, 0.0, 0.0],
-                &si,
-                &at_rest(radius, mass),
-                &mut h,
-                dt,
-                true,
-            )
-            .force[0]
-        };
-        let mut f = force(x, v);
-        for _ in 0..1_000_000 {
-            // Relative coordinate: x'' = F / m_eff.
-            v += 0.5 * dt * f / meff;
-            x += dt * v;
-            f = force(x, v);
-            v += 0.5 * dt * f / meff;
-            if x >= 2.0 * radius && v > 0.0 {
-                return v / speed;
-            }
-        }
-        panic!("the spheres did not part");
-    }
-
-    #[test]
-    fn restitution_form_rebounds_with_the_restitution_asked_for_at_any_speed() {
-        for e in [0.1, 0.3, 0.5, 0.7, 0.9, 1.0] {
-            let m = GranularMaterial {
-                damping: NormalDamping::CoeffRestitution,
-                restitution: e,
-                ..material()
-            };
-            for speed in [1e-3, 1e-1] {
-                let measured = restitution_of(&m, speed);
-                assert!(
-                    (measured - e).abs() < 1e-4,
-                    "e = {e}, v = {speed}: {measured}"
-                );
-            }
-        }
-    }
-
-    /// Tsuji's polynomial damps two equal spheres by 1/sqrt(2) of what `e`
-    /// needs (the ratio a fit made with the mass of one sphere, where the
-    /// force uses the reduced mass, would give): they rebound with more
-    /// than `e`, at any speed. LAMMPS 2021 does the same;
-    /// docs/model.md tabulates the rebound.
-    #[test]
-    fn tsuji_damping_is_the_restitution_form_over_sqrt_two_and_speed_independent() {
-        for e in [0.1, 0.3, 0.5, 0.7, 0.9] {
-            let ratio = restitution_prefactor(e) / tsuji_prefactor(e);
-            assert!(
-                (ratio - 2f64.sqrt()).abs() < 3e-3 * 2f64.sqrt(),
-                "e = {e}: {ratio}"
-            );
-            let m = GranularMaterial {
-                restitution: e,
-                ..material()
-            };
-            let (slow, fast) = (restitution_of(&m, 1e-3), restitution_of(&m, 1e-1));
-            assert!(slow > e, "e = {e}: rebound {slow}");
-            assert!((slow - fast).abs() < 1e-4, "{slow} vs {fast}");
-            eprintln!("tsuji e = {e}: rebound {slow:.4}");
-        }
-    }
-
-    #[test]
-    fn stuck_contact_pulls_back_with_mindlin_stiffness_until_coulomb() {
-        let m = material();
-        let c = GranularCoeffs::of(&m);
-        let (_, g_eff) = effective(&m);
-        let (radius, delta): (f64, f64) = (1.0, 0.01);
-        let reff = 0.5 * radius;
-        let a = (reff * delta).sqrt();
-        let del = [2.0 * radius - delta, 0.0, 0.0];
-        let fne = 4.0 / 3.0 * effective(&m).0 * a * delta;
-        // Sphere i slides along y at speed u for n steps: xi = u n dt.
-        let (u, dt) = (1e-3, 0.01);
-        let si = Sphere {
-            v: [0.0, u, 0.0],
-            ..at_rest(radius, 1.0)
-        };
-        let mut h = ContactHistory::default();
-        let mut steps = 0;
-        let mut last = ContactForce::default();
-        let mut stuck_checked = false;
-        while steps < 100_000 {
-            last = granular_contact(&c, &del, &si, &at_rest(radius, 1.0), &mut h, dt, true);
-            steps += 1;
-            let ft = last.force[1];
-            let expect_damped = -8.0 * g_eff * a * (u * steps as f64 * dt)
-                - m.tangential_damping
-                    * tsuji_prefactor(m.restitution)
-                    * (0.5 * 4.0 / 3.0 * effective(&m).0 * a).sqrt()
-                    * u;
-            if ft.abs() < 0.5 * m.sliding_friction * fne {
-                assert!(
-                    (ft - expect_damped).abs() < 1e-12 * fne,
-                    "{ft} vs {expect_damped}"
-                );
-                stuck_checked = true;
-            } else if ft.abs() >= m.sliding_friction * fne * (1.0 - 1e-12) {
-                break;
-            }
-        }
-        assert!(stuck_checked);
-        // Sliding: the force stays at the Coulomb limit and the spring
-        // holds only what the limit allows.
-        for _ in 0..100 {
-            last = granular_contact(&c, &del, &si, &at_rest(radius, 1.0), &mut h, dt, true);
-        }
-        let limit = m.sliding_friction * fne;
-        assert!((last.force[1].abs() - limit).abs() < 1e-12 * limit);
-        assert!(last.force[1] < 0.0, "friction opposes the sliding");
-        // Torques: the tangential force at the contact point, arm R - delta/2.
-        let arm = radius - 0.5 * delta;
-        assert!((last.torque_i[2] + arm * last.force[1]).abs() < 1e-14 * limit);
-        assert_eq!(last.torque_i, last.torque_j);
-    }
-
-    #[test]
-    fn history_turns_with_a_rotating_contact_and_keeps_its_length() {
-        let c = GranularCoeffs::of(&GranularMaterial {
-            sliding_friction: 1e3, // never slides
-            ..material()
-        });
-        let radius = 1.0;
-        let r = 2.0 * radius - 0.01;
-        let mut h = ContactHistory {
-            tangential: [0.0, 1e-3, 0.0],
-            ..Default::default()
-        };
-        // The contact normal turns by 0.1 rad about z; the history, which
-        // was tangent to the old normal, is turned into the new tangent
-        // plane with its length kept.
-        let angle: f64 = 0.1;
-        let n = [angle.cos(), angle.sin(), 0.0];
-        let del = n.map(|c| c * r);
-        granular_contact(
-            &c,
-            &del,
-            &at_rest(radius, 1.0),
-            &at_rest(radius, 1.0),
-            &mut h,
-            0.01,
-            true,
-        );
-        assert!((norm(&h.tangential) - 1e-3).abs() < 1e-18);
-        assert!(dot3(&h.tangential, &n).abs() < 1e-18);
     }
 
     #[test]
@@ -1057,115 +667,6 @@ mod tests {
                     "{p:?} {q:?}"
                 );
             }
-        }
-    }
-
-    /// A sliding contact that is also closing: the Coulomb limit follows
-    /// the total normal force, damping included (LAMMPS's `|F_ntot|`).
-    #[test]
-    fn coulomb_limit_includes_the_normal_damping() {
-        let c = GranularCoeffs::of(&material());
-        let del = [1.99, 0.0, 0.0];
-        // Closing at 0.05 along n, sliding fast along y.
-        let si = Sphere {
-            v: [-0.05, 1.0, 0.0],
-            ..at_rest(1.0, 1.0)
-        };
-        let mut h = ContactHistory {
-            tangential: [0.0, 1.0, 0.0],
-            ..Default::default()
-        };
-        let out = granular_contact(&c, &del, &si, &at_rest(1.0, 1.0), &mut h, 0.01, true);
-        let delta: f64 = 0.01;
-        let a = (0.5 * delta).sqrt();
-        let fne = c.normal_stiffness * delta * a;
-        let fntot = fne + c.normal_damping * (0.5 * c.normal_stiffness * a).sqrt() * 0.05;
-        assert!((out.force[0] - fntot).abs() < 1e-14 * fntot);
-        let ft = (out.force[1].powi(2) + out.force[2].powi(2)).sqrt();
-        assert!(
-            (ft - 0.3 * fntot).abs() < 1e-13 * fntot,
-            "{ft} vs {}",
-            0.3 * fntot
-        );
-        assert!(
-            (ft - 0.3 * fne).abs() > 1e-3 * fne,
-            "the elastic force alone would differ"
-        );
-    }
-
-    /// Outside a step (a stage's set-up) the history does not advance, but
-    /// a slider over its cap still rewrites it; one with no history whose
-    /// dashpot alone exceeds the cap gives no force at all (LAMMPS 2021).
-    #[test]
-    fn set_up_evaluations_clip_but_do_not_advance_the_history() {
-        let c = GranularCoeffs::of(&GranularMaterial {
-            sliding_friction: 1e-3,
-            ..material()
-        });
-        let del = [1.99, 0.0, 0.0];
-        let si = Sphere {
-            v: [0.0, 0.5, 0.0],
-            ..at_rest(1.0, 1.0)
-        };
-        let sj = at_rest(1.0, 1.0);
-        let mut fresh = ContactHistory::default();
-        let out = granular_contact(&c, &del, &si, &sj, &mut fresh, 0.01, false);
-        assert_eq!((out.force[1], out.force[2]), (0.0, 0.0));
-        assert_eq!(fresh.tangential, [0.0; 3]);
-        assert!(
-            (fresh.normal_force - out.force[0]).abs() < 1e-15,
-            "the load is recorded"
-        );
-        let mut loaded = ContactHistory {
-            tangential: [0.0, 0.2, 0.0],
-            ..Default::default()
-        };
-        let out = granular_contact(&c, &del, &si, &sj, &mut loaded, 0.01, false);
-        let (delta, a) = (0.01f64, (0.5f64 * 0.01).sqrt());
-        let fne = c.normal_stiffness * delta * a;
-        assert!((out.force[1].abs() - 1e-3 * fne).abs() < 1e-12 * fne);
-        // The stored stretch now gives exactly the capped force.
-        let k = c.tangential_stiffness * a;
-        let eta = c.tangential_damping * c.normal_damping * (0.5 * c.normal_stiffness * a).sqrt();
-        let again = -k * loaded.tangential[1] - eta * 0.5;
-        assert!(
-            (again - out.force[1]).abs() < 1e-12 * fne,
-            "{again} vs {}",
-            out.force[1]
-        );
-    }
-
-    /// A twist over its cap turns against the twisting velocity, whatever
-    /// the sign of the spring's stretch.
-    #[test]
-    fn a_slipping_twist_resists_the_twisting_velocity() {
-        let c = GranularCoeffs::of(&GranularMaterial {
-            twisting: Twisting::Sds(SpringDashpotSlider {
-                stiffness: 10.0,
-                damping: 0.0,
-                friction: 1e-4,
-            }),
-            ..material()
-        });
-        let del = [1.99, 0.0, 0.0];
-        for (spin, stretch) in [(-0.1, 5.0), (0.1, -5.0), (0.1, 5.0)] {
-            let si = Sphere {
-                omega: [spin, 0.0, 0.0],
-                ..at_rest(1.0, 1.0)
-            };
-            let mut h = ContactHistory {
-                twist: stretch,
-                ..Default::default()
-            };
-            let out = granular_contact(&c, &del, &si, &at_rest(1.0, 1.0), &mut h, 0.01, false);
-            let (delta, a) = (0.01f64, (0.5f64 * 0.01).sqrt());
-            let cap = 1e-4 * c.normal_stiffness * delta * a;
-            // The torque on i about n is -cap sign(spin).
-            assert!(
-                (out.torque_i[0] + cap * spin.signum()).abs() < 1e-15,
-                "{spin} {stretch}: {:?}",
-                out.torque_i
-            );
         }
     }
 

@@ -1,0 +1,67 @@
+//! Twisting resistance about the contact normal: Marshall's model
+//! (LAMMPS 2021's `twisting marshall`) or explicit coefficients (`twisting
+//! sds`). The contact law (`contact_law` in mod.rs) applies it on the
+//! accumulated twist angle.
+
+use serde::{Deserialize, Serialize};
+
+use super::rolling::SpringDashpotSlider;
+
+/// Twisting resistance about the contact normal.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Twisting {
+    /// None.
+    #[default]
+    None,
+    /// Marshall's model: stiffness `k_t a^2 / 2` with the contact's
+    /// tangential stiffness `k_t = 8 G_eff a` (so it grows as `a^3`),
+    /// damping `eta_t a^2 / 2` and friction `2/3 a mu_s` (LAMMPS 2021
+    /// `twisting marshall`).
+    Marshall,
+    /// Explicit coefficients (LAMMPS `twisting sds`).
+    Sds(SpringDashpotSlider),
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::tests::{at_rest, material};
+    use super::super::{
+        granular_contact, ContactHistory, GranularCoeffs, GranularMaterial, Sphere,
+    };
+    use super::*;
+
+    /// A twist over its cap turns against the twisting velocity, whatever
+    /// the sign of the spring's stretch.
+    #[test]
+    fn a_slipping_twist_resists_the_twisting_velocity() {
+        let c = GranularCoeffs::of(&GranularMaterial {
+            twisting: Twisting::Sds(SpringDashpotSlider {
+                stiffness: 10.0,
+                damping: 0.0,
+                friction: 1e-4,
+            }),
+            ..material()
+        });
+        let del = [1.99, 0.0, 0.0];
+        for (spin, stretch) in [(-0.1, 5.0), (0.1, -5.0), (0.1, 5.0)] {
+            let si = Sphere {
+                omega: [spin, 0.0, 0.0],
+                ..at_rest(1.0, 1.0)
+            };
+            let mut h = ContactHistory {
+                twist: stretch,
+                ..Default::default()
+            };
+            let out = granular_contact(&c, &del, &si, &at_rest(1.0, 1.0), &mut h, 0.01, false);
+            let (delta, a) = (0.01f64, (0.5f64 * 0.01).sqrt());
+            let cap = 1e-4 * c.normal_stiffness * delta * a;
+            // The torque on i about n is -cap sign(spin).
+            assert!(
+                (out.torque_i[0] + cap * spin.signum()).abs() < 1e-15,
+                "{spin} {stretch}: {:?}",
+                out.torque_i
+            );
+        }
+    }
+}
