@@ -275,6 +275,8 @@ fn bench_prints_every_goal_and_writes_them_as_json() {
             "1.5",
             "--packing-steps",
             "20",
+            "--liggghts-steps",
+            "100",
             "-o",
         ])
         .arg(&out)
@@ -322,6 +324,18 @@ fn bench_prints_every_goal_and_writes_them_as_json() {
         .all(|c| c["ns_per_particle_step"].as_f64().unwrap() > 0.0
             && !c["name"].as_str().unwrap().contains("stopped")));
     assert_eq!(report["packing_workload"]["grains"], 13);
+    // The LIGGGHTS case where LIGGGHTS is installed, a note where not.
+    assert_eq!(report["liggghts_steps"], 100);
+    if bpm::studies::bench::LiggghtsInstall::locate().is_ok() {
+        let speeds = report["liggghts"]["speeds"].as_array().unwrap();
+        assert_eq!(speeds.len(), 2, "{}", report["liggghts"]);
+        assert!(speeds
+            .iter()
+            .all(|s| s["liggghts_over_native"].as_f64().unwrap() > 0.0));
+    } else {
+        assert!(report["liggghts"].is_null());
+        assert!(stdout.contains("LIGGGHTS case skipped"), "{stdout}");
+    }
 }
 
 /// A LIGGGHTS sphere file (header as LIGGGHTS writes it), spheres of

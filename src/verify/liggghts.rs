@@ -49,7 +49,8 @@ impl LiggghtsLaw {
         }
     }
 
-    fn multicontact(self) -> Option<MultiContact> {
+    /// The closure the law runs with (`None`: plain Hertz).
+    pub fn multicontact(self) -> Option<MultiContact> {
         match self {
             Self::Hertz => None,
             Self::Closure => Some(MultiContact::standard(TUTORIAL_PREFACTOR)),
@@ -131,6 +132,15 @@ pub fn tutorial_options(bed: &Path, cycles: usize) -> LidOptions {
     }
 }
 
+/// Writes the tutorial's bed (LIGGGHTS's `data/input.data`, built into the
+/// program) as `work/name`, creating `work`; returns the file's path.
+pub fn write_tutorial_bed(work: &Path, name: &str) -> Result<std::path::PathBuf, FileError> {
+    std::fs::create_dir_all(work).map_err(FileError::on("creating", work))?;
+    let bed = work.join(name);
+    std::fs::write(&bed, BED).map_err(FileError::on("writing", &bed))?;
+    Ok(bed)
+}
+
 /// LIGGGHTS's lid force per step: the `step` and the instantaneous `fz`
 /// columns of a committed lid table.
 pub fn reference_lid_force(table: &str) -> Result<(Vec<u64>, Vec<f64>), LiggghtsError> {
@@ -186,9 +196,7 @@ pub fn lid_cross_check(
     work: &Path,
     threads: usize,
 ) -> Result<LiggghtsLidCheck, LiggghtsError> {
-    std::fs::create_dir_all(work).map_err(FileError::on("creating", work))?;
-    let bed = work.join("hydrogel-input.data");
-    std::fs::write(&bed, BED).map_err(FileError::on("writing", &bed))?;
+    let bed = write_tutorial_bed(work, "hydrogel-input.data")?;
     let opts = tutorial_options(&bed, cycles.clamp(1, 2));
     let scene = lid_scene(&opts, law.multicontact(), law.name())?;
     let run = run_native(&scene, &format!("liggghts-{}", law.name()), threads)?;

@@ -33,6 +33,12 @@ pub struct BenchArgs {
     /// Steps timed in each stage of the compaction workload
     #[arg(long, default_value_t = 2000)]
     packing_steps: u64,
+    /// Steps of the LIGGGHTS case: LIGGGHTS's hydrogel tutorial (514
+    /// beads) under its closing lid, plain Hertz and the closure, in
+    /// LIGGGHTS and natively (at most 30000, the lid's first pass; 0 skips
+    /// it; skipped with a note when liggghts is not installed)
+    #[arg(long, default_value_t = 30_000)]
+    liggghts_steps: u64,
     /// Write the results as JSON too, and the plot beside it (.svg).
     #[arg(short, long)]
     output: Option<PathBuf>,
@@ -49,6 +55,7 @@ impl BenchArgs {
             packing_grains,
             packing_radius,
             packing_steps,
+            liggghts_steps,
             output,
         } = self;
         let opts = BenchOptions {
@@ -62,6 +69,7 @@ impl BenchArgs {
                 steps: packing_steps,
                 seed,
             }),
+            liggghts_steps,
         };
         let lmp = std::env::current_exe()?.with_file_name("lmp-bpm");
         let bench = bench::run_bench(
@@ -107,6 +115,7 @@ impl BenchLammpsArgs {
             steps,
             replicas: vec![1],
             packing: None,
+            liggghts_steps: 0,
         };
         let lmp = std::env::current_exe()?.with_file_name("lmp-bpm");
         let bench = bench::run_bench_lammps(&opts, &lmp, threads, &mut print_line)?;

@@ -6,8 +6,13 @@
 //! ([`run_bench_lammps`]) runs the Debian LAMMPS variants alone.
 
 pub mod cli;
+mod liggghts;
 mod packing;
 
+pub use liggghts::{
+    bench_liggghts, loop_time, trimmed_deck, LiggghtsBench, LiggghtsInstall, LiggghtsSpeed,
+    PASS_STEPS,
+};
 pub use packing::{bench_packing, workload_protocol, PackingBench, PackingWorkload};
 
 use crate::analysis::plot::{write_svg, Mark, Panel, PlotError, Series};
@@ -59,6 +64,8 @@ pub struct BenchOptions {
     pub replicas: Vec<usize>,
     /// The compaction workload, or `None` to skip it.
     pub packing: Option<PackingWorkload>,
+    /// Steps of the LIGGGHTS case (at most [`PASS_STEPS`]; 0 skips it).
+    pub liggghts_steps: u64,
 }
 
 /// One measured case.
@@ -129,6 +136,9 @@ pub struct Bench {
     pub debian: Option<DebianSpeed>,
     /// The compaction workload (`None` when skipped).
     pub packing: Option<PackingBench>,
+    /// LIGGGHTS's hydrogel tutorial in LIGGGHTS and natively (`None` when
+    /// skipped: `--liggghts-steps 0`, or LIGGGHTS or its mesh missing).
+    pub liggghts: Option<LiggghtsBench>,
 }
 
 /// Debian's LAMMPS on the solid, one rank: our plugin's variants and
@@ -596,6 +606,12 @@ pub fn run_bench(
     if let Some(workload) = &opts.packing {
         workload.validate()?;
     }
+    if opts.liggghts_steps > PASS_STEPS {
+        return Err(BenchError::Options(format!(
+            "--liggghts-steps times the lid's first pass: at most {PASS_STEPS} (0 skips the case), got {}",
+            opts.liggghts_steps
+        )));
+    }
     if let Some(dir) = output
         .and_then(Path::parent)
         .filter(|d| !d.as_os_str().is_empty())
@@ -629,6 +645,7 @@ pub fn run_bench(
         Some(workload) => Some(bench_packing(workload, threads, log)?),
         None => None,
     };
+    let liggghts = liggghts_case(opts.liggghts_steps, log);
     Ok(Bench {
         size: opts.size,
         cases,
@@ -636,7 +653,28 @@ pub fn run_bench(
         upstream,
         debian,
         packing,
+        liggghts,
     })
+}
+
+/// The LIGGGHTS case ([`bench_liggghts`]) when `steps` > 0 and LIGGGHTS
+/// and its lid mesh are installed; otherwise a line saying why not.
+fn liggghts_case(steps: u64, log: &mut dyn FnMut(&str)) -> Option<LiggghtsBench> {
+    if steps == 0 {
+        log("LIGGGHTS case skipped: --liggghts-steps 0");
+        return None;
+    }
+    match LiggghtsInstall::locate() {
+        Ok(install) => {
+            let work =
+                std::env::temp_dir().join(format!("bpm-bench-liggghts-{}", std::process::id()));
+            Some(bench_liggghts(&install, steps, &work, log))
+        }
+        Err(why) => {
+            log(&format!("LIGGGHTS case skipped: {why}"));
+            None
+        }
+    }
 }
 
 impl Bench {
@@ -648,6 +686,7 @@ impl Bench {
             "steps": opts.steps, "replicas": opts.replicas, "isa": Isa::detect().name(), "cases": self.cases,
             "specialisations": self.specialisations, "upstream": self.upstream,
             "debian": self.debian, "packing_workload": opts.packing, "packing": self.packing,
+            "liggghts_steps": opts.liggghts_steps, "liggghts": self.liggghts,
             "goals": self.goals(),
         });
         crate::verify::write_json(path, &report).map_err(FileError::on("writing", path))?;
@@ -1160,6 +1199,7 @@ mod tests {
             upstream: Vec::new(),
             debian: Some(debian),
             packing: None,
+            liggghts: None,
         };
         let goals = bench.goals();
         let find = |part: &str| goals.iter().find(|g| g.figure.contains(part)).unwrap();
