@@ -148,16 +148,7 @@ fn trajectories_under_compression_and_shear_follow_lammps() {
         let lammps = launcher(&name).run(&scene, &name, 1, true).unwrap();
         let deviations = bpm::verify::compare_runs(&native.stages, &lammps.stages).unwrap();
         assert!(deviations.iter().any(|d| d.observable == "positions"));
-        for d in deviations {
-            let tol = bpm::verify::tolerances::tolerance(&format!("trajectory {}", d.observable));
-            assert!(
-                d.max_deviation <= tol,
-                "{name}: {} deviates by {:e} at step {} (tolerance {tol:e})",
-                d.observable,
-                d.max_deviation,
-                d.at_step
-            );
-        }
+        common::assert_within_trajectory_tolerances(&name, &deviations);
     }
 }
 

@@ -5,7 +5,6 @@
 mod common;
 
 use bpm::scene::{build_system, run_scene, validate, RunOptions, Scene};
-use bpm::verify::tolerances::tolerance;
 use bpm::verify::{
     compare_runs, dem_check_material, dem_trajectory, grain_squeeze, run_native, DemLoading,
     LammpsLauncher,
@@ -158,16 +157,7 @@ fn assert_agree(scene: &Scene, name: &str) -> Vec<f64> {
     let deviations = compare_runs(&native.stages, &lammps.stages).unwrap();
     assert!(deviations.iter().any(|d| d.observable == "positions"));
     assert!(deviations.iter().any(|d| d.observable == "external energy"));
-    for d in &deviations {
-        let tol = tolerance(&format!("trajectory {}", d.observable));
-        assert!(
-            d.max_deviation <= tol,
-            "{name}: {} deviates by {:e} at step {} (tolerance {tol:e})",
-            d.observable,
-            d.max_deviation,
-            d.at_step
-        );
-    }
+    common::assert_within_trajectory_tolerances(name, &deviations);
     let _ = std::fs::remove_dir_all(&l.dir);
     native.stages[0].column("e_external").unwrap()
 }

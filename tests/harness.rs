@@ -26,17 +26,7 @@ fn assert_agree(scene: &bpm::scene::Scene, name: &str, ranks: usize, newton: boo
     let native = run_native(scene, name, 1).unwrap();
     let lammps = l.run(scene, name, ranks, newton).unwrap();
     let deviations = compare_runs(&native.stages, &lammps.stages).unwrap();
-    for d in &deviations {
-        let tol = tolerance(&format!("trajectory {}", d.observable));
-        assert!(tol > 0.0, "no tolerance for {}", d.observable);
-        assert!(
-            d.max_deviation <= tol,
-            "{name}: {} deviates by {:e} at step {} (tolerance {tol:e})",
-            d.observable,
-            d.max_deviation,
-            d.at_step
-        );
-    }
+    common::assert_within_trajectory_tolerances(name, &deviations);
     let _ = std::fs::remove_dir_all(&l.dir);
     deviations.len()
 }

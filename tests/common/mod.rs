@@ -73,3 +73,19 @@ pub fn scratch_dir(name: &str) -> std::path::PathBuf {
     std::fs::create_dir_all(&dir).unwrap();
     dir
 }
+
+/// Every observable of a native-against-LAMMPS comparison of `name` within
+/// its `trajectory` tolerance (a missing tolerance fails too).
+pub fn assert_within_trajectory_tolerances(name: &str, deviations: &[bpm::verify::Deviation]) {
+    for d in deviations {
+        let tol = bpm::verify::tolerances::tolerance(&format!("trajectory {}", d.observable));
+        assert!(tol > 0.0, "no tolerance for {}", d.observable);
+        assert!(
+            d.max_deviation <= tol,
+            "{name}: {} deviates by {:e} at step {} (tolerance {tol:e})",
+            d.observable,
+            d.max_deviation,
+            d.at_step
+        );
+    }
+}
