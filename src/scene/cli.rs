@@ -316,9 +316,7 @@ impl ImportArgs {
             force_field.skin = s;
         }
         let mut scene = read_data_file(&data, periodic, force_field, seed)?;
-        let radius = scene.particles.radius.as_deref().filter(|r| !r.is_empty());
-        if let (None, Some(r)) = (skin, radius) {
-            let mean_diameter = 2.0 * r.iter().sum::<f64>() / r.len() as f64;
+        if let (None, Some(mean_diameter)) = (skin, scene.particles.mean_diameter()) {
             if let Some(s) = skin_for_diameter(mean_diameter) {
                 scene.force_field.skin = s;
                 println!(

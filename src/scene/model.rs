@@ -130,6 +130,13 @@ impl Particles {
     pub fn id(&self, i: usize) -> u64 {
         self.ids.as_ref().map_or(i as u64 + 1, |ids| ids[i])
     }
+
+    /// The spheres' mean diameter; `None` without radii (bonded particles)
+    /// or without particles.
+    pub fn mean_diameter(&self) -> Option<f64> {
+        let r = self.radius.as_deref().filter(|r| !r.is_empty())?;
+        Some(2.0 * r.iter().sum::<f64>() / r.len() as f64)
+    }
 }
 
 /// Particle masses: one value for all, or one per particle.

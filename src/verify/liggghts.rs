@@ -25,6 +25,13 @@ const CLOSURE_GRAVITY: &str = include_str!(
     "../../reference_data/liggghts/hydrogel_multicontact/lid_multicontact_gravity.txt"
 );
 
+/// LIGGGHTS's deck of plain Hertz with gravity.
+const HERTZ_DECK: &str =
+    include_str!("../../reference_data/liggghts/hydrogel_multicontact/in.hertz_gravity");
+/// LIGGGHTS's deck of the closure with gravity (the tutorial as shipped).
+const CLOSURE_DECK: &str =
+    include_str!("../../reference_data/liggghts/hydrogel_multicontact/in.multicontact_gravity");
+
 /// Rows count as loaded where LIGGGHTS's force exceeds this fraction of
 /// its peak: below it both forces are a few contacts flickering on and
 /// off, and a relative error means nothing.
@@ -54,6 +61,23 @@ impl LiggghtsLaw {
         match self {
             Self::Hertz => None,
             Self::Closure => Some(MultiContact::standard(TUTORIAL_PREFACTOR)),
+        }
+    }
+
+    /// The law's part of the reference files' names (`in.<tag>_gravity`,
+    /// `lid_<tag>_gravity.txt`).
+    pub fn tag(self) -> &'static str {
+        match self {
+            Self::Hertz => "hertz",
+            Self::Closure => "multicontact",
+        }
+    }
+
+    /// LIGGGHTS's deck of the law with gravity, as committed.
+    pub fn deck(self) -> &'static str {
+        match self {
+            Self::Hertz => HERTZ_DECK,
+            Self::Closure => CLOSURE_DECK,
         }
     }
 

@@ -235,19 +235,14 @@ pub fn lid_scene(
         youngs_modulus: opts.youngs_modulus,
         ..liggghts_hertz_material(opts.poisson_ratio, opts.restitution, opts.friction)
     };
-    let mut scene = read_data_file(
-        &opts.packing,
-        [false; 3],
-        ForceField::dem(sphere_material),
-        1,
-    )?;
-    scene.force_field.multicontact = multicontact;
-    if opts.gravity != [0.0; 3] {
-        scene.force_field.gravity = Some(opts.gravity);
-    }
+    let mut force_field = ForceField::dem(sphere_material);
+    force_field.multicontact = multicontact;
+    force_field.gravity = (opts.gravity != [0.0; 3]).then_some(opts.gravity);
+    let mut scene = read_data_file(&opts.packing, [false; 3], force_field, 1)?;
     check_bed(&scene, opts)?;
-    let radius = scene.particles.radius.clone().unwrap_or_default();
-    let mean_diameter = 2.0 * radius.iter().sum::<f64>() / radius.len().max(1) as f64;
+    // Radii are always there: `read_data_file` refuses a bonded-particle
+    // file given a sphere material.
+    let mean_diameter = scene.particles.mean_diameter().unwrap_or(0.0);
     scene.force_field.skin = opts.skin.unwrap_or(0.1 * mean_diameter);
     let walled = WalledBox {
         base: opts.base,

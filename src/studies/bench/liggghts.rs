@@ -22,13 +22,6 @@ use serde::Serialize;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-/// The committed deck of plain Hertz with gravity.
-const HERTZ_DECK: &str =
-    include_str!("../../../reference_data/liggghts/hydrogel_multicontact/in.hertz_gravity");
-/// The committed deck of the closure with gravity (the tutorial as shipped).
-const CLOSURE_DECK: &str =
-    include_str!("../../../reference_data/liggghts/hydrogel_multicontact/in.multicontact_gravity");
-
 /// Where Debian's `liggghts-doc` installs the tutorial's lid mesh.
 pub const MESH: &str = "/usr/share/doc/liggghts/examples/LIGGGHTS/Tutorials_public/hydrogel_multicontact/meshes/piston_hydrogel.stl";
 
@@ -79,17 +72,11 @@ impl LiggghtsInstall {
 /// ave/time` file, the lid table, the position dumps) removed; thermo
 /// every 1,000 steps stays.
 pub fn trimmed_deck(law: LiggghtsLaw, steps: u64) -> String {
-    let deck = match law {
-        LiggghtsLaw::Hertz => HERTZ_DECK,
-        LiggghtsLaw::Closure => CLOSURE_DECK,
-    };
+    let deck = law.deck();
     let mut out = format!(
         "# bpm bench: reference_data/liggghts/hydrogel_multicontact/in.{}_gravity cut to the\n\
          # lid's first pass, run {steps}; output files (ave/time file, lid table, dumps) removed\n",
-        match law {
-            LiggghtsLaw::Hertz => "hertz",
-            LiggghtsLaw::Closure => "multicontact",
-        }
+        law.tag()
     );
     let outputs = [
         "fix piston_force",
@@ -161,10 +148,7 @@ fn run_liggghts(
     steps: u64,
     dir: &Path,
 ) -> Result<LiggghtsRun, String> {
-    let tag = match law {
-        LiggghtsLaw::Hertz => "hertz",
-        LiggghtsLaw::Closure => "multicontact",
-    };
+    let tag = law.tag();
     let run_dir = dir.join(tag);
     write_tutorial_bed(&run_dir.join("data"), "input.data").map_err(|e| e.to_string())?;
     let meshes = run_dir.join("meshes");

@@ -25,6 +25,7 @@ pub mod shear;
 use crate::engine::MultiContact;
 use crate::kernels::GranularMaterial;
 use crate::reference::multicontact;
+use crate::scene::protocols::lid::liggghts_hertz_material;
 pub use crate::scene::protocols::lid::WalledBox;
 use crate::scene::{
     BoxSpec, ForceField, Mass, ModelKind, Particles, Scene, StageOutput, StageSpec,
@@ -303,13 +304,9 @@ impl Hydrogel {
     /// damping, and tangential damping `sqrt(2 (1 - nu) / (2 - nu))` times
     /// the normal one, which is its tangential dashpot in this contact law.
     pub fn material(&self) -> GranularMaterial {
-        reference_material(self.poisson_ratio, self.restitution, self.friction)
+        liggghts_hertz_material(self.poisson_ratio, self.restitution, self.friction)
     }
 }
-
-/// Spheres of Young's modulus 1 with the contact law of the closures'
-/// reference implementation (LIGGGHTS's Hertz model).
-pub use crate::scene::protocols::lid::liggghts_hertz_material as reference_material;
 
 #[cfg(test)]
 mod tests {

@@ -10,12 +10,12 @@ use crate::engine::{Deformation, MultiContact, ShearRemap, TiltFactor};
 use crate::kernels::{GranularMaterial, NormalDamping};
 use crate::scene::builders::packing::template_centres;
 use crate::scene::load::fnv1a;
+use crate::scene::protocols::lid::liggghts_hertz_material;
 use crate::scene::run::Recorders;
 use crate::scene::{
     build_system, run_scene, run_stage, validate, ForceField, ModelKind, RunOptions, Scene,
     StageOutput, StageSpec,
 };
-use crate::studies::mcdem::reference_material;
 use serde::{Deserialize, Serialize};
 
 /// The normal stiffness scale of equal spheres, `k = 4/3 E*` with
@@ -243,7 +243,7 @@ pub struct RecordedRun {
 
 /// The material of a run's spheres.
 pub fn material(series: &SeriesSpec, restitution: f64) -> GranularMaterial {
-    reference_material(series.poisson_ratio, restitution, series.friction)
+    liggghts_hertz_material(series.poisson_ratio, restitution, series.friction)
 }
 
 impl RunKey {
