@@ -8,6 +8,7 @@
 //! - [`scene`]: the JSON scene, its validation, builders and the stage runner;
 //! - [`analysis`]: fits, moduli and plots of recorded observables;
 //! - [`options`]: checks of user options, with errors naming the argument;
+//! - [`progress`]: progress bars and the JSON-lines progress log;
 //! - [`reference`]: the published numbers the studies compare against;
 //! - `lammps`, `verify`, `studies` (feature `lammps`, on by default): the
 //!   LAMMPS bridge, the cross-check harness, and the studies (calibration,
@@ -22,6 +23,7 @@ pub mod kernels;
 #[cfg(feature = "lammps")]
 pub mod lammps;
 pub mod options;
+pub mod progress;
 pub mod reference;
 pub mod scene;
 #[cfg(feature = "lammps")]

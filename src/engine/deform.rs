@@ -52,7 +52,7 @@ impl ShearRemap {
 
 /// The moving periodic images of a box sheared with Lees-Edwards
 /// boundaries: the rates of its tilt factors.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct LeesEdwards {
     /// Rates of change of the tilts `xy, xz, yz` (d / tau).
     pub tilt_rate: [f64; 3],

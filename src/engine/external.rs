@@ -88,7 +88,7 @@ impl ExternalTerms {
 /// stored positions, wrapped into a periodic box at neighbour rebuilds:
 /// along a periodic dimension the energy jumps when a particle is
 /// wrapped, and only its changes between rebuilds mean anything).
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Gravity {
     /// The acceleration (d / tau^2).
     pub acceleration: [f64; 3],
@@ -332,7 +332,7 @@ pub struct Tether {
 }
 
 /// A tether resolved against the particles of one stage.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct ActiveTether {
     members: Vec<usize>,
     anchor: [f64; 3],

@@ -10,6 +10,8 @@
 //!   folder beside them implementing [`ParticleModel`];
 //! - drivers: [`external`] (walls, tether, viscous damping, gravity: terms
 //!   either model runs under), [`deform`] (box deformation, barostat);
+//! - [`state`]: everything a step changes, saved and restored whole, so a
+//!   run resumed from a checkpoint continues bit for bit;
 //! - [`parallel`] and [`timers`]: threads and per-part timing.
 
 pub mod bpm;
@@ -22,6 +24,7 @@ pub mod neighbor;
 pub mod parallel;
 pub mod particles;
 pub mod simbox;
+pub mod state;
 pub mod system;
 pub mod team;
 pub mod timers;
@@ -41,6 +44,7 @@ pub use model::{EnergyTerm, ForceInput, ForceOutput, ModelTally, ParticleModel, 
 pub use neighbor::{pairs_within, Exclusions, NeighbourList};
 pub use particles::{Particles, Rotation};
 pub use simbox::{MinimumImage, SimBox};
+pub use state::EngineState;
 pub use system::{StageDrivers, StepReport, System};
 pub use team::Team;
 pub use timers::{Stage, Timers};
@@ -156,5 +160,11 @@ pub enum EngineError {
         step: u64,
         /// The pressure that caused it.
         pressure: f64,
+    },
+    /// A saved state does not fit the system it is restored into.
+    #[error("the saved state does not fit this system: {what}")]
+    StateMismatch {
+        /// What differs.
+        what: String,
     },
 }

@@ -160,6 +160,15 @@ pub trait ParticleModel: std::fmt::Debug + Send + Any {
         fault.likely_cause(dt, None, mass, nearest_unbonded)
     }
 
+    /// Everything of the model that a step or a stage changes (contact
+    /// histories, reference lengths, the force field of the current
+    /// stage), in the model's own serialised form, for checkpoints.
+    fn save_state(&self) -> Result<ciborium::Value, EngineError>;
+
+    /// Puts back a state that [`ParticleModel::save_state`] saved from a
+    /// model of the same kind on the same scene.
+    fn restore_state(&mut self, state: ciborium::Value) -> Result<(), EngineError>;
+
     /// The model as [`Any`], to reach model-specific state (e.g. a stage
     /// that resets bond reference lengths).
     fn as_any(&self) -> &dyn Any;

@@ -56,8 +56,10 @@ impl Exclusions {
     }
 }
 
-/// A half neighbour list (`j > i`) in CSR form.
-#[derive(Clone, Debug)]
+/// A half neighbour list (`j > i`) in CSR form. Serialised whole but for
+/// the bins, a build's scratch, so a resumed run walks the same pairs in
+/// the same order.
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
 pub struct NeighbourList {
     /// `offsets[i]..offsets[i + 1]` index the neighbours of atom `i`.
     pub offsets: Vec<usize>,
@@ -75,8 +77,11 @@ pub struct NeighbourList {
     /// Whether the rebuild test in a closed box discounts rigid motion
     /// (default; off only to measure what it saves).
     pub follow_rigid_motion: bool,
+    #[serde(skip)]
     bin_of: Vec<usize>,
+    #[serde(skip)]
     bin_start: Vec<usize>,
+    #[serde(skip)]
     bin_atoms: Vec<usize>,
 }
 

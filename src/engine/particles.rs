@@ -11,7 +11,7 @@ pub const SPHERE_INERTIA: f64 = 0.4;
 pub const DEFAULT_RADIUS: f64 = 0.5;
 
 /// Positions, velocities, forces and per-particle properties.
-#[derive(Clone, Debug, Default)]
+#[derive(Clone, Debug, Default, serde::Serialize, serde::Deserialize)]
 pub struct Particles {
     /// Positions (d), wrapped into the box along periodic dimensions at
     /// every pair-list build.
@@ -37,7 +37,7 @@ pub struct Particles {
 }
 
 /// Rotational state of spheres.
-#[derive(Clone, Debug, Default)]
+#[derive(Clone, Debug, Default, serde::Serialize, serde::Deserialize)]
 pub struct Rotation {
     /// Angular velocity (1 / tau).
     pub omega: Vec<[f64; 3]>,

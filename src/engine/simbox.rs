@@ -7,7 +7,7 @@ pub use crate::kernels::MinimumImage;
 use crate::kernels::Separation;
 
 /// A parallelepiped box with LAMMPS's restricted-triclinic convention.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct SimBox {
     /// Lower corner (d units).
     pub lo: [f64; 3],

@@ -86,9 +86,9 @@ pub struct System {
     /// How many times positions were wrapped into the box.
     pub wraps: u64,
     /// Simulated time at the start of the current stage (tau).
-    stage_start_time: f64,
+    pub(super) stage_start_time: f64,
     /// The current stage's Lees-Edwards boundaries, if it shears with them.
-    lees_edwards: Option<LeesEdwards>,
+    pub(super) lees_edwards: Option<LeesEdwards>,
 }
 
 impl System {

@@ -1,13 +1,13 @@
 //! `bpm run`: a scene through the native engine, or through LAMMPS with
 //! our styles in this process (under `mpirun`, on every rank).
 
+use crate::progress::Progress;
 use crate::scene::{
-    final_scene as final_scene_of, read_scene, run_native_report, write_scene, DumpOptions,
-    EngineInfo, OutputFiles, RunOptions, RunReport, Scene,
+    final_scene as final_scene_of, read_scene, run_native_report, write_scene, CheckpointEvery,
+    CheckpointOptions, DumpOptions, EngineInfo, OutputFiles, RunOptions, RunReport, Scene,
 };
 use anyhow::{bail, Context, Result};
 use clap::ValueEnum;
-use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 
 /// The engine a command runs its scenes in.
@@ -55,6 +55,31 @@ pub struct RunArgs {
     /// Add forces (`fx fy fz`) to the snapshots.
     #[arg(long)]
     dump_forces: bool,
+    /// Write a checkpoint to this file every --checkpoint-every, when the
+    /// run is stopped (Ctrl-C or SIGTERM) and at its end; with --resume,
+    /// continue from it (native engine only). A resumed run ends bit for
+    /// bit as an uninterrupted one.
+    #[arg(long)]
+    checkpoint: Option<PathBuf>,
+    /// How often to write the checkpoint: a number of steps (20000) or a
+    /// wall-clock time (90s, 10m, 2h).
+    #[arg(long, default_value = "10m", value_parser = parse_checkpoint_every)]
+    checkpoint_every: CheckpointEvery,
+    /// Continue from --checkpoint: the same scene, thread count and output
+    /// files as the run that wrote it.
+    #[arg(long, requires = "checkpoint")]
+    resume: bool,
+    /// No progress bars (they are drawn only when stderr is a terminal).
+    #[arg(long)]
+    quiet: bool,
+    /// Append progress as JSON lines to this file (for batch jobs): a line
+    /// per stage start and finish, and one every 10 s.
+    #[arg(long)]
+    progress_log: Option<PathBuf>,
+}
+
+fn parse_checkpoint_every(text: &str) -> Result<CheckpointEvery, String> {
+    text.parse()
 }
 
 impl RunArgs {
@@ -71,8 +96,14 @@ impl RunArgs {
             dump,
             dump_every,
             dump_forces,
+            checkpoint,
+            checkpoint_every,
+            resume,
+            quiet,
+            progress_log,
         } = self;
-        let progress = std::io::stderr().is_terminal();
+        let progress =
+            Progress::new(quiet, progress_log.as_deref()).context("opening the progress log")?;
         let files = OutputFiles {
             thermo,
             dump: dump.map(|path| DumpOptions {
@@ -88,6 +119,9 @@ impl RunArgs {
             if final_scene.is_some() {
                 bail!("--final-scene is only available with --engine native");
             }
+            if checkpoint.is_some() {
+                bail!("--checkpoint is only available with --engine native");
+            }
             return run_lammps(
                 &scene,
                 &path,
@@ -98,10 +132,18 @@ impl RunArgs {
                 &files,
             );
         }
+        let checkpoint = checkpoint
+            .map(|path| -> Result<CheckpointOptions> {
+                let options = CheckpointOptions::new(path, checkpoint_every, resume);
+                stop_on_signal(&options)?;
+                Ok(options)
+            })
+            .transpose()?;
         let opts = RunOptions {
             threads,
             progress,
             files,
+            checkpoint,
         };
         let (report, sys) = run_native_report(&scene, &path, hash, &opts);
         report.write(&output)?;
@@ -123,6 +165,19 @@ impl RunArgs {
         println!("wrote {}", output.display());
         Ok(())
     }
+}
+
+/// Makes Ctrl-C, SIGTERM and SIGHUP stop the run at its next step, after a
+/// checkpoint; a second signal ends the process at once.
+fn stop_on_signal(options: &CheckpointOptions) -> Result<()> {
+    let stop = options.stop.clone();
+    ctrlc::set_handler(move || {
+        if stop.swap(true, std::sync::atomic::Ordering::SeqCst) {
+            std::process::exit(130);
+        }
+        eprintln!("\nstopping after the next step and writing the checkpoint (signal again to quit at once)");
+    })
+    .context("installing the signal handler")
 }
 
 /// `bpm run --engine lammps`: the scene in LAMMPS in this process. LAMMPS

@@ -3,6 +3,7 @@
 //! and the run report.
 
 pub mod builders;
+pub mod checkpoint;
 pub mod cli;
 pub mod datafile;
 pub mod load;
@@ -15,6 +16,7 @@ pub mod run;
 pub mod trajectory;
 pub mod validate;
 
+pub use checkpoint::{CheckpointEvery, CheckpointOptions};
 pub use load::{build_system, final_scene, read_scene, read_scene_unvalidated, write_scene};
 pub use model::{
     Bonds, BoxSpec, ForceField, Mass, ModelKind, Particles, Record, Scene, StageSpec, VelocityInit,

@@ -63,6 +63,9 @@ pub struct RunReport {
     /// Files the run streamed to (thermo rows, trajectory).
     #[serde(default)]
     pub files: Vec<String>,
+    /// The global steps at which the run was resumed from a checkpoint.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub resumed_at: Vec<u64>,
     /// Observables per finished stage.
     pub stages: Vec<StageOutput>,
 }
@@ -85,6 +88,7 @@ impl RunReport {
             wall_seconds: 0.0,
             error: None,
             files: Vec::new(),
+            resumed_at: Vec::new(),
             stages: Vec::new(),
         }
     }
@@ -117,9 +121,8 @@ pub fn run_native_report(
     hash: u64,
     opts: &super::RunOptions,
 ) -> (RunReport, crate::engine::System) {
-    let start = std::time::Instant::now();
     let mut sys = super::build_system(scene, opts.threads);
-    let (stages, error) = super::run_scene(&mut sys, scene, opts);
+    let outcome = super::run::run_scene_outcome(&mut sys, scene, opts);
     let mut report = RunReport::new(
         EngineInfo::Native {
             threads: opts.threads,
@@ -128,9 +131,10 @@ pub fn run_native_report(
         hash,
         scene,
     );
-    report.wall_seconds = start.elapsed().as_secs_f64();
-    report.error = error.map(|e| e.to_string());
+    report.wall_seconds = outcome.wall_seconds;
+    report.error = outcome.error.map(|e| e.to_string());
     report.files = opts.files.paths();
-    report.stages = stages;
+    report.resumed_at = outcome.resumed_at;
+    report.stages = outcome.stages;
     (report, sys)
 }

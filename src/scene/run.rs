@@ -1,15 +1,19 @@
 //! Runs a scene's stages on the native engine and records observables.
 
+use super::checkpoint::{
+    CheckpointError, CheckpointOptions, Checkpointer, RunCheckpoint, StageProgress, StreamedFile,
+};
 use super::model::{Scene, StageSpec, VelocityInit};
 use super::observables::{closure_columns, column_names, native_row, stage_columns, Column};
 use super::trajectory::{DumpWriter, Frame, ThermoWriter, TrajectoryError};
 use crate::engine::{
-    ActiveTether, BpmModel, DemModel, EngineError, ExternalTerms, Gravity, Stage, StageDrivers,
-    System,
+    ActiveTether, BpmModel, DemModel, EngineError, EngineState, ExternalTerms, Gravity, Stage,
+    StageDrivers, System,
 };
-use indicatif::{ProgressBar, ProgressStyle};
+use crate::progress::Progress;
 use rand::{Rng, SeedableRng};
 use serde::{Deserialize, Serialize};
+use std::borrow::Cow;
 use std::path::PathBuf;
 
 /// Observables of one stage.
@@ -125,10 +129,12 @@ pub struct DumpOptions {
 pub struct RunOptions {
     /// Threads for the force passes.
     pub threads: usize,
-    /// Show progress bars (on a terminal).
-    pub progress: bool,
+    /// Progress bars and log.
+    pub progress: Progress,
     /// Files the run streams to.
     pub files: OutputFiles,
+    /// Checkpoints to write, or to resume from.
+    pub checkpoint: Option<CheckpointOptions>,
 }
 
 impl RunOptions {
@@ -136,8 +142,9 @@ impl RunOptions {
     pub fn quiet(threads: usize) -> Self {
         Self {
             threads,
-            progress: false,
+            progress: Progress::hidden(),
             files: OutputFiles::default(),
+            checkpoint: None,
         }
     }
 }
@@ -151,6 +158,17 @@ pub enum RunError {
     /// A trajectory or thermo file could not be written.
     #[error(transparent)]
     Output(#[from] TrajectoryError),
+    /// A checkpoint could not be written, read or used.
+    #[error(transparent)]
+    Checkpoint(#[from] CheckpointError),
+    /// The run was asked to stop and wrote a checkpoint to continue from.
+    #[error("stopped at step {step} as asked; the checkpoint {} continues the run (the same command with --resume)", checkpoint.display())]
+    Interrupted {
+        /// The global step reached.
+        step: u64,
+        /// The checkpoint written.
+        checkpoint: PathBuf,
+    },
     /// A stage stopped part of the way: the error, and what the stage had
     /// recorded until then.
     #[error("{error}")]
@@ -184,6 +202,58 @@ impl Recorders {
                 Some(d) if d.every > 0 => Some((DumpWriter::create(&d.path)?, d.every, d.forces)),
                 _ => None,
             },
+            ids: None,
+        })
+    }
+
+    /// Reopens the files of `files` where `checkpoint` left them: the
+    /// same files must be asked for as when it was written.
+    pub fn reopen(files: &OutputFiles, checkpoint: &RunCheckpoint<'_>) -> Result<Self, RunError> {
+        let refused = |reason: String| {
+            RunError::Checkpoint(CheckpointError::Refused {
+                path: PathBuf::from("(resumed run)"),
+                reason,
+            })
+        };
+        let thermo = match (&files.thermo, &checkpoint.thermo) {
+            (None, None) => None,
+            (Some(path), Some(saved)) if *path == saved.path => {
+                Some(ThermoWriter::reopen(path, saved.length)?)
+            }
+            (asked, saved) => {
+                return Err(refused(format!(
+                    "it streamed thermo rows to {}, this run asks for {}",
+                    saved
+                        .as_ref()
+                        .map_or("no file".into(), |s| s.path.display().to_string()),
+                    asked
+                        .as_ref()
+                        .map_or("no file".into(), |p| p.display().to_string())
+                )))
+            }
+        };
+        let dump = match (&files.dump, &checkpoint.dump) {
+            (None, None) => None,
+            (Some(d), Some(saved)) if d.path == saved.path && d.every > 0 => Some((
+                DumpWriter::reopen(&d.path, saved.length, saved.last_step)?,
+                d.every,
+                d.forces,
+            )),
+            (asked, saved) => {
+                return Err(refused(format!(
+                    "it wrote a dump to {}, this run asks for {}",
+                    saved
+                        .as_ref()
+                        .map_or("no file".into(), |s| s.path.display().to_string()),
+                    asked
+                        .as_ref()
+                        .map_or("no file".into(), |d| d.path.display().to_string())
+                )))
+            }
+        };
+        Ok(Self {
+            thermo,
+            dump,
             ids: None,
         })
     }
@@ -288,6 +358,20 @@ pub fn stage_seed(seed: u64, index: usize) -> u64 {
     seed ^ (0x9E37_79B9_7F4A_7C15u64.wrapping_mul(index as u64 + 1))
 }
 
+/// Where a stage starts.
+enum StageStart<'a> {
+    /// At its beginning: the stage's changes to the system, then a set-up.
+    Fresh,
+    /// Inside it, from a checkpoint.
+    Resumed(Box<(StageProgress<'a>, EngineState)>),
+}
+
+/// A run's checkpointing, with the stages it finished before this one.
+struct Saving<'a, 'b> {
+    checkpointer: &'a mut Checkpointer,
+    finished: &'b [StageOutput],
+}
+
 /// Runs one stage on `sys`, recording into `out_files`.
 pub fn run_stage(
     sys: &mut System,
@@ -297,9 +381,26 @@ pub fn run_stage(
     opts: &RunOptions,
     out_files: &mut Recorders,
 ) -> Result<StageOutput, RunError> {
-    let start = std::time::Instant::now();
-    let timers_before = sys.timers.clone();
-    let builds_before = sys.neighbours.builds;
+    run_stage_from(
+        sys,
+        spec,
+        index,
+        seed,
+        opts,
+        out_files,
+        StageStart::Fresh,
+        None,
+    )
+}
+
+/// Makes the changes a stage makes at its start (force field, reference
+/// reset, velocities) and resolves its tether.
+fn begin_stage(
+    sys: &mut System,
+    spec: &StageSpec,
+    index: usize,
+    seed: u64,
+) -> Result<Option<ActiveTether>, RunError> {
     let n = sys.len();
     if let Some(ff) = &spec.force_field {
         if let Some(bpm) = sys.model_as_mut::<BpmModel>() {
@@ -333,47 +434,59 @@ pub fn run_stage(
         sys.particles.v = random_velocities(n, init, stage_seed(seed, index));
     }
     let p = &sys.particles;
-    let tether = spec
+    Ok(spec
         .tether
         .as_ref()
-        .map(|t| ActiveTether::new(t, &p.grain, &sys.simbox, &p.x, &p.image));
-    let drivers = StageDrivers {
+        .map(|t| ActiveTether::new(t, &p.grain, &sys.simbox, &p.x, &p.image)))
+}
+
+/// How far the streamed files have got (flushed), for a checkpoint.
+fn streamed(files: &mut Recorders) -> Result<[Option<StreamedFile>; 2], TrajectoryError> {
+    let thermo = match &mut files.thermo {
+        Some(t) => Some(StreamedFile {
+            length: t.length()?,
+            path: t.path().to_path_buf(),
+            last_step: None,
+        }),
+        None => None,
+    };
+    let dump = match &mut files.dump {
+        Some((d, _, _)) => Some(StreamedFile {
+            length: d.length()?,
+            path: d.path().to_path_buf(),
+            last_step: d.last_step(),
+        }),
+        None => None,
+    };
+    Ok([thermo, dump])
+}
+
+#[allow(clippy::too_many_arguments)]
+fn run_stage_from(
+    sys: &mut System,
+    spec: &StageSpec,
+    index: usize,
+    seed: u64,
+    opts: &RunOptions,
+    out_files: &mut Recorders,
+    start: StageStart<'_>,
+    mut saving: Option<Saving<'_, '_>>,
+) -> Result<StageOutput, RunError> {
+    let session_start = std::time::Instant::now();
+    let timers_before = sys.timers.clone();
+    let mut drivers = StageDrivers {
         dt: spec.dt,
         external: ExternalTerms {
             walls: spec.walls.clone(),
             sphere_wall: spec.sphere_wall.clone(),
             granular_walls: spec.granular_walls.clone(),
-            tether,
+            tether: None,
             viscous: spec.viscous,
-            gravity: sys.gravity,
+            gravity: None,
         },
         deformation: spec.deformation.clone(),
         barostat: spec.barostat.clone(),
         tally_every: spec.record.every,
-    };
-    let stage_box = sys.simbox.clone();
-    sys.setup(&drivers)?;
-    let mut columns = stage_columns(sys.model.energy_terms(), sys.model.rotational(), spec);
-    if sys
-        .model_as::<DemModel>()
-        .is_some_and(|m| m.multicontact().is_some())
-    {
-        columns.extend(closure_columns());
-    }
-    if let Some(t) = out_files.thermo() {
-        t.begin_stage(index, &spec.name, &column_names(&columns))?;
-    }
-    let mut out = StageOutput {
-        name: spec.name.clone(),
-        steps: spec.steps,
-        rows_file: out_files.thermo().map(|t| t.path().to_path_buf()),
-        columns,
-        rows: Vec::new(),
-        checkpoints: Vec::new(),
-        wall_seconds: 0.0,
-        timers: Default::default(),
-        neighbour_builds: 0,
-        stopped_at: None,
     };
     let dump = out_files.dump_schedule();
     let record = |sys: &System,
@@ -404,24 +517,73 @@ pub fn run_stage(
         }
         Ok(())
     };
-    sys.check_faults(spec.dt)?;
-    sys.check_walls()?;
-    record(sys, &mut out, out_files, 0)?;
-    let bar = if opts.progress && spec.steps >= 1000 {
-        let bar = ProgressBar::new(spec.steps);
-        bar.set_style(
-            ProgressStyle::with_template(
-                "{prefix:>12} [{bar:40}] {pos}/{len} steps {per_sec} eta {eta}",
+    // What earlier sessions of a resumed stage spent and built.
+    let (stage_box, mut out, mut k, builds_before, earlier) = match start {
+        StageStart::Fresh => {
+            let builds_before = sys.neighbours.builds;
+            drivers.external.tether = begin_stage(sys, spec, index, seed)?;
+            drivers.external.gravity = sys.gravity;
+            let stage_box = sys.simbox.clone();
+            sys.setup(&drivers)?;
+            let mut columns = stage_columns(sys.model.energy_terms(), sys.model.rotational(), spec);
+            if sys
+                .model_as::<DemModel>()
+                .is_some_and(|m| m.multicontact().is_some())
+            {
+                columns.extend(closure_columns());
+            }
+            if let Some(t) = out_files.thermo() {
+                t.begin_stage(index, &spec.name, &column_names(&columns))?;
+            }
+            let mut out = StageOutput {
+                name: spec.name.clone(),
+                steps: spec.steps,
+                rows_file: out_files.thermo().map(|t| t.path().to_path_buf()),
+                columns,
+                rows: Vec::new(),
+                checkpoints: Vec::new(),
+                wall_seconds: 0.0,
+                timers: Default::default(),
+                neighbour_builds: 0,
+                stopped_at: None,
+            };
+            sys.check_faults(spec.dt)?;
+            sys.check_walls()?;
+            record(sys, &mut out, out_files, 0)?;
+            (stage_box, out, 0, builds_before, Default::default())
+        }
+        StageStart::Resumed(resumed) => {
+            let (progress, engine) = *resumed;
+            drivers.external.tether = progress.tether.into_owned();
+            drivers.external.gravity = engine.gravity;
+            sys.resume(&drivers, engine)?;
+            let mut out = progress.output.into_owned();
+            let earlier = (out.wall_seconds, std::mem::take(&mut out.timers));
+            let builds_before = sys.neighbours.builds - out.neighbour_builds;
+            (
+                progress.stage_box.into_owned(),
+                out,
+                progress.step,
+                builds_before,
+                earlier,
             )
-            .unwrap_or_else(|_| ProgressStyle::default_bar())
-            .progress_chars("=> "),
-        );
-        bar.set_prefix(spec.name.clone());
-        bar
-    } else {
-        ProgressBar::hidden()
+        }
     };
-    let mut k = 0;
+    let (earlier_seconds, earlier_timers): (f64, std::collections::BTreeMap<String, f64>) = earlier;
+    // The wall time, timers and list builds of the stage so far, over
+    // every session.
+    let account = |sys: &System, out: &mut StageOutput| {
+        out.wall_seconds = earlier_seconds + session_start.elapsed().as_secs_f64();
+        for s in Stage::ALL {
+            let secs = (sys.timers.total(s) - timers_before.total(s)).as_secs_f64();
+            let before = earlier_timers.get(s.name()).copied().unwrap_or(0.0);
+            out.timers.insert(s.name().to_string(), before + secs);
+        }
+        out.neighbour_builds = sys.neighbours.builds - builds_before;
+    };
+    let mut bar = opts
+        .progress
+        .task(&spec.name, spec.steps, k, spec.steps >= 1000);
     let mut steps = || -> Result<(), RunError> {
         while k < spec.steps {
             k += 1;
@@ -429,25 +591,49 @@ pub fn run_stage(
             record(sys, &mut out, out_files, k)?;
             if k % 256 == 0 {
                 sys.check_finite()?;
-                bar.set_position(k);
+                bar.set(k);
+            }
+            if let Some(saving) = &mut saving {
+                let stop = saving.checkpointer.options().stop_requested(sys.step);
+                if stop || saving.checkpointer.due(sys.step) {
+                    // Only a finite state is worth continuing from.
+                    sys.check_finite()?;
+                    account(sys, &mut out);
+                    let [thermo, dump] = streamed(out_files)?;
+                    let progress = StageProgress {
+                        index,
+                        step: k,
+                        stage_box: Cow::Borrowed(&stage_box),
+                        tether: Cow::Borrowed(&drivers.external.tether),
+                        output: Cow::Borrowed(&out),
+                    };
+                    saving.checkpointer.write(
+                        saving.finished,
+                        Some(progress),
+                        sys.save_state()?,
+                        thermo,
+                        dump,
+                    )?;
+                    if stop {
+                        return Err(RunError::Interrupted {
+                            step: sys.step,
+                            checkpoint: saving.checkpointer.options().path.clone(),
+                        });
+                    }
+                }
             }
         }
         sys.check_finite()?;
         Ok(())
     };
     let result = steps();
-    bar.finish_and_clear();
+    bar.finish(k);
     // A failed flush must not hide why the stage stopped.
     let flushed = match out_files.thermo() {
         Some(t) => t.flush(),
         None => Ok(()),
     };
-    out.wall_seconds = start.elapsed().as_secs_f64();
-    for s in Stage::ALL {
-        let secs = (sys.timers.total(s) - timers_before.total(s)).as_secs_f64();
-        out.timers.insert(s.name().to_string(), secs);
-    }
-    out.neighbour_builds = sys.neighbours.builds - builds_before;
+    account(sys, &mut out);
     if let Err(error) = result {
         // The records up to the failure are kept (a squeeze that ends early
         // still has its curve), except those a blow-up had already made
@@ -475,25 +661,116 @@ pub fn run_stage(
 
 /// Runs every stage of `scene` on `sys` in order. Stages that finished are
 /// returned even when a later one fails, so nothing recorded is lost.
+///
+/// With [`RunOptions::checkpoint`], checkpoints are written as it asks
+/// and at the end; resuming, `sys` must be the system built from `scene`
+/// (its state is replaced by the checkpoint's) and the stages finished
+/// before the checkpoint come back with the rest.
 pub fn run_scene(
     sys: &mut System,
     scene: &Scene,
     opts: &RunOptions,
 ) -> (Vec<StageOutput>, Option<RunError>) {
-    let mut files = match Recorders::open(&opts.files) {
-        Ok(f) => f.with_ids(scene.particles.ids.clone()),
-        Err(e) => return (Vec::new(), Some(e.into())),
+    let outcome = run_scene_outcome(sys, scene, opts);
+    (outcome.stages, outcome.error)
+}
+
+/// What a run did, over every session of a resumed one.
+#[derive(Debug)]
+pub struct RunOutcome {
+    /// The stages finished (and the one that failed, cut where it did).
+    pub stages: Vec<StageOutput>,
+    /// Why the run stopped early, if it did.
+    pub error: Option<RunError>,
+    /// Wall-clock seconds, over every session.
+    pub wall_seconds: f64,
+    /// The global steps at which the run was resumed from checkpoints.
+    pub resumed_at: Vec<u64>,
+}
+
+/// [`run_scene`], with the run's wall time and resumptions.
+pub fn run_scene_outcome(sys: &mut System, scene: &Scene, opts: &RunOptions) -> RunOutcome {
+    let start = std::time::Instant::now();
+    let mut outcome = RunOutcome {
+        stages: Vec::with_capacity(scene.stages.len()),
+        error: None,
+        wall_seconds: 0.0,
+        resumed_at: Vec::new(),
     };
-    let mut done = Vec::with_capacity(scene.stages.len());
-    for (i, stage) in scene.stages.iter().enumerate() {
-        match run_stage(sys, stage, i, scene.seed, opts, &mut files) {
+    let mut earlier_seconds = 0.0;
+    outcome.error = run_stages(sys, scene, opts, &mut outcome, &mut earlier_seconds).err();
+    outcome.wall_seconds = earlier_seconds + start.elapsed().as_secs_f64();
+    outcome
+}
+
+/// [`run_scene`], appending finished stages to `outcome`.
+fn run_stages(
+    sys: &mut System,
+    scene: &Scene,
+    opts: &RunOptions,
+    outcome: &mut RunOutcome,
+    earlier_seconds: &mut f64,
+) -> Result<(), RunError> {
+    let done = &mut outcome.stages;
+    let mut checkpointer = None;
+    let mut resume = None;
+    let mut files = match &opts.checkpoint {
+        Some(ck) if ck.resume => {
+            let saved = RunCheckpoint::read(&ck.path, scene, opts.threads)?;
+            let files = Recorders::reopen(&opts.files, &saved)?;
+            let mut resumed_at = saved.resumed_at;
+            resumed_at.push(saved.engine.step);
+            outcome.resumed_at.clone_from(&resumed_at);
+            *earlier_seconds = saved.wall_seconds;
+            checkpointer = Some(Checkpointer::new(
+                ck.clone(),
+                scene,
+                opts.threads,
+                saved.wall_seconds,
+                resumed_at,
+            ));
+            done.extend(saved.finished.into_owned());
+            match saved.current {
+                Some(progress) => resume = Some((progress, saved.engine)),
+                None => sys.restore(saved.engine)?,
+            }
+            files
+        }
+        Some(ck) => {
+            checkpointer = Some(Checkpointer::new(
+                ck.clone(),
+                scene,
+                opts.threads,
+                0.0,
+                Vec::new(),
+            ));
+            Recorders::open(&opts.files)?
+        }
+        None => Recorders::open(&opts.files)?,
+    }
+    .with_ids(scene.particles.ids.clone());
+    let first = resume.as_ref().map_or(done.len(), |(p, _)| p.index);
+    for (i, stage) in scene.stages.iter().enumerate().skip(first) {
+        let start = match resume.take() {
+            Some(resumed) => StageStart::Resumed(Box::new(resumed)),
+            None => StageStart::Fresh,
+        };
+        let saving = checkpointer.as_mut().map(|checkpointer| Saving {
+            checkpointer,
+            finished: done,
+        });
+        match run_stage_from(sys, stage, i, scene.seed, opts, &mut files, start, saving) {
             Ok(out) => done.push(out),
             Err(RunError::Stopped { error, partial }) => {
                 done.push(*partial);
-                return (done, Some(*error));
+                return Err(*error);
             }
-            Err(e) => return (done, Some(e)),
+            Err(e) => return Err(e),
         }
     }
-    (done, None)
+    if let Some(checkpointer) = &mut checkpointer {
+        let [thermo, dump] = streamed(&mut files)?;
+        checkpointer.write(done, None, sys.save_state()?, thermo, dump)?;
+    }
+    Ok(())
 }

@@ -54,6 +54,42 @@ impl Frame {
     }
 }
 
+/// Opens `path` for appending after its first `length` bytes, dropping
+/// the rest (written after a checkpoint, by a run that then died). A file
+/// shorter than `length` is not the one the checkpoint knew.
+fn reopen_at(path: &Path, length: u64) -> Result<std::fs::File, TrajectoryError> {
+    use std::io::{Seek, SeekFrom};
+    let mut file = std::fs::OpenOptions::new()
+        .read(true)
+        .write(true)
+        .open(path)
+        .map_err(io_error(path))?;
+    let found = file.metadata().map_err(io_error(path))?.len();
+    if found < length {
+        return Err(TrajectoryError::Io {
+            path: path.to_path_buf(),
+            cause: std::io::Error::new(
+                std::io::ErrorKind::InvalidData,
+                format!(
+                    "it has {found} bytes, fewer than the {length} it had at the checkpoint (was it replaced?)"
+                ),
+            ),
+        });
+    }
+    file.set_len(length).map_err(io_error(path))?;
+    file.seek(SeekFrom::End(0)).map_err(io_error(path))?;
+    Ok(file)
+}
+
+/// Flushes `out` and returns the length of its file.
+fn written_length(out: &mut BufWriter<std::fs::File>, path: &Path) -> Result<u64, TrajectoryError> {
+    out.flush().map_err(io_error(path))?;
+    out.get_ref()
+        .metadata()
+        .map(|m| m.len())
+        .map_err(io_error(path))
+}
+
 /// Writes frames to a LAMMPS text dump.
 #[derive(Debug)]
 pub struct DumpWriter {
@@ -83,6 +119,31 @@ impl DumpWriter {
     /// The file written to.
     pub fn path(&self) -> &Path {
         &self.path
+    }
+
+    /// Reopens a dump this writer wrote, cut back to its first `length`
+    /// bytes (its length at a checkpoint), to append from there; the frame
+    /// of `last_step` is the last one in it.
+    pub fn reopen(
+        path: &Path,
+        length: u64,
+        last_step: Option<u64>,
+    ) -> Result<Self, TrajectoryError> {
+        Ok(Self {
+            path: path.to_path_buf(),
+            out: BufWriter::new(reopen_at(path, length)?),
+            last_step,
+        })
+    }
+
+    /// The bytes written so far, all flushed to the file.
+    pub fn length(&mut self) -> Result<u64, TrajectoryError> {
+        written_length(&mut self.out, &self.path)
+    }
+
+    /// The step of the last frame written.
+    pub fn last_step(&self) -> Option<u64> {
+        self.last_step
     }
 
     /// Appends `frame`, unless a frame of the same step was the last one
@@ -369,6 +430,20 @@ impl ThermoWriter {
             path: path.to_path_buf(),
             out: BufWriter::new(file),
         })
+    }
+
+    /// Reopens a thermo file this writer wrote, cut back to its first
+    /// `length` bytes (its length at a checkpoint), to append from there.
+    pub fn reopen(path: &Path, length: u64) -> Result<Self, TrajectoryError> {
+        Ok(Self {
+            path: path.to_path_buf(),
+            out: BufWriter::new(reopen_at(path, length)?),
+        })
+    }
+
+    /// The bytes written so far, all flushed to the file.
+    pub fn length(&mut self) -> Result<u64, TrajectoryError> {
+        written_length(&mut self.out, &self.path)
     }
 
     /// The file written to.

@@ -16,6 +16,7 @@ use super::neighbor::Exclusions;
 use super::parallel::{as_rows, as_vec3, chunk_range, Scratch, Vec3};
 use super::simbox::SimBox;
 use super::timers::Stage;
+use super::EngineError;
 use crate::kernels::{
     accumulate_multibody_sums, accumulate_reference_volumes, balance_multibody, gather_forces,
     gather_volumes, pair_forces, row_forces, row_volumes, BondCoeffs, BondEntry, BondRows, Fault,
@@ -84,6 +85,20 @@ pub struct BpmModel {
     multibody_sums: Vec<MultibodySum>,
     force_scratch: Scratch<Vec3>,
     layout: BondLayout,
+    /// Whether the zero-net-multibody variant was chosen (live only with
+    /// the multibody term: [`BpmTerms::zero_net`]).
+    zero_net_variant: bool,
+}
+
+/// What a step or a stage changes in the model: the current force field
+/// and the reference lengths (a stress-free reset rewrites them). The
+/// volumes and the bond layout follow from these.
+#[derive(serde::Serialize, serde::Deserialize)]
+struct BpmState {
+    bond: BondCoeffs,
+    pair: Option<PairCoeffs>,
+    zero_net: bool,
+    r0: Vec<f64>,
 }
 
 /// The bonds as rows for the two-step bond pass
@@ -159,6 +174,7 @@ impl BpmModel {
             multibody_sums: Vec::new(),
             force_scratch: Scratch::default(),
             layout: BondLayout::default(),
+            zero_net_variant: zero_net,
         };
         model.set_coefficients(bond, pair, zero_net, n);
         model
@@ -175,6 +191,7 @@ impl BpmModel {
     ) {
         self.bond = bond;
         self.pair = pair;
+        self.zero_net_variant = zero_net;
         self.terms = BpmTerms::of(&bond, pair.as_ref(), zero_net, self.bonds.is_empty());
         self.update_reference_volumes(n);
     }
@@ -384,6 +401,39 @@ impl ParticleModel for BpmModel {
 
     fn likely_cause(&self, fault: &Fault, dt: f64, mass: f64, nearest_unbonded: f64) -> String {
         fault.likely_cause(dt, Some(&self.bond), mass, nearest_unbonded)
+    }
+
+    fn save_state(&self) -> Result<ciborium::Value, EngineError> {
+        let state = BpmState {
+            bond: self.bond,
+            pair: self.pair,
+            zero_net: self.zero_net_variant,
+            r0: self.bonds.r0.clone(),
+        };
+        ciborium::Value::serialized(&state).map_err(|e| EngineError::StateMismatch {
+            what: format!("the bonded model's state could not be saved: {e}"),
+        })
+    }
+
+    fn restore_state(&mut self, state: ciborium::Value) -> Result<(), EngineError> {
+        let state: BpmState = state
+            .deserialized()
+            .map_err(|e| EngineError::StateMismatch {
+                what: format!("it is not a bonded model's state: {e}"),
+            })?;
+        if state.r0.len() != self.bonds.len() {
+            return Err(EngineError::StateMismatch {
+                what: format!(
+                    "it has {} bonds, this system {}",
+                    state.r0.len(),
+                    self.bonds.len()
+                ),
+            });
+        }
+        self.bonds.r0 = state.r0;
+        let n = self.bonds.offsets.len().saturating_sub(1);
+        self.set_coefficients(state.bond, state.pair, state.zero_net, n);
+        Ok(())
     }
 
     fn as_any(&self) -> &dyn std::any::Any {

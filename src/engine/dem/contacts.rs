@@ -10,7 +10,7 @@ use super::super::neighbor::NeighbourList;
 use crate::kernels::ContactHistory;
 
 /// Contact histories aligned with one build of the pair list.
-#[derive(Clone, Debug, Default)]
+#[derive(Clone, Debug, Default, serde::Serialize, serde::Deserialize)]
 pub struct ContactStore {
     /// The list build the store is aligned with (`None` before the first).
     build: Option<u64>,

@@ -52,6 +52,19 @@ pub struct DemModel {
     report: DemReport,
 }
 
+/// What a step or a stage changes in the model: the current force field,
+/// the contact histories of pairs and walls, and whether the next
+/// evaluation starts a stage. The closure's corrections follow from these.
+#[derive(serde::Serialize, serde::Deserialize)]
+struct DemState {
+    material: GranularMaterial,
+    multicontact: Option<MultiContact>,
+    contacts: ContactStore,
+    wall_histories: Vec<Vec<ContactHistory>>,
+    wall_planes: Vec<(usize, WallSide)>,
+    stage_start: bool,
+}
+
 /// What DEM spheres report of one force evaluation, beyond forces and
 /// stress.
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -349,6 +362,41 @@ impl ParticleModel for DemModel {
         }
         self.report = report;
         tally
+    }
+
+    fn save_state(&self) -> Result<ciborium::Value, EngineError> {
+        let state = DemState {
+            material: self.material,
+            multicontact: self.multicontact().copied(),
+            contacts: self.contacts.clone(),
+            wall_histories: self.wall_histories.clone(),
+            wall_planes: self.wall_planes.clone(),
+            stage_start: self.stage_start,
+        };
+        ciborium::Value::serialized(&state).map_err(|e| EngineError::StateMismatch {
+            what: format!("the DEM model's state could not be saved: {e}"),
+        })
+    }
+
+    fn restore_state(&mut self, state: ciborium::Value) -> Result<(), EngineError> {
+        let state: DemState = state
+            .deserialized()
+            .map_err(|e| EngineError::StateMismatch {
+                what: format!("it is not a DEM model's state: {e}"),
+            })?;
+        self.set_force_field(state.material, state.multicontact);
+        // The stage's walls were resolved against the material before it
+        // was restored.
+        self.walls = self
+            .walls
+            .iter()
+            .map(|w| ActiveGranularWall::new(&w.wall, &self.material))
+            .collect();
+        self.contacts = state.contacts;
+        self.wall_histories = state.wall_histories;
+        self.wall_planes = state.wall_planes;
+        self.stage_start = state.stage_start;
+        Ok(())
     }
 
     fn as_any(&self) -> &dyn std::any::Any {

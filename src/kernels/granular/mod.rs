@@ -146,7 +146,7 @@ impl GranularCoeffs {
 }
 
 /// What a contact remembers between steps.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct ContactHistory {
     /// Accumulated tangential displacement `xi` (d).
     pub tangential: [f64; 3],

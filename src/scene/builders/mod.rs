@@ -61,7 +61,7 @@ fn run_build_stages(
     validate(scene)?;
     let mut sys = build_system(scene, threads);
     let opts = RunOptions {
-        progress,
+        progress: crate::progress::Progress::bars(progress),
         ..RunOptions::quiet(threads)
     };
     match run_scene(&mut sys, scene, &opts) {

@@ -720,7 +720,7 @@ fn run_engine(
         CompactionEngine::Native => {
             let mut sys = build_system(scene, threads);
             let run = RunOptions {
-                progress,
+                progress: crate::progress::Progress::bars(progress),
                 ..RunOptions::quiet(threads)
             };
             let (stages, error) = run_scene(&mut sys, scene, &run);

@@ -511,7 +511,7 @@ pub fn run_compression(
         let start = std::time::Instant::now();
         let mut sys = build_system(&scene, 1);
         let run_opts = RunOptions {
-            progress,
+            progress: crate::progress::Progress::bars(progress),
             ..RunOptions::quiet(1)
         };
         let (outputs, err) = run_scene(&mut sys, &scene, &run_opts);

@@ -97,7 +97,7 @@ pub fn run_lid(
         let start = std::time::Instant::now();
         let mut sys = build_system(&scene, threads);
         let run_opts = RunOptions {
-            progress,
+            progress: crate::progress::Progress::bars(progress),
             ..RunOptions::quiet(threads)
         };
         let (outputs, err) = run_scene(&mut sys, &scene, &run_opts);
