@@ -313,7 +313,7 @@ fn a_tiny_compaction_study_measures_moduli_and_writes_its_report() {
         },
         dem: None,
     };
-    let report = run_compaction(&opts, 1, None, &dir, "test", false, &mut |_| {}).unwrap();
+    let report = run_compaction(&opts, &plain(), None, &dir, "test", &mut |_| {}).unwrap();
     let run = &report.runs[0];
     assert!(run.stopped.is_none(), "{:?}", run.stopped);
     assert_eq!(run.moduli.len() + run.moduli_failures.len(), 2);
@@ -387,7 +387,7 @@ fn a_tiny_dem_compaction_compresses_spheres_and_reports_both_volume_fractions() 
         ..DemContact::default()
     };
     let mut opts = tiny_study(Some(dem), 50_000);
-    let report = run_compaction(&opts, 1, None, &dir, "test", false, &mut |_| {}).unwrap();
+    let report = run_compaction(&opts, &plain(), None, &dir, "test", &mut |_| {}).unwrap();
     let run = &report.runs[0];
     assert!(run.stopped.is_none(), "{:?}", run.stopped);
     assert_eq!((run.grains, run.particles), (16, 16));
@@ -464,11 +464,10 @@ fn a_tiny_dem_compaction_compresses_spheres_and_reports_both_volume_fractions() 
     };
     let e = run_compaction(
         &grains,
-        1,
+        &plain(),
         None,
         &dir.join("grains"),
         "test",
-        false,
         &mut |_| {},
     )
     .unwrap_err();
@@ -478,18 +477,18 @@ fn a_tiny_dem_compaction_compresses_spheres_and_reports_both_volume_fractions() 
     );
     // What a DEM study cannot do is refused, naming the option.
     opts.moduli.states = 2;
-    let e = run_compaction(&opts, 1, None, &dir, "test", false, &mut |_| {}).unwrap_err();
+    let e = run_compaction(&opts, &plain(), None, &dir, "test", &mut |_| {}).unwrap_err();
     assert!(e.to_string().contains("--moduli-states"), "{e}");
     opts.moduli.states = 0;
     opts.zero_net = true;
-    let e = run_compaction(&opts, 1, None, &dir, "test", false, &mut |_| {}).unwrap_err();
+    let e = run_compaction(&opts, &plain(), None, &dir, "test", &mut |_| {}).unwrap_err();
     assert!(e.to_string().contains("--zero-net"), "{e}");
     // LAMMPS's history flaw for rolling and twisting is recorded with the
     // run (here one that cannot start: no bpm executable to launch).
     opts.zero_net = false;
     opts.engine = CompactionEngine::Lammps { ranks: 1 };
     let lammps = dir.join("lammps");
-    let report = run_compaction(&opts, 1, None, &lammps, "test", false, &mut |_| {}).unwrap();
+    let report = run_compaction(&opts, &plain(), None, &lammps, "test", &mut |_| {}).unwrap();
     assert!(report.warnings[0].contains("rolling and twisting"));
     let stopped = report.runs[0].stopped.as_deref().unwrap();
     assert!(stopped.contains("no bpm executable"), "{stopped}");
@@ -512,7 +511,7 @@ fn closures_are_calibrated_against_a_tiny_grain_study() {
     let mut grains = tiny_study(None, 20_000);
     grains.protocol.states_per_stage = 12;
     let grains_dir = dir.join("grains");
-    let g = run_compaction(&grains, 1, None, &grains_dir, "test", false, &mut |_| {}).unwrap();
+    let g = run_compaction(&grains, &plain(), None, &grains_dir, "test", &mut |_| {}).unwrap();
     assert!(g.runs[0].stopped.is_none(), "{:?}", g.runs[0].stopped);
     assert!(
         g.runs[0].fits.pressure.is_some(),
@@ -687,4 +686,123 @@ fn tiny_protocol() -> bpm::scene::protocols::CompactionProtocol {
         volumetric_strain: 0.4,
         ..bpm::scene::protocols::CompactionProtocol::paper()
     }
+}
+
+/// One thread, no progress bars, no checkpoint.
+fn plain() -> bpm::studies::StudyRuntime {
+    bpm::studies::StudyRuntime::plain(1, false)
+}
+
+/// A report's runs as JSON without wall times and folders, which differ
+/// between sessions.
+fn runs_without_times(report: &bpm::studies::compaction::CompactionReport) -> serde_json::Value {
+    fn strip(v: &mut serde_json::Value) {
+        match v {
+            serde_json::Value::Object(map) => {
+                map.retain(|k, _| !k.contains("seconds") && k != "folder");
+                map.values_mut().for_each(strip);
+            }
+            serde_json::Value::Array(items) => items.iter_mut().for_each(strip),
+            _ => {}
+        }
+    }
+    let mut runs = serde_json::to_value(&report.runs).unwrap();
+    strip(&mut runs);
+    runs
+}
+
+#[test]
+fn a_compaction_study_stopped_twice_resumes_to_the_same_report() {
+    use bpm::scene::checkpoint::StudyCheckpoint;
+    use bpm::scene::CheckpointEvery;
+    use bpm::studies::compaction::{run_compaction, CompactionError};
+    use bpm::studies::{StudyRuntime, StudyStop};
+    use std::sync::atomic::Ordering;
+    let mut opts = tiny_study(None, 20_000);
+    opts.moduli.states = 2;
+    opts.moduli.protocol.relax_time = 100.0;
+    opts.moduli.protocol.compression_rate = 1e-5;
+    opts.moduli.protocol.shear_rate = 2e-5;
+    let straight_dir = common::scratch_dir("ck-study-straight");
+    let straight =
+        run_compaction(&opts, &plain(), None, &straight_dir, "test", &mut |_| {}).unwrap();
+    assert_eq!(straight.runs[0].moduli.len(), 2);
+
+    let dir = common::scratch_dir("ck-study");
+    let path = dir.join("study.ck");
+    let session = |resume: bool| {
+        let checkpoint = StudyCheckpoint::open(
+            &path,
+            CheckpointEvery::Steps(700),
+            resume,
+            "compact",
+            &opts,
+            1,
+        )
+        .unwrap();
+        StudyRuntime {
+            checkpoint: Some(checkpoint),
+            ..plain()
+        }
+    };
+    let stopped = |e: CompactionError| {
+        assert!(
+            matches!(e, CompactionError::Stopped(StudyStop::Interrupted(_))),
+            "{e}"
+        );
+    };
+    // Stopped by a signal's flag a moment into the run, at whatever step
+    // it has reached.
+    let first = session(false);
+    let flag = first.checkpoint.as_ref().unwrap().stop_flag();
+    let e = run_compaction(&opts, &first, None, &dir, "test", &mut |line| {
+        if line.contains("running") {
+            let flag = flag.clone();
+            std::thread::spawn(move || {
+                std::thread::sleep(std::time::Duration::from_millis(300));
+                flag.store(true, Ordering::SeqCst);
+            });
+        }
+    })
+    .unwrap_err();
+    stopped(e);
+    // The run continues from its checkpoint; the study is stopped again
+    // after its first moduli measurement.
+    let second = session(true);
+    let (parts, run) = second.checkpoint.as_ref().unwrap().summary();
+    assert_eq!(parts, ["seed-3/packing"]);
+    let (key, step) = run.expect("stopped inside the run");
+    assert!(key == "seed-3/run" && step > 1, "{key} {step}");
+    let flag = second.checkpoint.as_ref().unwrap().stop_flag();
+    let mut lines = Vec::new();
+    let e = run_compaction(&opts, &second, None, &dir, "test", &mut |line| {
+        lines.push(line.to_string());
+        if line.contains("moduli 1/2") {
+            flag.store(true, Ordering::SeqCst);
+        }
+    })
+    .unwrap_err();
+    stopped(e);
+    assert!(lines.iter().any(|l| l.contains("moduli 1/2")), "{lines:?}");
+    let mut lines = Vec::new();
+    let resumed = run_compaction(&opts, &session(true), None, &dir, "test", &mut |line| {
+        lines.push(line.to_string())
+    })
+    .unwrap();
+    assert_eq!(runs_without_times(&straight), runs_without_times(&resumed));
+    // The finished run and the first measurement came from the checkpoint.
+    assert!(lines.iter().any(|l| l.contains("moduli 2/2")), "{lines:?}");
+    // Options other than the checkpoint's are refused.
+    let mut other = opts.clone();
+    other.seeds = vec![4];
+    let e = StudyCheckpoint::open(
+        &path,
+        CheckpointEvery::Steps(700),
+        true,
+        "compact",
+        &other,
+        1,
+    )
+    .unwrap_err();
+    assert!(e.to_string().contains("other options"), "{e}");
 }

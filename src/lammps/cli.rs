@@ -2,9 +2,10 @@
 //! our styles in this process (under `mpirun`, on every rank).
 
 use crate::progress::Progress;
+use crate::scene::checkpoint::CheckpointArgs;
 use crate::scene::{
-    final_scene as final_scene_of, read_scene, run_native_report, write_scene, CheckpointEvery,
-    CheckpointOptions, DumpOptions, EngineInfo, OutputFiles, RunOptions, RunReport, Scene,
+    final_scene as final_scene_of, read_scene, run_native_report, write_scene, DumpOptions,
+    EngineInfo, OutputFiles, RunOptions, RunReport, Scene,
 };
 use anyhow::{bail, Context, Result};
 use clap::ValueEnum;
@@ -55,20 +56,8 @@ pub struct RunArgs {
     /// Add forces (`fx fy fz`) to the snapshots.
     #[arg(long)]
     dump_forces: bool,
-    /// Write a checkpoint to this file every --checkpoint-every, when the
-    /// run is stopped (Ctrl-C or SIGTERM) and at its end; with --resume,
-    /// continue from it (native engine only). A resumed run ends bit for
-    /// bit as an uninterrupted one.
-    #[arg(long)]
-    checkpoint: Option<PathBuf>,
-    /// How often to write the checkpoint: a number of steps (20000) or a
-    /// wall-clock time (90s, 10m, 2h).
-    #[arg(long, default_value = "10m", value_parser = parse_checkpoint_every)]
-    checkpoint_every: CheckpointEvery,
-    /// Continue from --checkpoint: the same scene, thread count and output
-    /// files as the run that wrote it.
-    #[arg(long, requires = "checkpoint")]
-    resume: bool,
+    #[command(flatten)]
+    checkpoint: CheckpointArgs,
     /// No progress bars (they are drawn only when stderr is a terminal).
     #[arg(long)]
     quiet: bool,
@@ -76,10 +65,6 @@ pub struct RunArgs {
     /// per stage start and finish, and one every 10 s.
     #[arg(long)]
     progress_log: Option<PathBuf>,
-}
-
-fn parse_checkpoint_every(text: &str) -> Result<CheckpointEvery, String> {
-    text.parse()
 }
 
 impl RunArgs {
@@ -97,8 +82,6 @@ impl RunArgs {
             dump_every,
             dump_forces,
             checkpoint,
-            checkpoint_every,
-            resume,
             quiet,
             progress_log,
         } = self;
@@ -119,7 +102,7 @@ impl RunArgs {
             if final_scene.is_some() {
                 bail!("--final-scene is only available with --engine native");
             }
-            if checkpoint.is_some() {
+            if checkpoint.checkpoint.is_some() {
                 bail!("--checkpoint is only available with --engine native");
             }
             return run_lammps(
@@ -132,13 +115,7 @@ impl RunArgs {
                 &files,
             );
         }
-        let checkpoint = checkpoint
-            .map(|path| -> Result<CheckpointOptions> {
-                let options = CheckpointOptions::new(path, checkpoint_every, resume);
-                stop_on_signal(&options)?;
-                Ok(options)
-            })
-            .transpose()?;
+        let checkpoint = checkpoint.run()?;
         let opts = RunOptions {
             threads,
             progress,
@@ -165,19 +142,6 @@ impl RunArgs {
         println!("wrote {}", output.display());
         Ok(())
     }
-}
-
-/// Makes Ctrl-C, SIGTERM and SIGHUP stop the run at its next step, after a
-/// checkpoint; a second signal ends the process at once.
-fn stop_on_signal(options: &CheckpointOptions) -> Result<()> {
-    let stop = options.stop.clone();
-    ctrlc::set_handler(move || {
-        if stop.swap(true, std::sync::atomic::Ordering::SeqCst) {
-            std::process::exit(130);
-        }
-        eprintln!("\nstopping after the next step and writing the checkpoint (signal again to quit at once)");
-    })
-    .context("installing the signal handler")
 }
 
 /// `bpm run --engine lammps`: the scene in LAMMPS in this process. LAMMPS

@@ -617,7 +617,7 @@ fn run_stage_from(
                     if stop {
                         return Err(RunError::Interrupted {
                             step: sys.step,
-                            checkpoint: saving.checkpointer.options().path.clone(),
+                            checkpoint: saving.checkpointer.options().target.path(),
                         });
                     }
                 }
@@ -714,9 +714,12 @@ fn run_stages(
     let done = &mut outcome.stages;
     let mut checkpointer = None;
     let mut resume = None;
-    let mut files = match &opts.checkpoint {
-        Some(ck) if ck.resume => {
-            let saved = RunCheckpoint::read(&ck.path, scene, opts.threads)?;
+    let saved = match &opts.checkpoint {
+        Some(ck) if ck.resume => ck.saved_run(scene, opts.threads)?,
+        _ => None,
+    };
+    let mut files = match (&opts.checkpoint, saved) {
+        (Some(ck), Some(saved)) => {
             let files = Recorders::reopen(&opts.files, &saved)?;
             let mut resumed_at = saved.resumed_at;
             resumed_at.push(saved.engine.step);
@@ -736,7 +739,7 @@ fn run_stages(
             }
             files
         }
-        Some(ck) => {
+        (Some(ck), None) => {
             checkpointer = Some(Checkpointer::new(
                 ck.clone(),
                 scene,
@@ -746,7 +749,7 @@ fn run_stages(
             ));
             Recorders::open(&opts.files)?
         }
-        None => Recorders::open(&opts.files)?,
+        (None, _) => Recorders::open(&opts.files)?,
     }
     .with_ids(scene.particles.ids.clone());
     let first = resume.as_ref().map_or(done.len(), |(p, _)| p.index);

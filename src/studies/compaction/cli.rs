@@ -5,14 +5,15 @@
 use crate::analysis::packing::AnalysisOptions;
 use crate::engine::dem::MultiContact;
 use crate::lammps::cli::EngineArg;
+use crate::progress::Progress;
+use crate::scene::checkpoint::CheckpointArgs;
 use crate::scene::cli::GrainKindArg;
 use crate::scene::protocols;
 use crate::studies::compaction;
 use crate::studies::mcdem::Closures;
-use crate::studies::{command_line, print_line};
+use crate::studies::{command_line, print_line, StudyRuntime};
 use anyhow::{Context, Result};
 use clap::ValueEnum;
-use std::io::IsTerminal;
 use std::path::PathBuf;
 
 /// The particle model of `bpm compact --model`.
@@ -171,6 +172,14 @@ pub struct CompactArgs {
     /// are ignored).
     #[arg(long)]
     refit: bool,
+    #[command(flatten)]
+    checkpoint: CheckpointArgs,
+    /// No progress bars (they are drawn only when stderr is a terminal).
+    #[arg(long)]
+    quiet: bool,
+    /// Append progress as JSON lines to this file (for batch jobs).
+    #[arg(long)]
+    progress_log: Option<PathBuf>,
 }
 
 impl CompactArgs {
@@ -215,6 +224,9 @@ impl CompactArgs {
             mpr,
             reach,
             refit,
+            checkpoint,
+            quiet,
+            progress_log,
         } = self;
         if refit {
             let report = compaction::refit(&output)?;
@@ -341,13 +353,18 @@ impl CompactArgs {
         };
         opts.validate()?;
         let exe = std::env::current_exe().context("locating the bpm executable")?;
+        let runtime = StudyRuntime {
+            threads,
+            progress: Progress::new(quiet, progress_log.as_deref())
+                .context("opening the progress log")?,
+            checkpoint: checkpoint.study("compact", &opts, threads)?,
+        };
         let report = compaction::run_compaction(
             &opts,
-            threads,
+            &runtime,
             Some(&exe),
             &output,
             &command_line(),
-            std::io::stderr().is_terminal(),
             &mut print_line,
         )?;
         print!("{}", compaction::table(&report));

@@ -31,11 +31,11 @@ use crate::scene::datafile::{read_data_file, write_data_file};
 use crate::scene::model::{Mass, ModelKind};
 use crate::scene::protocols::{compaction_scene, CompactionProtocol};
 use crate::scene::run::Checkpoint;
+use crate::scene::run::{run_scene_outcome, RunError};
 use crate::scene::validate::{simbox_of, SceneError};
-use crate::scene::{
-    build_system, run_scene, write_scene, ForceField, RunOptions, Scene, StageOutput,
-};
+use crate::scene::{build_system, write_scene, ForceField, Scene, StageOutput};
 use crate::studies::hertz::Moduli;
+use crate::studies::{StudyRuntime, StudyStop};
 use crate::verify::LammpsLauncher;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
@@ -140,6 +140,9 @@ pub enum CompactionError {
     /// A file could not be written.
     #[error(transparent)]
     File(#[from] FileError),
+    /// The study stopped before its end (its checkpoint continues it).
+    #[error(transparent)]
+    Stopped(#[from] crate::studies::StudyStop),
 }
 
 impl CompactionError {
@@ -702,41 +705,42 @@ fn column(stage: &StageOutput, name: &str) -> Vec<f64> {
     stage.column(name).unwrap_or_default()
 }
 
-/// Runs a scene in the chosen engine (LAMMPS's files are `folder/tag.*`);
-/// returns the stages
-/// (those done, the last possibly partial), the stop message if any, and
-/// the run's seconds.
+/// Runs a scene in the chosen engine (LAMMPS's files are `folder/tag.*`;
+/// a native run is checkpointed as the study's part `key`).
 fn run_engine(
     scene: &Scene,
     engine: &CompactionEngine,
     folder: &Path,
     tag: &str,
-    threads: usize,
+    key: &str,
+    runtime: &StudyRuntime,
     bpm: Option<&Path>,
-    progress: bool,
-) -> (Vec<StageOutput>, Option<String>, f64) {
+) -> Result<EngineRun, CompactionError> {
     let start = std::time::Instant::now();
-    match engine {
+    let threads = runtime.threads;
+    Ok(match engine {
         CompactionEngine::Native => {
             let mut sys = build_system(scene, threads);
-            let run = RunOptions {
-                progress: crate::progress::Progress::bars(progress),
-                ..RunOptions::quiet(threads)
-            };
-            let (stages, error) = run_scene(&mut sys, scene, &run);
-            (
-                stages,
-                error.map(|e| e.to_string()),
-                start.elapsed().as_secs_f64(),
-            )
+            let outcome = run_scene_outcome(&mut sys, scene, &runtime.run_options(key));
+            match outcome.error {
+                Some(RunError::Interrupted { checkpoint, .. }) => {
+                    return Err(StudyStop::Interrupted(checkpoint).into())
+                }
+                Some(RunError::Checkpoint(e)) => return Err(StudyStop::Checkpoint(e).into()),
+                error => (
+                    outcome.stages,
+                    error.map(|e| e.to_string()),
+                    outcome.wall_seconds,
+                ),
+            }
         }
         CompactionEngine::Lammps { ranks } => {
             let Some(bpm) = bpm else {
-                return (
+                return Ok((
                     Vec::new(),
                     Some("no bpm executable to run LAMMPS with".into()),
                     0.0,
-                );
+                ));
             };
             let launcher = LammpsLauncher {
                 bpm: bpm.to_path_buf(),
@@ -751,8 +755,12 @@ fn run_engine(
                 ),
             }
         }
-    }
+    })
 }
+
+/// A run's stages (those done, the last possibly partial), its stop
+/// message if any, and its wall-clock seconds.
+type EngineRun = (Vec<StageOutput>, Option<String>, f64);
 
 /// How the states of a packing are measured.
 enum Meter {
@@ -975,15 +983,21 @@ fn write_slices(
 /// engine and the analysis of its states; writes `compaction.json`, the
 /// plots and each run's scene and data file into `dir` as it goes.
 /// `bpm` is this program's executable (needed for the LAMMPS engine).
+///
+/// With a checkpoint in `runtime`, each seed's packing, run and moduli
+/// measurements are kept in it as they finish, and the native run under
+/// way is checkpointed into it: the same call with the checkpoint resumed
+/// takes what is kept and continues the run where it stopped, and ends
+/// with the same report.
 pub fn run_compaction(
     opts: &CompactOptions,
-    threads: usize,
+    runtime: &StudyRuntime,
     bpm: Option<&Path>,
     dir: &Path,
     command: &str,
-    progress: bool,
     print: &mut dyn FnMut(&str),
 ) -> Result<CompactionReport, CompactionError> {
+    let threads = runtime.threads;
     opts.validate()?;
     std::fs::create_dir_all(dir).map_err(FileError::on("creating", dir))?;
     let moduli = Moduli::paper_fits(opts.a_b);
@@ -1009,7 +1023,10 @@ pub fn run_compaction(
     for &seed in &opts.seeds {
         let folder = dir.join(format!("seed-{seed}"));
         std::fs::create_dir_all(&folder).map_err(FileError::on("creating", &folder))?;
-        let (packing, summary, expansion) = packing(opts, &report.moduli, seed, threads)?;
+        let (packing, summary, expansion) = runtime
+            .part(&format!("seed-{seed}/packing"), || {
+                packing(opts, &report.moduli, seed, threads)
+            })?;
         // Every grain must have a hull before hours of running, not after.
         let meter = Meter::of(&packing, &opts.analysis)?;
         // Built DEM spheres are separated by far less (below 1e-8).
@@ -1032,15 +1049,10 @@ pub fn run_compaction(
             scene.stages.iter().map(|s| s.steps).sum::<u64>(),
             scene.stages.len()
         ));
-        let (stages, stopped, run_seconds) = run_engine(
-            &scene,
-            &opts.engine,
-            &folder,
-            "lammps",
-            threads,
-            bpm,
-            progress,
-        );
+        let key = format!("seed-{seed}/run");
+        let (stages, stopped, run_seconds) = runtime.part(&key, || {
+            run_engine(&scene, &opts.engine, &folder, "lammps", &key, runtime, bpm)
+        })?;
         if let Some(m) = &stopped {
             print(&format!("seed {seed}: the run stopped: {m}"));
         }
@@ -1099,15 +1111,17 @@ pub fn run_compaction(
             let Some(checkpoint) = checkpoint_of(&stages, &row) else {
                 continue;
             };
-            let measured = moduli::measure_state(
-                &packing,
-                checkpoint,
-                &opts.moduli.protocol,
-                &opts.engine,
-                &folder,
-                threads,
-                bpm,
-            );
+            let measured = runtime.part(&format!("seed-{seed}/moduli-{}", row.step), || {
+                Ok::<_, CompactionError>(moduli::measure_state(
+                    &packing,
+                    checkpoint,
+                    &opts.moduli.protocol,
+                    &opts.engine,
+                    &folder,
+                    threads,
+                    bpm,
+                ))
+            })?;
             match measured {
                 Ok(moduli) => {
                     let m = StateModuli {

@@ -213,6 +213,9 @@ fn run_all(
     bpm: Option<&Path>,
 ) -> Result<[Vec<StageOutput>; 3], String> {
     let mut out: [Vec<StageOutput>; 3] = Default::default();
+    // The three short runs of a state are one part of a checkpointed
+    // study, kept when all three have finished.
+    let runtime = crate::studies::StudyRuntime::plain(threads, false);
     for (k, (scene, kind)) in scenes
         .iter()
         .zip(["compress", "shear", "control"])
@@ -223,10 +226,11 @@ fn run_all(
             engine,
             folder,
             &format!("{tag}-{kind}"),
-            threads,
+            kind,
+            &runtime,
             bpm,
-            false,
-        );
+        )
+        .map_err(|e| e.to_string())?;
         if let Some(m) = stopped {
             return Err(format!("the {kind} run stopped: {m}"));
         }

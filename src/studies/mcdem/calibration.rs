@@ -360,7 +360,8 @@ fn study_in(
             Err(e) => print(&format!("{}: unreadable ({e}), run again", dir.display())),
         }
     }
-    run_compaction(opts, threads, None, dir, command, progress, print)
+    let runtime = crate::studies::StudyRuntime::plain(threads, progress);
+    run_compaction(opts, &runtime, None, dir, command, print)
 }
 
 /// A grain study checked before any sphere runs: bonded grains from a

@@ -12,6 +12,12 @@
 //! are bit-reproducible for a fixed count only), another format or
 //! another version of this program.
 
+mod args;
+mod study;
+
+pub use args::CheckpointArgs;
+pub use study::StudyCheckpoint;
+
 use super::model::Scene;
 use super::run::StageOutput;
 use crate::engine::{ActiveTether, EngineState, SimBox};
@@ -104,11 +110,31 @@ impl FromStr for CheckpointEvery {
     }
 }
 
+/// Where a run's checkpoints go.
+#[derive(Clone, Debug)]
+pub enum CheckpointTarget {
+    /// A file of the run's own.
+    File(PathBuf),
+    /// A part of a study's checkpoint, under this key: the study's file
+    /// holds it beside the study's finished parts.
+    Part(StudyCheckpoint, String),
+}
+
+impl CheckpointTarget {
+    /// The file written.
+    pub fn path(&self) -> PathBuf {
+        match self {
+            Self::File(path) => path.clone(),
+            Self::Part(study, _) => study.path(),
+        }
+    }
+}
+
 /// Checkpointing of one run.
 #[derive(Clone, Debug)]
 pub struct CheckpointOptions {
-    /// The checkpoint file.
-    pub path: PathBuf,
+    /// Where the checkpoints go.
+    pub target: CheckpointTarget,
     /// When to write it (also when the run is stopped, and at its end).
     pub every: CheckpointEvery,
     /// Continue from the file instead of starting afresh.
@@ -125,12 +151,31 @@ impl CheckpointOptions {
     /// Checkpoints to `path` at `every`; `resume` to continue from it.
     pub fn new(path: PathBuf, every: CheckpointEvery, resume: bool) -> Self {
         Self {
-            path,
+            target: CheckpointTarget::File(path),
             every,
             resume,
             stop: Arc::new(AtomicBool::new(false)),
             stop_at_step: None,
         }
+    }
+
+    /// The checkpoint to continue from: for a file of its own, the file
+    /// (an error if it is missing); for a part of a study, the part's run
+    /// if the study's checkpoint has one (`None`: the run starts afresh).
+    pub fn saved_run(
+        &self,
+        scene: &Scene,
+        threads: usize,
+    ) -> Result<Option<RunCheckpoint<'static>>, CheckpointError> {
+        let saved = match &self.target {
+            CheckpointTarget::File(path) => RunCheckpoint::read(path, scene, threads)?,
+            CheckpointTarget::Part(study, key) => match study.take_run(key) {
+                Some(saved) => saved,
+                None => return Ok(None),
+            },
+        };
+        saved.check(&self.target.path(), scene, threads)?;
+        Ok(Some(saved))
     }
 
     /// Whether the run should stop after global step `step`.
@@ -206,24 +251,7 @@ impl RunCheckpoint<'_> {
     /// over it, synced to disk first: a kill at any moment leaves either
     /// the old checkpoint or the new one, whole.
     pub fn write(&self, path: &Path) -> Result<(), CheckpointError> {
-        let io = |cause| CheckpointError::Io {
-            path: path.to_path_buf(),
-            cause,
-        };
-        let mut name = path.file_name().unwrap_or_default().to_os_string();
-        name.push(".partial");
-        let partial = path.with_file_name(name);
-        let file = std::fs::File::create(&partial).map_err(io)?;
-        let mut out = std::io::BufWriter::new(file);
-        out.write_all(MAGIC).map_err(io)?;
-        ciborium::into_writer(self, &mut out).map_err(|e| CheckpointError::Io {
-            path: path.to_path_buf(),
-            cause: std::io::Error::other(e.to_string()),
-        })?;
-        let file = out.into_inner().map_err(|e| io(e.into_error()))?;
-        file.sync_all().map_err(io)?;
-        drop(file);
-        std::fs::rename(&partial, path).map_err(io)
+        write_atomically(path, self)
     }
 
     /// Reads a checkpoint and checks that it continues a run of `scene` on
@@ -233,55 +261,93 @@ impl RunCheckpoint<'_> {
         scene: &Scene,
         threads: usize,
     ) -> Result<RunCheckpoint<'static>, CheckpointError> {
-        let bytes = std::fs::read(path).map_err(|cause| CheckpointError::Io {
-            path: path.to_path_buf(),
-            cause,
-        })?;
-        let malformed = |reason: String| CheckpointError::Malformed {
-            path: path.to_path_buf(),
-            reason,
-        };
-        let Some(body) = bytes.strip_prefix(MAGIC) else {
-            return Err(malformed("it is not a bpm checkpoint file".into()));
-        };
-        // The format and version are read first, so a checkpoint of
-        // another layout is refused by name, not by a decoding error.
-        #[derive(Deserialize)]
-        struct Header {
-            format: u32,
-            version: String,
-        }
-        let header: Header = ciborium::from_reader(body)
-            .map_err(|e| malformed(format!("damaged or truncated ({e})")))?;
+        let checkpoint: RunCheckpoint<'static> = read_checked(path)?;
+        checkpoint.check(path, scene, threads)?;
+        Ok(checkpoint)
+    }
+
+    /// Whether the checkpoint continues a run of `scene` on `threads`
+    /// threads (`path` names it in the error).
+    fn check(&self, path: &Path, scene: &Scene, threads: usize) -> Result<(), CheckpointError> {
         let refused = |reason: String| CheckpointError::Refused {
             path: path.to_path_buf(),
             reason,
         };
-        if header.format != CHECKPOINT_FORMAT || header.version != crate::VERSION {
+        let identity = scene_identity(scene);
+        if self.scene != identity {
             return Err(refused(format!(
+                "it was written for another scene (identity {}, this scene's is {identity})",
+                self.scene
+            )));
+        }
+        if self.threads != threads {
+            return Err(refused(format!(
+                "it was written with --threads {}; resume with --threads {} (results are bit-reproducible for a fixed thread count only)",
+                self.threads, self.threads
+            )));
+        }
+        Ok(())
+    }
+}
+
+/// Writes `value` as a checkpoint file at `path`, through a temporary
+/// file synced to disk and renamed over it: a kill at any moment leaves
+/// either the old file or the new one, whole.
+fn write_atomically<T: Serialize>(path: &Path, value: &T) -> Result<(), CheckpointError> {
+    let io = |cause| CheckpointError::Io {
+        path: path.to_path_buf(),
+        cause,
+    };
+    let mut name = path.file_name().unwrap_or_default().to_os_string();
+    name.push(".partial");
+    let partial = path.with_file_name(name);
+    let file = std::fs::File::create(&partial).map_err(io)?;
+    let mut out = std::io::BufWriter::new(file);
+    out.write_all(MAGIC).map_err(io)?;
+    ciborium::into_writer(value, &mut out).map_err(|e| CheckpointError::Io {
+        path: path.to_path_buf(),
+        cause: std::io::Error::other(e.to_string()),
+    })?;
+    let file = out.into_inner().map_err(|e| io(e.into_error()))?;
+    file.sync_all().map_err(io)?;
+    drop(file);
+    std::fs::rename(&partial, path).map_err(io)
+}
+
+/// Reads a checkpoint file of this format and version.
+fn read_checked<T: serde::de::DeserializeOwned>(path: &Path) -> Result<T, CheckpointError> {
+    let bytes = std::fs::read(path).map_err(|cause| CheckpointError::Io {
+        path: path.to_path_buf(),
+        cause,
+    })?;
+    let malformed = |reason: String| CheckpointError::Malformed {
+        path: path.to_path_buf(),
+        reason,
+    };
+    let Some(body) = bytes.strip_prefix(MAGIC) else {
+        return Err(malformed("it is not a bpm checkpoint file".into()));
+    };
+    // The format and version are read first, so a checkpoint of another
+    // layout is refused by name, not by a decoding error.
+    #[derive(Deserialize)]
+    struct Header {
+        format: u32,
+        version: String,
+    }
+    let header: Header = ciborium::from_reader(body)
+        .map_err(|e| malformed(format!("damaged or truncated ({e})")))?;
+    if header.format != CHECKPOINT_FORMAT || header.version != crate::VERSION {
+        return Err(CheckpointError::Refused {
+            path: path.to_path_buf(),
+            reason: format!(
                 "it was written by bpm {} (checkpoint format {}); this is bpm {} (format {CHECKPOINT_FORMAT}): rerun from the start with this version",
                 header.version,
                 header.format,
                 crate::VERSION
-            )));
-        }
-        let checkpoint: RunCheckpoint<'static> = ciborium::from_reader(body)
-            .map_err(|e| malformed(format!("damaged or truncated ({e})")))?;
-        let identity = scene_identity(scene);
-        if checkpoint.scene != identity {
-            return Err(refused(format!(
-                "it was written for another scene (identity {}, this scene's is {identity})",
-                checkpoint.scene
-            )));
-        }
-        if checkpoint.threads != threads {
-            return Err(refused(format!(
-                "it was written with --threads {}; resume with --threads {} (results are bit-reproducible for a fixed thread count only)",
-                checkpoint.threads, checkpoint.threads
-            )));
-        }
-        Ok(checkpoint)
+            ),
+        });
     }
+    ciborium::from_reader(body).map_err(|e| malformed(format!("damaged or truncated ({e})")))
 }
 
 /// Decides when to write checkpoints and writes them.
@@ -359,7 +425,10 @@ impl Checkpointer {
             wall_seconds: self.wall_seconds(),
             resumed_at: self.resumed_at.clone(),
         };
-        checkpoint.write(&self.options.path)?;
+        match &self.options.target {
+            CheckpointTarget::File(path) => checkpoint.write(path)?,
+            CheckpointTarget::Part(study, key) => study.write_run(key, &checkpoint)?,
+        }
         self.last_write = Instant::now();
         Ok(())
     }
