@@ -278,6 +278,8 @@ const SUBCOMMANDS: &[&[&str]] = &[
 /// Value names of options that take paths or words, not numbers.
 const NOT_NUMBERS: &[&str] = &[
     "OUTPUT",
+    "CHECKPOINT",
+    "PROGRESS_LOG",
     "THERMO",
     "DUMP",
     "FINAL_SCENE",

@@ -10,6 +10,7 @@ pub mod load;
 pub mod model;
 pub mod observables;
 pub mod protocols;
+pub mod records;
 pub mod report;
 pub mod rotation;
 pub mod run;
@@ -22,6 +23,7 @@ pub use model::{
     Bonds, BoxSpec, ForceField, Mass, ModelKind, Particles, Record, Scene, StageSpec, VelocityInit,
     SCENE_VERSION,
 };
+pub use records::{Checkpoint, StageOutput};
 pub use report::{run_native_report, EngineInfo, RunReport};
-pub use run::{run_scene, run_stage, DumpOptions, OutputFiles, RunError, RunOptions, StageOutput};
+pub use run::{run_scene, run_stage, DumpOptions, OutputFiles, RunError, RunOptions};
 pub use validate::{validate, SceneError};

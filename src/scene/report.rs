@@ -2,7 +2,7 @@
 //! the cross-check harness reads back.
 
 use super::model::{ForceField, Scene, StageSpec};
-use super::run::StageOutput;
+use super::records::StageOutput;
 use serde::{Deserialize, Serialize};
 use std::path::Path;
 

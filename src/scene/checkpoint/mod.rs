@@ -19,7 +19,7 @@ pub use args::CheckpointArgs;
 pub use study::StudyCheckpoint;
 
 use super::model::Scene;
-use super::run::StageOutput;
+use super::records::StageOutput;
 use crate::engine::{ActiveTether, EngineState, SimBox};
 use serde::{Deserialize, Serialize};
 use std::borrow::Cow;
