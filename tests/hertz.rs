@@ -5,7 +5,10 @@
 mod common;
 
 use bpm::scene::builders::grain::{build_grain, GrainKind, GrainParams};
+use bpm::scene::checkpoint::StudyCheckpoint;
+use bpm::scene::CheckpointEvery;
 use bpm::studies::hertz::{run_hertz, GrainSource, HertzOptions, Moduli, SqueezeEngine};
+use bpm::studies::StudyRuntime;
 use bpm::verify::tolerances::tolerance;
 use bpm::verify::LammpsLauncher;
 
@@ -38,7 +41,14 @@ fn both_engines_squeeze_a_grain_file_to_the_same_curve() {
             threads: 1,
         };
         let out = dir.join(format!("{engine:?}"));
-        let report = run_hertz(&opts, &out, &launcher, &mut |_| {}).unwrap();
+        let report = run_hertz(
+            &opts,
+            &out,
+            &launcher,
+            &StudyRuntime::plain(1, false),
+            &mut |_| {},
+        )
+        .unwrap();
         assert!(out.join("hertz.json").exists() && out.join("hertz.svg").exists());
         assert_eq!(report.squeezes.len(), 2);
         for s in &report.squeezes {
@@ -162,7 +172,41 @@ fn the_sweep_saves_grains_that_squeeze_to_the_same_curve_again() {
         threads: 1,
         time_scale: 0.05,
     };
-    let report = run_hertz_sweep(&opts, &dir, &launcher, &mut |_| {}).unwrap();
+    // Checkpointed, and stopped at step 150 of the last case's squeeze:
+    // the resumed sweep must end with the curve a straight squeeze of the
+    // same grain gives (`again`, below), bit for bit.
+    let path = dir.join("sweep.ck");
+    let session = |resume: bool| {
+        let checkpoint = StudyCheckpoint::open(
+            &path,
+            CheckpointEvery::Steps(100),
+            resume,
+            "hertz-sweep",
+            &opts,
+            1,
+        )
+        .unwrap();
+        StudyRuntime {
+            checkpoint: Some(checkpoint),
+            ..StudyRuntime::plain(1, false)
+        }
+    };
+    let first = session(false);
+    let checkpoint = first.checkpoint.clone().unwrap();
+    let mut cases = 0;
+    let stopped = run_hertz_sweep(&opts, &dir, &launcher, &first, &mut |_| {
+        cases += 1;
+        if cases == 3 {
+            checkpoint.stop_runs_at(Some(150));
+        }
+    })
+    .unwrap_err();
+    assert!(stopped.to_string().contains("--resume"), "{stopped}");
+    let second = session(true);
+    let (parts, run) = second.checkpoint.as_ref().unwrap().summary();
+    assert_eq!(parts.len(), 5, "two grains and three squeezes: {parts:?}");
+    assert_eq!(run, Some(("R4-aB-0.5/seed3-rot0".to_string(), 150)));
+    let report = run_hertz_sweep(&opts, &dir, &launcher, &second, &mut |_| {}).unwrap();
     assert_eq!(report.cases.len(), 4);
     for c in &report.cases {
         assert!(c.deviation.is_some(), "R = {} a_B = {}", c.radius, c.a_b);
@@ -189,6 +233,7 @@ fn the_sweep_saves_grains_that_squeeze_to_the_same_curve_again() {
         },
         &dir.join("again"),
         &launcher,
+        &StudyRuntime::plain(1, false),
         &mut |_| {},
     )
     .unwrap();

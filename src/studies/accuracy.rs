@@ -583,7 +583,7 @@ fn hertz_sweeps(
             s.radius, s.dt, s.speed, s.skin
         );
         let t = std::time::Instant::now();
-        let squeezed = squeeze_native(&scene, &tag, threads);
+        let squeezed = squeeze_native(&scene, &tag, &crate::scene::RunOptions::quiet(threads));
         let seconds = t.elapsed().as_secs_f64();
         let stage = match squeezed {
             Ok((stage, None)) => stage,

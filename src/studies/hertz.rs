@@ -16,8 +16,9 @@ use crate::reference::paper;
 use crate::scene::builders::grain::{build_grain, GrainKind, GrainParams, GrainSummary};
 use crate::scene::protocols::{hertz_squeeze, SqueezeParams};
 use crate::scene::rotation::{rotated, uniform_rotation};
-use crate::scene::{run_native_report, RunOptions, StageOutput};
 use crate::scene::{ForceField, Scene};
+use crate::scene::{RunError, RunOptions, StageOutput};
+use crate::studies::{StudyRuntime, StudyStop};
 use crate::verify::single_point::nan_max;
 use crate::verify::{HarnessError, LammpsLauncher};
 use rand::{Rng, SeedableRng};
@@ -125,6 +126,9 @@ pub enum HertzError {
     /// A file or folder could not be written.
     #[error(transparent)]
     File(#[from] FileError),
+    /// The study stopped before its end (its checkpoint continues it).
+    #[error(transparent)]
+    Stopped(#[from] crate::studies::StudyStop),
 }
 
 impl HertzOptions {
@@ -246,18 +250,27 @@ pub(crate) fn gap_and_force(stage: &StageOutput) -> (Vec<f64>, Vec<f64>) {
 
 /// Squeezes natively. A squeeze that stops part of the way (a particle
 /// pushed onto a wall's plane) keeps its records up to there, with the
-/// reason.
+/// reason; one stopped as asked (a signal, with a checkpoint in `run`)
+/// ends the study.
 pub(crate) fn squeeze_native(
     scene: &Scene,
     tag: &str,
-    threads: usize,
+    run: &RunOptions,
 ) -> Result<(StageOutput, Option<String>), HertzError> {
     crate::scene::validate(scene).map_err(|cause| HarnessError::Scene {
         scene: tag.into(),
         cause,
     })?;
-    let (report, _) = run_native_report(scene, Path::new(tag), 0, &RunOptions::quiet(threads));
-    match (report.stages.into_iter().next(), report.error) {
+    let mut sys = crate::scene::build_system(scene, run.threads);
+    let outcome = crate::scene::run::run_scene_outcome(&mut sys, scene, run);
+    let error = match outcome.error {
+        Some(RunError::Interrupted { checkpoint, .. }) => {
+            return Err(StudyStop::Interrupted(checkpoint).into())
+        }
+        Some(RunError::Checkpoint(e)) => return Err(StudyStop::Checkpoint(e).into()),
+        error => error.map(|e| e.to_string()),
+    };
+    match (outcome.stages.into_iter().next(), error) {
         (Some(stage), error) if stage.rows.len() > 1 => Ok((stage, error)),
         (_, error) => Err(HertzError::Run(HarnessError::Native {
             scene: tag.into(),
@@ -325,7 +338,7 @@ pub const HERTZ_WINDOW: (f64, f64) = (0.02, 0.25);
 
 /// A grain to squeeze: its seed (also the seed of its rotations), the
 /// scene, and the builder's summary when it was built here.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct Grain {
     /// Seed.
     pub seed: u64,
@@ -387,15 +400,22 @@ fn grains(opts: &HertzOptions) -> Result<Vec<Grain>, HertzError> {
 
 /// Runs the study: every grain, every rotation, in the chosen engine;
 /// writes `hertz.json` and `hertz.svg` into `out`.
+///
+/// With a checkpoint in `runtime`, the grains and each squeeze are kept in
+/// it as they finish and the native squeeze under way is checkpointed into
+/// it, so the same call with the checkpoint resumed ends with the same
+/// report.
 pub fn run_hertz(
     opts: &HertzOptions,
     out: &Path,
     launcher: &LammpsLauncher,
+    runtime: &StudyRuntime,
     progress: &mut dyn FnMut(&Squeeze),
 ) -> Result<HertzReport, HertzError> {
     opts.validate()?;
     let start = std::time::Instant::now();
-    let mut report = squeeze_grains(opts, grains(opts)?, launcher, progress)?;
+    let grains = runtime.part("grains", || grains(opts))?;
+    let mut report = squeeze_grains(opts, grains, launcher, runtime, "", progress)?;
     report.wall_seconds = start.elapsed().as_secs_f64();
     write_report(&report, out)?;
     Ok(report)
@@ -403,10 +423,14 @@ pub fn run_hertz(
 
 /// Squeezes `grains` (every rotation the options ask for) in the chosen
 /// engine. The options must be valid; `wall_seconds` counts the squeezes.
+/// Each squeeze is a part of `runtime`'s checkpoint, its key
+/// `{key_prefix}seed{seed}-rot{r}`.
 pub fn squeeze_grains(
     opts: &HertzOptions,
     grains: Vec<Grain>,
     launcher: &LammpsLauncher,
+    runtime: &StudyRuntime,
+    key_prefix: &str,
     progress: &mut dyn FnMut(&Squeeze),
 ) -> Result<HertzReport, HertzError> {
     let start = std::time::Instant::now();
@@ -437,77 +461,86 @@ pub fn squeeze_grains(
             };
             let scene = hertz_squeeze(&g, &params);
             let tag = format!("seed{seed}-rot{r}");
-            let t = std::time::Instant::now();
-            let (stage, stopped) = match opts.engine {
-                SqueezeEngine::Native | SqueezeEngine::Both => {
-                    squeeze_native(&scene, &tag, opts.threads)?
-                }
-                SqueezeEngine::Lammps => {
-                    let mut run = launcher.run(&scene, &tag, 1, true)?;
-                    (run.stages.remove(0), None)
-                }
+            let key = format!("{key_prefix}{tag}");
+            let run = RunOptions {
+                threads: opts.threads,
+                ..runtime.run_options(&key)
             };
-            let seconds = t.elapsed().as_secs_f64();
-            let (gap, force) = gap_and_force(&stage);
-            let engines = if opts.engine == SqueezeEngine::Both {
+            let s = runtime.part(&key, || -> Result<Squeeze, HertzError> {
                 let t = std::time::Instant::now();
-                let lammps = launcher.run(&scene, &tag, 1, true);
-                let lammps_seconds = t.elapsed().as_secs_f64();
-                Some(match lammps {
-                    Ok(_) if stopped.is_some() => {
-                        let why = stopped.unwrap_or_default();
-                        return Err(HertzError::Run(HarnessError::Native {
-                            scene: tag.clone(),
-                            message: format!(
-                                "the engines disagree: LAMMPS ran the squeeze \
-                                 through, the native engine stopped ({why})"
-                            ),
-                        }));
+                let (stage, stopped) = match opts.engine {
+                    SqueezeEngine::Native | SqueezeEngine::Both => {
+                        squeeze_native(&scene, &tag, &run)?
                     }
-                    Ok(run) => {
-                        let (gap_l, force_l) = gap_and_force(&run.stages[0]);
-                        let scale = force.iter().map(|f| f.abs()).fold(0.0, nan_max);
-                        EngineAgreement {
-                            force_deviation: Some(largest_difference(&force, &force_l) / scale),
-                            gap_deviation: Some(largest_difference(&gap, &gap_l)),
-                            lammps_seconds,
-                            lammps_error: None,
+                    SqueezeEngine::Lammps => {
+                        let mut run = launcher.run(&scene, &tag, 1, true)?;
+                        (run.stages.remove(0), None)
+                    }
+                };
+                let seconds = t.elapsed().as_secs_f64();
+                let (gap, force) = gap_and_force(&stage);
+                let engines = if opts.engine == SqueezeEngine::Both {
+                    let t = std::time::Instant::now();
+                    let lammps = launcher.run(&scene, &tag, 1, true);
+                    let lammps_seconds = t.elapsed().as_secs_f64();
+                    Some(match lammps {
+                        Ok(_) if stopped.is_some() => {
+                            let why = stopped.unwrap_or_default();
+                            return Err(HertzError::Run(HarnessError::Native {
+                                scene: tag.clone(),
+                                message: format!(
+                                    "the engines disagree: LAMMPS ran the squeeze \
+                                     through, the native engine stopped ({why})"
+                                ),
+                            }));
                         }
-                    }
-                    // Only a native squeeze that stopped too may see LAMMPS
-                    // stop: otherwise the engines disagree.
-                    Err(e) if stopped.is_some() && e.to_string().contains(LAMMPS_WALL_ERROR) => {
-                        EngineAgreement {
-                            force_deviation: None,
-                            gap_deviation: None,
-                            lammps_seconds,
-                            lammps_error: Some(e.to_string()),
+                        Ok(run) => {
+                            let (gap_l, force_l) = gap_and_force(&run.stages[0]);
+                            let scale = force.iter().map(|f| f.abs()).fold(0.0, nan_max);
+                            EngineAgreement {
+                                force_deviation: Some(largest_difference(&force, &force_l) / scale),
+                                gap_deviation: Some(largest_difference(&gap, &gap_l)),
+                                lammps_seconds,
+                                lammps_error: None,
+                            }
                         }
-                    }
-                    Err(e) => return Err(e.into()),
+                        // Only a native squeeze that stopped too may see LAMMPS
+                        // stop: otherwise the engines disagree.
+                        Err(e)
+                            if stopped.is_some() && e.to_string().contains(LAMMPS_WALL_ERROR) =>
+                        {
+                            EngineAgreement {
+                                force_deviation: None,
+                                gap_deviation: None,
+                                lammps_seconds,
+                                lammps_error: Some(e.to_string()),
+                            }
+                        }
+                        Err(e) => return Err(e.into()),
+                    })
+                } else {
+                    None
+                };
+                let curve = squeeze_curve(&gap, &force, radius, e_eff);
+                let deviation = hertz_deviation(
+                    &curve.overlap_over_r,
+                    &curve.normalised_force,
+                    HERTZ_WINDOW.0,
+                    HERTZ_WINDOW.1,
+                );
+                Ok(Squeeze {
+                    seed,
+                    rotation: r,
+                    rotation_draw: draw,
+                    grain: summary.clone(),
+                    particles: g.particles.positions.len(),
+                    curve,
+                    deviation,
+                    seconds,
+                    engines,
+                    stopped,
                 })
-            } else {
-                None
-            };
-            let curve = squeeze_curve(&gap, &force, radius, e_eff);
-            let deviation = hertz_deviation(
-                &curve.overlap_over_r,
-                &curve.normalised_force,
-                HERTZ_WINDOW.0,
-                HERTZ_WINDOW.1,
-            );
-            let s = Squeeze {
-                seed,
-                rotation: r,
-                rotation_draw: draw,
-                grain: summary.clone(),
-                particles: g.particles.positions.len(),
-                curve,
-                deviation,
-                seconds,
-                engines,
-                stopped,
-            };
+            })?;
             progress(&s);
             squeezes.push(s);
         }

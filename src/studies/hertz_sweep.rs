@@ -14,6 +14,7 @@ use crate::studies::hertz::{
     squeeze_grains, write_report, Grain, GrainSource, HertzError, HertzOptions, Moduli,
     SqueezeEngine, MIN_GRAIN_RADIUS,
 };
+use crate::studies::StudyRuntime;
 use crate::verify::LammpsLauncher;
 use serde::{Deserialize, Serialize};
 use std::path::Path;
@@ -90,6 +91,7 @@ pub fn run_hertz_sweep(
     opts: &SweepOptions,
     out: &Path,
     launcher: &LammpsLauncher,
+    runtime: &StudyRuntime,
     progress: &mut dyn FnMut(&SweepCase),
 ) -> Result<SweepReport, HertzError> {
     if opts.radii.is_empty() || opts.a_bs.is_empty() {
@@ -136,8 +138,9 @@ pub fn run_hertz_sweep(
         // its a_B only sets the force field it is written with.
         let mut params = GrainParams::new(opts.kind, radius, opts.seed, opts.a_bs[0]);
         params.time_scale = opts.time_scale;
-        let (scene, summary) = build_grain(&params, opts.threads, false)
-            .map_err(|e| HertzError::Grain(e.to_string()))?;
+        let (scene, summary) = runtime.part(&format!("R{radius}/grain"), || {
+            build_grain(&params, opts.threads, false).map_err(|e| HertzError::Grain(e.to_string()))
+        })?;
         let grain_file = grains_dir.join(format!(
             "{}-R{radius}-s{}.json",
             opts.kind.name(),
@@ -151,8 +154,15 @@ pub fn run_hertz_sweep(
         };
         for &a_b in &opts.a_bs {
             let hertz_opts = case_opts(radius, a_b);
-            let report = squeeze_grains(&hertz_opts, vec![grain.clone()], launcher, &mut |_| {})?;
             let folder = format!("R{radius}-aB{a_b}");
+            let report = squeeze_grains(
+                &hertz_opts,
+                vec![grain.clone()],
+                launcher,
+                runtime,
+                &format!("{folder}/"),
+                &mut |_| {},
+            )?;
             write_report(&report, &out.join(&folder))?;
             let n = report.squeezes.len();
             let case = SweepCase {

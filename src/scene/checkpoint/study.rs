@@ -22,6 +22,7 @@ pub struct StudyCheckpoint {
     state: Arc<Mutex<State>>,
     every: CheckpointEvery,
     stop: Arc<AtomicBool>,
+    stop_at_step: Arc<Mutex<Option<u64>>>,
 }
 
 #[derive(Debug)]
@@ -106,6 +107,7 @@ impl StudyCheckpoint {
             state: Arc::new(Mutex::new(state)),
             every,
             stop: Arc::new(AtomicBool::new(false)),
+            stop_at_step: Arc::new(Mutex::new(None)),
         })
     }
 
@@ -124,6 +126,13 @@ impl StudyCheckpoint {
     /// checkpoint (set it from a signal handler).
     pub fn stop_flag(&self) -> Arc<AtomicBool> {
         self.stop.clone()
+    }
+
+    /// Makes the study's runs started from now on stop after global step
+    /// `step` (as [`CheckpointOptions::stop_at_step`]): a study split into
+    /// pieces of known length.
+    pub fn stop_runs_at(&self, step: Option<u64>) {
+        *self.stop_at_step.lock().unwrap_or_else(|e| e.into_inner()) = step;
     }
 
     /// Whether a stop was asked for.
@@ -177,7 +186,7 @@ impl StudyCheckpoint {
             every: self.every,
             resume: true,
             stop: self.stop.clone(),
-            stop_at_step: None,
+            stop_at_step: *self.stop_at_step.lock().unwrap_or_else(|e| e.into_inner()),
         }
     }
 

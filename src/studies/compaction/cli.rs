@@ -5,13 +5,11 @@
 use crate::analysis::packing::AnalysisOptions;
 use crate::engine::dem::MultiContact;
 use crate::lammps::cli::EngineArg;
-use crate::progress::Progress;
-use crate::scene::checkpoint::CheckpointArgs;
 use crate::scene::cli::GrainKindArg;
 use crate::scene::protocols;
 use crate::studies::compaction;
 use crate::studies::mcdem::Closures;
-use crate::studies::{command_line, print_line, StudyRuntime};
+use crate::studies::{command_line, print_line, RuntimeArgs};
 use anyhow::{Context, Result};
 use clap::ValueEnum;
 use std::path::PathBuf;
@@ -173,13 +171,7 @@ pub struct CompactArgs {
     #[arg(long)]
     refit: bool,
     #[command(flatten)]
-    checkpoint: CheckpointArgs,
-    /// No progress bars (they are drawn only when stderr is a terminal).
-    #[arg(long)]
-    quiet: bool,
-    /// Append progress as JSON lines to this file (for batch jobs).
-    #[arg(long)]
-    progress_log: Option<PathBuf>,
+    runtime: RuntimeArgs,
 }
 
 impl CompactArgs {
@@ -224,9 +216,7 @@ impl CompactArgs {
             mpr,
             reach,
             refit,
-            checkpoint,
-            quiet,
-            progress_log,
+            runtime,
         } = self;
         if refit {
             let report = compaction::refit(&output)?;
@@ -353,12 +343,7 @@ impl CompactArgs {
         };
         opts.validate()?;
         let exe = std::env::current_exe().context("locating the bpm executable")?;
-        let runtime = StudyRuntime {
-            threads,
-            progress: Progress::new(quiet, progress_log.as_deref())
-                .context("opening the progress log")?,
-            checkpoint: checkpoint.study("compact", &opts, threads)?,
-        };
+        let runtime = runtime.runtime("compact", &opts, threads)?;
         let report = compaction::run_compaction(
             &opts,
             &runtime,

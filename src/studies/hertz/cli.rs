@@ -4,6 +4,7 @@ use crate::scene::cli::GrainKindArg;
 use crate::studies::hertz::{
     run_hertz, EngineAgreement, GrainSource, HertzOptions, Moduli, SqueezeEngine,
 };
+use crate::studies::RuntimeArgs;
 use crate::verify::LammpsLauncher;
 use anyhow::Result;
 use clap::ValueEnum;
@@ -74,6 +75,8 @@ pub struct HertzArgs {
     /// Output folder.
     #[arg(short, long)]
     output: PathBuf,
+    #[command(flatten)]
+    runtime: RuntimeArgs,
 }
 
 impl HertzArgs {
@@ -93,6 +96,7 @@ impl HertzArgs {
             nu,
             records,
             output,
+            runtime,
         } = self;
         let mut moduli = Moduli::paper_fits(a_b);
         if k.is_some() || nu.is_some() {
@@ -129,7 +133,8 @@ impl HertzArgs {
             "{:>6} {:>8} {:>9} {:>9} {:>10} {:>10} {:>8} {:>8}",
             "seed", "rotation", "particles", "points", "rms", "rms rel", "slope", "seconds"
         );
-        let report = run_hertz(&opts, &output, &launcher, &mut |s| {
+        let runtime = runtime.runtime("hertz", &opts, threads)?;
+        let report = run_hertz(&opts, &output, &launcher, &runtime, &mut |s| {
             let d = s.deviation;
             println!(
                 "{:>6} {:>8} {:>9} {:>9} {:>10.4} {:>10.4} {:>8.3} {:>8.1}",

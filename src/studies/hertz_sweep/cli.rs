@@ -4,6 +4,7 @@
 use crate::scene::cli::GrainKindArg;
 use crate::studies::hertz::cli::SqueezeWith;
 use crate::studies::hertz_sweep::{run_hertz_sweep, SweepOptions};
+use crate::studies::RuntimeArgs;
 use crate::verify::LammpsLauncher;
 use anyhow::Result;
 use std::path::PathBuf;
@@ -46,6 +47,8 @@ pub struct HertzSweepArgs {
     /// Output folder.
     #[arg(short, long)]
     output: PathBuf,
+    #[command(flatten)]
+    runtime: RuntimeArgs,
 }
 
 impl HertzSweepArgs {
@@ -62,6 +65,7 @@ impl HertzSweepArgs {
             time_scale,
             records,
             output,
+            runtime,
         } = self;
         let opts = SweepOptions {
             kind: kind.into(),
@@ -92,7 +96,8 @@ impl HertzSweepArgs {
             "slope",
             "worst rel"
         );
-        let report = run_hertz_sweep(&opts, &output, &launcher, &mut |c| {
+        let runtime = runtime.runtime("hertz-sweep", &opts, threads)?;
+        let report = run_hertz_sweep(&opts, &output, &launcher, &runtime, &mut |c| {
             let d = c.deviation;
             println!(
                 "{:>5} {:>5} {:>6.3} {:>9} {:>9.4} {:>8.1} {:>9.1} {:>9.4} {:>8.3} {:>10.4}",

@@ -1,0 +1,111 @@
+//! How a study runs, beside what it runs: threads, progress bars and log,
+//! and the checkpoint that keeps its finished parts and its run under way;
+//! and the command-line options that set them.
+
+use crate::progress::Progress;
+use crate::scene::checkpoint::{CheckpointArgs, CheckpointError, StudyCheckpoint};
+use anyhow::Context;
+use std::path::PathBuf;
+
+/// How a study runs, beside what it runs: threads, progress, and the
+/// checkpoint that keeps its finished parts and its run under way.
+#[derive(Clone, Debug, Default)]
+pub struct StudyRuntime {
+    /// Threads of the force passes.
+    pub threads: usize,
+    /// Progress bars and log.
+    pub progress: Progress,
+    /// The study's checkpoint, if it keeps one.
+    pub checkpoint: Option<StudyCheckpoint>,
+}
+
+impl StudyRuntime {
+    /// `threads` threads, progress bars on a terminal when `bars`, no
+    /// checkpoint.
+    pub fn plain(threads: usize, bars: bool) -> Self {
+        Self {
+            threads,
+            progress: Progress::bars(bars),
+            checkpoint: None,
+        }
+    }
+
+    /// Part `key` of the study: the value the checkpoint kept for it, or
+    /// else `compute`'s, kept in the checkpoint (a computation that fails
+    /// is not kept). A stop asked for (a signal) before a part starts
+    /// ends the study with [`StudyStop::Interrupted`].
+    pub fn part<T, E>(&self, key: &str, compute: impl FnOnce() -> Result<T, E>) -> Result<T, E>
+    where
+        T: serde::Serialize + serde::de::DeserializeOwned,
+        E: From<StudyStop>,
+    {
+        let Some(checkpoint) = &self.checkpoint else {
+            return compute();
+        };
+        if let Some(value) = checkpoint.finished(key).map_err(StudyStop::from)? {
+            return Ok(value);
+        }
+        if checkpoint.stop_requested() {
+            return Err(StudyStop::Interrupted(checkpoint.path()).into());
+        }
+        let value = compute()?;
+        checkpoint.finish(key, &value).map_err(StudyStop::from)?;
+        Ok(value)
+    }
+
+    /// The options of the study's native run `key`: checkpointed into the
+    /// study's checkpoint (and continued from it) if there is one.
+    pub fn run_options(&self, key: &str) -> crate::scene::RunOptions {
+        crate::scene::RunOptions {
+            threads: self.threads,
+            progress: self.progress.clone(),
+            files: Default::default(),
+            checkpoint: self.checkpoint.as_ref().map(|c| c.run_options(key)),
+        }
+    }
+}
+
+/// Why a checkpointed study stopped before its end.
+#[derive(Debug, thiserror::Error)]
+pub enum StudyStop {
+    /// Its checkpoint could not be written or read.
+    #[error(transparent)]
+    Checkpoint(#[from] CheckpointError),
+    /// It was asked to stop (a signal) and its checkpoint holds its
+    /// progress.
+    #[error("stopped as asked; the checkpoint {} continues the study (the same command with --resume)", .0.display())]
+    Interrupted(std::path::PathBuf),
+}
+
+/// The options every checkpointed study takes: `--checkpoint`,
+/// `--checkpoint-every`, `--resume`, `--quiet` and `--progress-log`.
+#[derive(Clone, Debug, clap::Args)]
+pub struct RuntimeArgs {
+    #[command(flatten)]
+    checkpoint: CheckpointArgs,
+    /// No progress bars (they are drawn only when stderr is a terminal).
+    #[arg(long)]
+    quiet: bool,
+    /// Append progress as JSON lines to this file (for batch jobs): a line
+    /// per run's stage start and finish, and one every 10 s.
+    #[arg(long)]
+    progress_log: Option<PathBuf>,
+}
+
+impl RuntimeArgs {
+    /// The runtime of study `study` (its command's name) with `options`
+    /// on `threads` threads.
+    pub fn runtime(
+        &self,
+        study: &str,
+        options: &impl serde::Serialize,
+        threads: usize,
+    ) -> anyhow::Result<StudyRuntime> {
+        Ok(StudyRuntime {
+            threads,
+            progress: Progress::new(self.quiet, self.progress_log.as_deref())
+                .context("opening the progress log")?,
+            checkpoint: self.checkpoint.study(study, options, threads)?,
+        })
+    }
+}
