@@ -36,6 +36,9 @@ pub enum CalibrationError {
     /// A file or folder could not be created, written or read.
     #[error(transparent)]
     File(#[from] FileError),
+    /// The study stopped before its end (its checkpoint continues it).
+    #[error(transparent)]
+    Stopped(#[from] crate::studies::StudyStop),
     /// An earlier `calibration.json` could not be parsed.
     #[error("{what}: {cause}")]
     Json {
@@ -156,19 +159,25 @@ impl Case {
 }
 
 /// Runs the study's cases; `log` receives each case as it finishes.
+/// With a checkpoint in `runtime`, each solid and case is kept in it as it
+/// finishes, and a resumed study takes them from there.
 pub fn run_study(
     opts: &StudyOptions,
     launcher: &LammpsLauncher,
-    threads: usize,
+    runtime: &crate::studies::StudyRuntime,
     log: &mut dyn FnMut(&Case),
-) -> Result<Vec<Case>, HarnessError> {
+) -> Result<Vec<Case>, CalibrationError> {
+    let threads = runtime.threads;
     let largest = opts.sizes.iter().copied().fold(f64::NAN, f64::max);
     let mut cases = Vec::new();
     for &size in &opts.sizes {
         for (n, &seed) in opts.seeds.iter().enumerate() {
-            let start = std::time::Instant::now();
-            let (solid, summary) = paper_solid(size, seed, threads)?;
-            let build_seconds = start.elapsed().as_secs_f64();
+            let (solid, summary, build_seconds) =
+                runtime.part(&format!("L{size}-s{seed}/solid"), || {
+                    let start = std::time::Instant::now();
+                    let (solid, summary) = paper_solid(size, seed, threads)?;
+                    Ok::<_, CalibrationError>((solid, summary, start.elapsed().as_secs_f64()))
+                })?;
             // Every a_B at the largest size, and for the LAMMPS comparison.
             let a_bs = if size == largest || (n == 0 && opts.lammps_sizes.contains(&size)) {
                 &opts.a_b
@@ -187,7 +196,12 @@ pub fn run_study(
             for &a_b in a_bs {
                 for (engine, loading) in &engines {
                     let tag = format!("L{size}-s{seed}-aB{a_b}-rate{}", loading.rate);
-                    let (moduli, _) = measure_moduli(&solid, a_b, false, loading, engine, &tag)?;
+                    let key = format!("{tag}-{}", engine.name());
+                    let moduli = runtime.part(&key, || {
+                        let (moduli, _) =
+                            measure_moduli(&solid, a_b, false, loading, engine, &tag)?;
+                        Ok::<_, CalibrationError>(moduli)
+                    })?;
                     let case = Case {
                         size,
                         seed,
@@ -573,10 +587,11 @@ pub fn calibrate(
     opts: &StudyOptions,
     output: &Path,
     bpm: &Path,
-    threads: usize,
+    runtime: &crate::studies::StudyRuntime,
     command: &str,
     log: &mut dyn FnMut(&str),
 ) -> Result<Calibration, CalibrationError> {
+    let threads = runtime.threads;
     opts.validate()?;
     std::fs::create_dir_all(output).map_err(FileError::on("creating", output))?;
     let launcher = LammpsLauncher {
@@ -585,7 +600,7 @@ pub fn calibrate(
     };
     let start = std::time::Instant::now();
     log(&case_header());
-    let cases = run_study(opts, &launcher, threads, &mut |c| log(&c.row()))?;
+    let cases = run_study(opts, &launcher, runtime, &mut |c| log(&c.row()))?;
     let doc = serde_json::json!({
         "program": "bpm calibrate",
         "version": crate::VERSION,

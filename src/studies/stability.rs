@@ -55,6 +55,9 @@ pub enum StabilityError {
     /// The report could not be written.
     #[error(transparent)]
     File(#[from] FileError),
+    /// The study stopped before its end (its checkpoint continues it).
+    #[error(transparent)]
+    Stopped(#[from] crate::studies::StudyStop),
 }
 
 /// What `bpm stability` runs.
@@ -186,7 +189,7 @@ impl StabilityOptions {
 }
 
 /// One run at one timestep.
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, Serialize, serde::Deserialize)]
 pub struct Trial {
     /// Timestep (tau).
     pub dt: f64,
@@ -206,7 +209,7 @@ pub struct Trial {
 }
 
 /// The stability limit of one solid at one `(a_B, Gamma)`.
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, Serialize, serde::Deserialize)]
 pub struct Limit {
     /// Multibody strength (k d).
     pub a_b: f64,
@@ -238,7 +241,7 @@ impl Limit {
 }
 
 /// The stiffest vibration mode of one solid at one a_B.
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, Serialize, serde::Deserialize)]
 pub struct Mode {
     /// Multibody strength (k d).
     pub a_b: f64,
@@ -254,7 +257,7 @@ pub struct Mode {
 }
 
 /// K, G and nu at one a_B (dt 0.1), or why they could not be measured.
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, Serialize, serde::Deserialize)]
 pub struct ModuliRow {
     /// Multibody strength (k d).
     pub a_b: f64,
@@ -553,12 +556,17 @@ pub fn stiffest_mode(solid: &Scene, a_b: f64, seed: u64, iterations: usize) -> (
 }
 
 /// Runs the study; `log` receives each line of progress.
+///
+/// With a checkpoint in `runtime`, each solid, mode, limit and moduli
+/// measurement is kept in it as it finishes, and a resumed study takes
+/// them from there.
 pub fn run_stability(
     opts: &StabilityOptions,
-    threads: usize,
+    runtime: &crate::studies::StudyRuntime,
     command: &str,
     log: &mut dyn FnMut(&str),
 ) -> Result<StabilityReport, StabilityError> {
+    let threads = runtime.threads;
     opts.validate()?;
     let mut report = StabilityReport {
         program: format!("bpm {}", env!("CARGO_PKG_VERSION")),
@@ -571,7 +579,9 @@ pub fn run_stability(
         moduli: Vec::new(),
     };
     for (n, &seed) in opts.seeds.iter().enumerate() {
-        let (mut solid, summary) = paper_solid(opts.size, seed, threads)?;
+        let (mut solid, summary) = runtime.part(&format!("seed-{seed}/solid"), || {
+            paper_solid(opts.size, seed, threads).map_err(StabilityError::from)
+        })?;
         solid.force_field.zero_net_multibody = opts.zero_net;
         report.particles.push((seed, summary.particles));
         log(&format!(
@@ -579,34 +589,46 @@ pub fn run_stability(
             opts.size, summary.particles
         ));
         for &a_b in &opts.a_b {
-            let (lambda, damping) = stiffest_mode(&solid, a_b, seed, 500);
-            let mode = Mode {
-                a_b,
-                seed,
-                lambda,
-                damping,
-                dt_undamped: verlet_limit(lambda, 0.0),
-            };
+            let mode = runtime.part(&format!("seed-{seed}/aB{a_b}/mode"), || {
+                let (lambda, damping) = stiffest_mode(&solid, a_b, seed, 500);
+                Ok::<_, StabilityError>(Mode {
+                    a_b,
+                    seed,
+                    lambda,
+                    damping,
+                    dt_undamped: verlet_limit(lambda, 0.0),
+                })
+            })?;
             log(&format!(
                 "  a_B={a_b}: stiffest mode lambda = {:.4} k/m (unit damping gives it c = {:.4} /tau), undamped Verlet limit {:.4} tau",
                 mode.lambda, mode.damping, mode.dt_undamped
             ));
             report.modes.push(mode);
             for &gamma in &opts.gammas {
-                let limit = stable_limit(&solid, seed, a_b, gamma, opts, &mut |t| {
-                    log(&format!(
-                        "    a_B={a_b} Gamma={gamma} dt={:.5}: {} ({} steps, {:.1} s){}",
-                        t.dt,
-                        if t.stable { "stable" } else { "UNSTABLE" },
-                        t.steps,
-                        t.seconds,
-                        if t.reason.is_empty() {
-                            String::new()
-                        } else {
-                            format!(": {}", t.reason)
-                        }
+                let key = format!("seed-{seed}/aB{a_b}/gamma{gamma}");
+                let limit = runtime.part(&key, || {
+                    Ok::<_, StabilityError>(stable_limit(
+                        &solid,
+                        seed,
+                        a_b,
+                        gamma,
+                        opts,
+                        &mut |t| {
+                            log(&format!(
+                                "    a_B={a_b} Gamma={gamma} dt={:.5}: {} ({} steps, {:.1} s){}",
+                                t.dt,
+                                if t.stable { "stable" } else { "UNSTABLE" },
+                                t.steps,
+                                t.seconds,
+                                if t.reason.is_empty() {
+                                    String::new()
+                                } else {
+                                    format!(": {}", t.reason)
+                                }
+                            ))
+                        },
                     ))
-                });
+                })?;
                 log(&format!("  limit {}", limit.row()));
                 report.limits.push(limit);
             }
@@ -616,7 +638,8 @@ pub fn run_stability(
                     .iter()
                     .filter(|l| l.a_b == a_b && l.seed == seed)
                     .all(|l| !l.dt_stable.is_finite());
-                let row = match measure_moduli(
+                let row = runtime.part(&format!("aB{a_b}/moduli"), || {
+                    Ok::<_, StabilityError>(match measure_moduli(
                     &solid,
                     a_b,
                     opts.zero_net,
@@ -652,7 +675,8 @@ pub fn run_stability(
                         nu: f64::NAN,
                         error: Some(e.to_string()),
                     },
-                };
+                })
+                })?;
                 log(&format!(
                     "  a_B={a_b}: K = {:.4}, G = {:.4}, nu = {:.4}{}",
                     row.k,

@@ -204,7 +204,7 @@ impl BulkBuild {
 }
 
 /// What the builder reports besides the scene.
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, Serialize, serde::Deserialize)]
 pub struct BulkSummary {
     /// Particles.
     pub particles: usize,

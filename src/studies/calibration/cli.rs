@@ -1,6 +1,7 @@
 //! `bpm calibrate`: the calibration study from the command line.
 
 use crate::studies::calibration;
+use crate::studies::RuntimeArgs;
 use crate::studies::{command_line, print_line};
 use anyhow::Result;
 use std::path::PathBuf;
@@ -49,6 +50,8 @@ pub struct CalibrateArgs {
     /// without running anything (other options are ignored).
     #[arg(long)]
     from: Option<PathBuf>,
+    #[command(flatten)]
+    runtime: RuntimeArgs,
 }
 
 impl CalibrateArgs {
@@ -65,6 +68,7 @@ impl CalibrateArgs {
             strain,
             no_rate_check,
             from,
+            runtime,
         } = self;
         if let Some(path) = from {
             print_calibration_report(&calibration::replot(&path, &output)?);
@@ -85,11 +89,12 @@ impl CalibrateArgs {
         };
         opts.validate()?;
         let exe = std::env::current_exe()?;
+        let runtime = runtime.runtime("calibrate", &opts, threads)?;
         let done = calibration::calibrate(
             &opts,
             &output,
             &exe,
-            threads,
+            &runtime,
             &command_line(),
             &mut print_line,
         )?;

@@ -1,6 +1,7 @@
 //! `bpm stability`: the stability map from the command line.
 
 use crate::studies::stability;
+use crate::studies::RuntimeArgs;
 use crate::studies::{command_line, print_line};
 use anyhow::{Context, Result};
 use std::path::PathBuf;
@@ -55,6 +56,8 @@ pub struct StabilityArgs {
     /// (docs/model.md) instead of the paper's model.
     #[arg(long)]
     zero_net: bool,
+    #[command(flatten)]
+    runtime: RuntimeArgs,
 }
 
 impl StabilityArgs {
@@ -74,6 +77,7 @@ impl StabilityArgs {
             precision,
             no_moduli,
             zero_net,
+            runtime,
         } = self;
         let opts = stability::StabilityOptions {
             size,
@@ -92,7 +96,8 @@ impl StabilityArgs {
         opts.validate()?;
         std::fs::create_dir_all(&output)
             .with_context(|| format!("creating {}", output.display()))?;
-        let report = stability::run_stability(&opts, threads, &command_line(), &mut print_line)?;
+        let runtime = runtime.runtime("stability", &opts, threads)?;
+        let report = stability::run_stability(&opts, &runtime, &command_line(), &mut print_line)?;
         stability::write_report(&report, &output)?;
         println!(
             "\n{:>6} {:>6} {:>5} {:>10} {:>11} {:>7}",
