@@ -2,12 +2,14 @@
 
 #include "fix_bpm_granular_wall.h"
 
+#include "comm.h"
 #include "domain.h"
 #include "error.h"
 #include "force.h"
 #include "update.h"
 #include "utils.h"
 
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -42,6 +44,7 @@ FixBPMGranularWall::FixBPMGranularWall(LAMMPS *lmp, int narg, char **arg) :
   time_origin = update->ntimestep;
   dt_origin = update->dt;
   time_depend = 1;    // LAMMPS refuses reset_timestep while the plane moves with the step
+  restart_global = 1;
   vector_flag = 1;
   size_vector = 2;
   global_freq = 1;
@@ -104,4 +107,43 @@ double FixBPMGranularWall::compute_vector(int n)
     summed = 1;
   }
   return total_force;
+}
+
+// The plane's motion as defined (not its position now), so a run resumed
+// from the restart file puts the plane where the uninterrupted run does,
+// to the last bit; and whether the pair style has taken the wall yet.
+void FixBPMGranularWall::write_restart(FILE *fp)
+{
+  if (comm->me != 0) return;
+  double list[] = {(double) number, (double) axis,      (double) side, start,
+                   velocity,        (double) time_origin, dt_origin,     (double) fresh};
+  int size = sizeof(list);
+  fwrite(&size, sizeof(int), 1, fp);
+  fwrite(list, sizeof(double), sizeof(list) / sizeof(double), fp);
+}
+
+// Called when this fix is defined after read_restart with the ID of one in
+// the file: the wall must be the same; its plane goes on from the file.
+void FixBPMGranularWall::restart(char *buf)
+{
+  auto list = reinterpret_cast<double *>(buf);
+  if (list[0] != (double) number || list[1] != (double) axis || list[2] != (double) side ||
+      list[4] != velocity) {
+    auto wall = [](double n, int a, double s, double v) {
+      std::ostringstream text;
+      text.precision(17);
+      text << "number " << (int64_t) n << ", " << "xyz"[a] << (s > 0 ? " lo" : " hi")
+           << ", moving at " << v;
+      return text.str();
+    };
+    error->all(FLERR, std::string("fix ") + id + " bpm/granular/wall: the restart file's wall is " +
+                          wall(list[0], (int) list[1], list[2], list[4]) +
+                          "; this command defines " + wall((double) number, axis, side, velocity) +
+                          ". Define it as in the run that wrote the file, or under another fix "
+                          "ID for a new wall");
+  }
+  start = list[3];
+  time_origin = (bigint) list[5];
+  dt_origin = list[6];
+  fresh = (int) list[7];
 }

@@ -7,7 +7,9 @@
  * counts the wall as a contact of each atom touching it; the physics is
  * in the Rust kernels, this fix holds the wall's definition and reports
  * [1] the normal force on the wall (positive when pushed) and [2] its
- * position. See lammps-plugin/doc/pair_bpm_granular.md. */
+ * position. Restart files keep the plane's motion: the same fix defined
+ * after read_restart goes on where it was. See
+ * lammps-plugin/doc/pair_bpm_granular.md. */
 #ifndef LMP_FIX_BPM_GRANULAR_WALL_H
 #define LMP_FIX_BPM_GRANULAR_WALL_H
 
@@ -24,6 +26,8 @@ class FixBPMGranularWall : public Fix {
   void init() override;
   double compute_vector(int) override;
   void reset_dt() override;
+  void write_restart(FILE *) override;
+  void restart(char *) override;
 
   // The wall now; `fresh` until the pair style has taken it once.
   bpm_granular_wall current() const;

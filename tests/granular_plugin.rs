@@ -492,3 +492,108 @@ fn cross_check_runs_a_scene_file_through_both_engines() {
     assert!(!refused.status.success());
     assert!(String::from_utf8_lossy(&refused.stderr).contains("--ranks"));
 }
+
+/// The walls' motion goes into the restart file: a run between two
+/// moving walls (the upper one pressing on the spheres by the restart),
+/// resumed with the same walls defined again, ends where the run that
+/// wrote the file ends. Walls defined under new IDs start again where
+/// given (their springs unloaded), and the run goes elsewhere; a wall
+/// defined differently under a saved ID is refused.
+#[test]
+fn a_restart_keeps_the_walls_moving_from_where_they_were() {
+    use bpm::lammps::datafile::dem_pair_coeff;
+    let mut scene = closure_scene(false, DemLoading::Walls, 0, MultiContact::standard(1.0));
+    let walls = scene.stages[0].granular_walls.clone();
+    scene.stages.clear();
+    let dir = workdir();
+    let restart = dir.join("walls.restart");
+    let dump = |name: &str| dir.join(format!("walls-{name}.dump"));
+    let write = |name: &str| {
+        format!(
+            "write_dump      all custom {} id x y z fx fy fz tqx tqy tqz modify sort id format float %.17g\n",
+            dump(name).display()
+        )
+    };
+    let define_walls = |prefix: &str, velocity_scale: f64| -> String {
+        walls
+            .iter()
+            .enumerate()
+            .map(|(w, wall)| {
+                format!(
+                    "fix             {prefix}{w} all bpm/granular/wall {} {} {} {:.17e} {:.17e} {}\n",
+                    w + 1,
+                    ["x", "y", "z"][wall.axis],
+                    match wall.side {
+                        bpm::engine::WallSide::Lo => "lo",
+                        bpm::engine::WallSide::Hi => "hi",
+                    },
+                    wall.position,
+                    wall.velocity * velocity_scale,
+                    dem_pair_coeff(&wall.material, None, true)
+                )
+            })
+            .collect()
+    };
+    let motion = "fix             move all nve/sphere\ntimestep        0.01\n";
+    let continuous = dem_script(
+        &[],
+        &format!(
+            "{}{motion}run 400\nwrite_restart   {}\nrun 400\n{}",
+            define_walls("wall", 1.0),
+            restart.display(),
+            write("continuous")
+        ),
+    );
+    run_script(&scene, "walls-restart-write", &continuous).unwrap();
+    let resume = |name: &str, walls: &str| {
+        format!(
+            "units lj\nread_restart    {}\nnewton          off\ncomm_modify     vel yes\nneighbor        {} bin\nneigh_modify    delay 0 every 1 check yes\natom_modify     sort 0 0.0\n{walls}{motion}run 400\n{}",
+            restart.display(),
+            scene.force_field.skin,
+            write(name)
+        )
+    };
+    let positions = |name: &str| -> Vec<[f64; 3]> {
+        read_rows(&dump(name))
+            .iter()
+            .map(|r| [r[1], r[2], r[3]])
+            .collect()
+    };
+    let largest_shift = |a: &[[f64; 3]], b: &[[f64; 3]]| {
+        a.iter()
+            .zip(b)
+            .map(|(p, q)| common::dist(p, q))
+            .fold(0.0, f64::max)
+    };
+    let straight = positions("continuous");
+    run_script(
+        &scene,
+        "walls-restart-read",
+        &resume("resumed", &define_walls("wall", 1.0)),
+    )
+    .unwrap();
+    let shift = largest_shift(&straight, &positions("resumed"));
+    println!("walls through a restart: positions differ by {shift:e} d");
+    assert!(
+        shift <= tolerance("restart positions"),
+        "positions differ by {shift:e} d after the restart"
+    );
+    run_script(
+        &scene,
+        "walls-restart-new",
+        &resume("new-walls", &define_walls("fresh", 1.0)),
+    )
+    .unwrap();
+    let moved = largest_shift(&straight, &positions("new-walls"));
+    assert!(
+        moved > 1e-3,
+        "walls started afresh move the spheres by only {moved:e} d"
+    );
+    let refused = run_script(
+        &scene,
+        "walls-restart-other",
+        &resume("other", &define_walls("wall", 2.0)),
+    )
+    .unwrap_err();
+    assert!(refused.contains("the restart file's wall is"), "{refused}");
+}
