@@ -528,7 +528,14 @@ fn closures_are_calibrated_against_a_tiny_grain_study() {
         ..CalibrationOptions::default()
     };
     let out = dir.join("calibration");
-    let report = run_calibration(&opts, 1, &out, "test", false, &mut |_| {}).unwrap();
+    let report = run_calibration(
+        &opts,
+        &bpm::studies::StudyRuntime::plain(1, false),
+        &out,
+        "test",
+        &mut |_| {},
+    )
+    .unwrap();
     let study = &report.studies[0];
     assert_eq!(study.label, "grains");
     let laws: Vec<Law> = study.variants.iter().map(|v| v.law).collect();
@@ -597,9 +604,13 @@ fn closures_are_calibrated_against_a_tiny_grain_study() {
     record["runs"] = serde_json::json!([]);
     std::fs::write(&interrupted, record.to_string()).unwrap();
     let mut said = Vec::new();
-    let again = run_calibration(&opts, 1, &out, "test", false, &mut |m| {
-        said.push(m.to_string())
-    })
+    let again = run_calibration(
+        &opts,
+        &bpm::studies::StudyRuntime::plain(1, false),
+        &out,
+        "test",
+        &mut |m| said.push(m.to_string()),
+    )
     .unwrap();
     let count = |what: &str| said.iter().filter(|m| m.contains(what)).count();
     assert_eq!((count("reused"), count("incomplete")), (3, 1), "{said:?}");
@@ -614,17 +625,23 @@ fn closures_are_calibrated_against_a_tiny_grain_study() {
             grains: vec![study.variants[0].folder.clone()],
             ..opts.clone()
         },
-        1,
+        &bpm::studies::StudyRuntime::plain(1, false),
         &dir.join("wrong"),
         "test",
-        false,
         &mut |_| {},
     )
     .unwrap_err();
     assert!(e.to_string().contains("DEM spheres"), "{e}");
     // The grains' packing is rebuilt only with their thread count.
     assert_eq!(g.threads, Some(1));
-    let e = run_calibration(&opts, 2, &dir.join("wrong"), "test", false, &mut |_| {}).unwrap_err();
+    let e = run_calibration(
+        &opts,
+        &bpm::studies::StudyRuntime::plain(2, false),
+        &dir.join("wrong"),
+        "test",
+        &mut |_| {},
+    )
+    .unwrap_err();
     assert!(e.to_string().contains("--threads"), "{e}");
     let lammps = CompactOptions {
         engine: CompactionEngine::Lammps { ranks: 1 },

@@ -236,7 +236,7 @@ fn the_rigid_box_study_squeezes_a_single_sphere_as_hertz_says() {
         records: 30,
         ..BoxOptions::default()
     };
-    let report = run_box(&opts, "test").unwrap();
+    let report = run_box(&opts, "test", &bpm::studies::StudyRuntime::plain(1, false)).unwrap();
     let e = report.hydrogel.youngs_modulus;
     let (nu, wall) = (report.hydrogel.poisson_ratio, opts.wall_modulus);
     let e_eff = 1.0 / ((1.0 - nu * nu) / e + (1.0 - nu * nu) / wall);
@@ -467,7 +467,8 @@ fn a_small_bed_compresses_and_the_closures_stiffen_it() {
     assert!(bed.start_height > bed.edges[2] + 0.1, "built taller");
     let again = build_bed(&opts).unwrap();
     assert_eq!(bed.centres, again.centres, "the seed fixes the bed");
-    let (report, _) = run_compression(&opts, "test", false).unwrap();
+    let (report, _) =
+        run_compression(&opts, "test", &bpm::studies::StudyRuntime::plain(1, false)).unwrap();
     let built = bed.solid_volume() / (bed.edges[0] * bed.edges[1] * bed.start_height);
     for run in &report.runs {
         let ends: Vec<(f64, f64)> = run

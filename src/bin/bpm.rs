@@ -207,7 +207,7 @@ fn real_main() -> Result<()> {
         Command::AnalysePacking(args) => args.run(),
         Command::LargeStrain(args) => args.run(threads),
         Command::Stability(args) => args.run(threads),
-        Command::McBox(args) => args.run(),
+        Command::McBox(args) => args.run(threads),
         Command::McCompress(args) => args.run(threads),
         Command::McCalibrate(args) => args.run(threads),
         Command::McShear(args) => args.run(),

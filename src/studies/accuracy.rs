@@ -583,7 +583,12 @@ fn hertz_sweeps(
             s.radius, s.dt, s.speed, s.skin
         );
         let t = std::time::Instant::now();
-        let squeezed = squeeze_native(&scene, &tag, &crate::scene::RunOptions::quiet(threads));
+        let squeezed = squeeze_native(
+            &scene,
+            &tag,
+            &crate::studies::StudyRuntime::plain(threads, false),
+            &tag,
+        );
         let seconds = t.elapsed().as_secs_f64();
         let stage = match squeezed {
             Ok((stage, None)) => stage,

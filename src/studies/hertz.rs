@@ -16,9 +16,9 @@ use crate::reference::paper;
 use crate::scene::builders::grain::{build_grain, GrainKind, GrainParams, GrainSummary};
 use crate::scene::protocols::{hertz_squeeze, SqueezeParams};
 use crate::scene::rotation::{rotated, uniform_rotation};
+use crate::scene::StageOutput;
 use crate::scene::{ForceField, Scene};
-use crate::scene::{RunError, RunOptions, StageOutput};
-use crate::studies::{StudyRuntime, StudyStop};
+use crate::studies::StudyRuntime;
 use crate::verify::single_point::nan_max;
 use crate::verify::{HarnessError, LammpsLauncher};
 use rand::{Rng, SeedableRng};
@@ -250,27 +250,23 @@ pub(crate) fn gap_and_force(stage: &StageOutput) -> (Vec<f64>, Vec<f64>) {
 
 /// Squeezes natively. A squeeze that stops part of the way (a particle
 /// pushed onto a wall's plane) keeps its records up to there, with the
-/// reason; one stopped as asked (a signal, with a checkpoint in `run`)
-/// ends the study.
+/// reason; one stopped as asked (a signal, with a checkpoint in
+/// `runtime`, the run's part `key`) ends the study.
 pub(crate) fn squeeze_native(
     scene: &Scene,
     tag: &str,
-    run: &RunOptions,
+    runtime: &StudyRuntime,
+    key: &str,
 ) -> Result<(StageOutput, Option<String>), HertzError> {
     crate::scene::validate(scene).map_err(|cause| HarnessError::Scene {
         scene: tag.into(),
         cause,
     })?;
-    let mut sys = crate::scene::build_system(scene, run.threads);
-    let outcome = crate::scene::run::run_scene_outcome(&mut sys, scene, run);
-    let error = match outcome.error {
-        Some(RunError::Interrupted { checkpoint, .. }) => {
-            return Err(StudyStop::Interrupted(checkpoint).into())
-        }
-        Some(RunError::Checkpoint(e)) => return Err(StudyStop::Checkpoint(e).into()),
-        error => error.map(|e| e.to_string()),
-    };
-    match (outcome.stages.into_iter().next(), error) {
+    let outcome = runtime.run_scene(key, scene)?;
+    match (
+        outcome.stages.into_iter().next(),
+        outcome.error.map(|e| e.to_string()),
+    ) {
         (Some(stage), error) if stage.rows.len() > 1 => Ok((stage, error)),
         (_, error) => Err(HertzError::Run(HarnessError::Native {
             scene: tag.into(),
@@ -462,15 +458,15 @@ pub fn squeeze_grains(
             let scene = hertz_squeeze(&g, &params);
             let tag = format!("seed{seed}-rot{r}");
             let key = format!("{key_prefix}{tag}");
-            let run = RunOptions {
+            let runtime = StudyRuntime {
                 threads: opts.threads,
-                ..runtime.run_options(&key)
+                ..runtime.clone()
             };
             let s = runtime.part(&key, || -> Result<Squeeze, HertzError> {
                 let t = std::time::Instant::now();
                 let (stage, stopped) = match opts.engine {
                     SqueezeEngine::Native | SqueezeEngine::Both => {
-                        squeeze_native(&scene, &tag, &run)?
+                        squeeze_native(&scene, &tag, &runtime, &key)?
                     }
                     SqueezeEngine::Lammps => {
                         let mut run = launcher.run(&scene, &tag, 1, true)?;

@@ -17,6 +17,9 @@ pub struct StudyRuntime {
     pub progress: Progress,
     /// The study's checkpoint, if it keeps one.
     pub checkpoint: Option<StudyCheckpoint>,
+    /// Put before every key: a study run inside another keeps its parts
+    /// apart ([`StudyRuntime::scoped`]).
+    pub prefix: String,
 }
 
 impl StudyRuntime {
@@ -27,6 +30,16 @@ impl StudyRuntime {
             threads,
             progress: Progress::bars(bars),
             checkpoint: None,
+            prefix: String::new(),
+        }
+    }
+
+    /// The same runtime, its keys under `scope/`: for a study run as a
+    /// part of another (a compaction of each variant of a calibration).
+    pub fn scoped(&self, scope: &str) -> Self {
+        Self {
+            prefix: format!("{}{scope}/", self.prefix),
+            ..self.clone()
         }
     }
 
@@ -42,15 +55,42 @@ impl StudyRuntime {
         let Some(checkpoint) = &self.checkpoint else {
             return compute();
         };
-        if let Some(value) = checkpoint.finished(key).map_err(StudyStop::from)? {
+        let key = format!("{}{key}", self.prefix);
+        if let Some(value) = checkpoint.finished(&key).map_err(StudyStop::from)? {
             return Ok(value);
         }
         if checkpoint.stop_requested() {
             return Err(StudyStop::Interrupted(checkpoint.path()).into());
         }
         let value = compute()?;
-        checkpoint.finish(key, &value).map_err(StudyStop::from)?;
+        checkpoint.finish(&key, &value).map_err(StudyStop::from)?;
         Ok(value)
+    }
+
+    /// Runs `scene` natively as the study's run `key`, checkpointed into
+    /// the study's checkpoint and continued from it. A stop asked for,
+    /// or a checkpoint that cannot be written, ends the study; the run's
+    /// own failures (a blow-up) are in the outcome, as without a
+    /// checkpoint.
+    pub fn run_scene(
+        &self,
+        key: &str,
+        scene: &crate::scene::Scene,
+    ) -> Result<crate::scene::run::RunOutcome, StudyStop> {
+        use crate::scene::RunError;
+        let mut sys = crate::scene::build_system(scene, self.threads);
+        let mut outcome =
+            crate::scene::run::run_scene_outcome(&mut sys, scene, &self.run_options(key));
+        match outcome.error.take() {
+            Some(RunError::Interrupted { checkpoint, .. }) => {
+                Err(StudyStop::Interrupted(checkpoint))
+            }
+            Some(RunError::Checkpoint(e)) => Err(StudyStop::Checkpoint(e)),
+            error => {
+                outcome.error = error;
+                Ok(outcome)
+            }
+        }
     }
 
     /// The options of the study's native run `key`: checkpointed into the
@@ -60,7 +100,10 @@ impl StudyRuntime {
             threads: self.threads,
             progress: self.progress.clone(),
             files: Default::default(),
-            checkpoint: self.checkpoint.as_ref().map(|c| c.run_options(key)),
+            checkpoint: self
+                .checkpoint
+                .as_ref()
+                .map(|c| c.run_options(&format!("{}{key}", self.prefix))),
         }
     }
 }
@@ -106,6 +149,7 @@ impl RuntimeArgs {
             progress: Progress::new(self.quiet, self.progress_log.as_deref())
                 .context("opening the progress log")?,
             checkpoint: self.checkpoint.study(study, options, threads)?,
+            prefix: String::new(),
         })
     }
 }

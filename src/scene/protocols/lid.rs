@@ -309,7 +309,7 @@ fn check_bed(scene: &Scene, opts: &LidOptions) -> Result<(), LidError> {
 }
 
 /// The lid's history over every pass of a lid scene's run.
-#[derive(Clone, Debug, Default, PartialEq, Serialize)]
+#[derive(Clone, Debug, Default, PartialEq, Serialize, serde::Deserialize)]
 pub struct LidRows {
     /// Steps since the start of the first pass, per row (LIGGGHTS's
     /// `step` column for a deck that starts at step 0).

@@ -31,11 +31,10 @@ use crate::scene::datafile::{read_data_file, write_data_file};
 use crate::scene::model::{Mass, ModelKind};
 use crate::scene::protocols::{compaction_scene, CompactionProtocol};
 use crate::scene::run::Checkpoint;
-use crate::scene::run::{run_scene_outcome, RunError};
 use crate::scene::validate::{simbox_of, SceneError};
-use crate::scene::{build_system, write_scene, ForceField, Scene, StageOutput};
+use crate::scene::{write_scene, ForceField, Scene, StageOutput};
 use crate::studies::hertz::Moduli;
-use crate::studies::{StudyRuntime, StudyStop};
+use crate::studies::StudyRuntime;
 use crate::verify::LammpsLauncher;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
@@ -717,22 +716,14 @@ fn run_engine(
     bpm: Option<&Path>,
 ) -> Result<EngineRun, CompactionError> {
     let start = std::time::Instant::now();
-    let threads = runtime.threads;
     Ok(match engine {
         CompactionEngine::Native => {
-            let mut sys = build_system(scene, threads);
-            let outcome = run_scene_outcome(&mut sys, scene, &runtime.run_options(key));
-            match outcome.error {
-                Some(RunError::Interrupted { checkpoint, .. }) => {
-                    return Err(StudyStop::Interrupted(checkpoint).into())
-                }
-                Some(RunError::Checkpoint(e)) => return Err(StudyStop::Checkpoint(e).into()),
-                error => (
-                    outcome.stages,
-                    error.map(|e| e.to_string()),
-                    outcome.wall_seconds,
-                ),
-            }
+            let outcome = runtime.run_scene(key, scene)?;
+            (
+                outcome.stages,
+                outcome.error.map(|e| e.to_string()),
+                outcome.wall_seconds,
+            )
         }
         CompactionEngine::Lammps { ranks } => {
             let Some(bpm) = bpm else {

@@ -331,11 +331,11 @@ impl CalibrationOptions {
 fn study_in(
     opts: &CompactOptions,
     dir: &Path,
-    threads: usize,
+    runtime: &crate::studies::StudyRuntime,
     command: &str,
-    progress: bool,
     print: &mut dyn FnMut(&str),
 ) -> Result<CompactionReport, CompactionError> {
+    let threads = runtime.threads;
     if dir.join("compaction.json").exists() {
         match read_report(dir) {
             Ok(done) => {
@@ -360,8 +360,7 @@ fn study_in(
             Err(e) => print(&format!("{}: unreadable ({e}), run again", dir.display())),
         }
     }
-    let runtime = crate::studies::StudyRuntime::plain(threads, progress);
-    run_compaction(opts, &runtime, None, dir, command, print)
+    run_compaction(opts, runtime, None, dir, command, print)
 }
 
 /// A grain study checked before any sphere runs: bonded grains from a
@@ -577,14 +576,17 @@ fn best_fits(variants: &[VariantFit]) -> (Option<BestFit>, Option<BestFit>) {
 /// Runs (or reuses) every variant of every grain study, fits, and writes
 /// `dir/calibration.json`, `dir/calibration.svg` and `dir/calibration.txt`;
 /// each variant's study goes to `dir/<grains>/<law>/`.
+///
+/// With a checkpoint in `runtime`, each variant's compaction keeps its
+/// parts in it, under `<grains>/<law>/`.
 pub fn run_calibration(
     opts: &CalibrationOptions,
-    threads: usize,
+    runtime: &crate::studies::StudyRuntime,
     dir: &Path,
     command: &str,
-    progress: bool,
     print: &mut dyn FnMut(&str),
 ) -> Result<CalibrationReport, CompactionError> {
+    let threads = runtime.threads;
     opts.validate()?;
     let mut labels = std::collections::HashSet::new();
     let mut all_grains = Vec::new();
@@ -628,9 +630,8 @@ pub fn run_calibration(
             let spheres = study_in(
                 &opts.sphere_options(&grains, law),
                 &folder,
-                threads,
+                &runtime.scoped(&format!("{label}/{}", law.folder())),
                 command,
-                progress,
                 print,
             )?;
             studies.push((law, folder, spheres));

@@ -5,7 +5,7 @@ use crate::reference::multicontact;
 use crate::scene::protocols::lid::LidOptions;
 use crate::studies::mcdem::shear::{self, ContactLaw, Grid, SeriesSpec, ShearOptions};
 use crate::studies::mcdem::{calibration as mc_calibration, compression, lid, rigid_box, Closures};
-use crate::studies::{command_line, print_line};
+use crate::studies::{command_line, print_line, RuntimeArgs};
 use anyhow::{bail, Context, Result};
 use clap::ValueEnum;
 use std::io::IsTerminal;
@@ -71,11 +71,13 @@ pub struct McBoxArgs {
     records: u64,
     #[command(flatten)]
     closures: ClosureArgs,
+    #[command(flatten)]
+    runtime: RuntimeArgs,
 }
 
 impl McBoxArgs {
     /// `bpm mc-box`.
-    pub fn run(self) -> Result<()> {
+    pub fn run(self, threads: usize) -> Result<()> {
         let Self {
             output,
             diameter,
@@ -85,6 +87,7 @@ impl McBoxArgs {
             dt,
             records,
             closures,
+            runtime,
         } = self;
         let opts = rigid_box::BoxOptions {
             diameter,
@@ -95,7 +98,8 @@ impl McBoxArgs {
             records,
             closures: closures.into(),
         };
-        let report = rigid_box::run_box(&opts, &command_line())?;
+        let runtime = runtime.runtime("mc-box", &opts, threads)?;
+        let report = rigid_box::run_box(&opts, &command_line(), &runtime)?;
         rigid_box::write_report(&report, &output)?;
         println!("{}", rigid_box::table(&report));
         println!(
@@ -154,6 +158,8 @@ pub struct McCompressArgs {
     closures: ClosureArgs,
     #[command(flatten)]
     packing: PackingArgs,
+    #[command(flatten)]
+    runtime: RuntimeArgs,
 }
 
 /// `bpm mc-compress --packing`: the lid protocol on a bed from a data
@@ -226,6 +232,7 @@ impl McCompressArgs {
             seed,
             closures,
             packing,
+            runtime,
         } = self;
         if let Some(file) = &packing.packing {
             let lid = lid_options(
@@ -237,8 +244,8 @@ impl McCompressArgs {
                 dt,
                 &closures,
             )?;
-            let progress = std::io::stderr().is_terminal();
-            let (report, scenes) = lid::run_lid(&lid, &command_line(), threads, progress)?;
+            let runtime = runtime.runtime("mc-compress", &lid, threads)?;
+            let (report, scenes) = lid::run_lid(&lid, &command_line(), &runtime)?;
             lid::write_lid_report(&report, &scenes, &output)?;
             println!(
                 "{} spheres, {} steps per pass, lid at {:e} per time unit, skin {}",
@@ -286,8 +293,8 @@ impl McCompressArgs {
             closures: closures.into(),
         };
         opts.validate()?;
-        let progress = std::io::stderr().is_terminal();
-        let (report, scene) = compression::run_compression(&opts, &command_line(), progress)?;
+        let runtime = runtime.runtime("mc-compress", &opts, threads)?;
+        let (report, scene) = compression::run_compression(&opts, &command_line(), &runtime)?;
         compression::write_report(&report, &scene, &output)?;
         println!("{}", compression::table(&report));
         println!(
@@ -394,6 +401,8 @@ pub struct McCalibrateArgs {
     /// overlaps are too small for a correction to matter).
     #[arg(long, value_delimiter = ',', default_value = "0.1,0.3")]
     window: Vec<f64>,
+    #[command(flatten)]
+    runtime: RuntimeArgs,
 }
 
 impl McCalibrateArgs {
@@ -409,6 +418,7 @@ impl McCalibrateArgs {
             reach,
             volumetric_strain,
             window,
+            runtime,
         } = self;
         let [mu_s, mu_r, mu_t] = friction[..] else {
             bail!(
@@ -430,12 +440,12 @@ impl McCalibrateArgs {
             window: [lo, hi],
         };
         opts.validate()?;
+        let runtime = runtime.runtime("mc-calibrate", &opts, threads)?;
         let report = mc_calibration::run_calibration(
             &opts,
-            threads,
+            &runtime,
             &output,
             &command_line(),
-            std::io::stderr().is_terminal(),
             &mut print_line,
         )?;
         print!("{}", mc_calibration::table(&report));

@@ -20,7 +20,7 @@
 use super::{BoxWalls, Closures, Hydrogel, Variant, WalledBox};
 use crate::analysis::plot::{write_svg, Mark, Panel, PlotError, Series};
 use crate::file_error::FileError;
-use crate::scene::{build_system, run_scene, validate, Mass, RunOptions, Scene, StageSpec};
+use crate::scene::{validate, Mass, Scene, StageOutput, StageSpec};
 use rand::{Rng, SeedableRng};
 use rand_distr::{Distribution, Normal};
 use serde::Serialize;
@@ -97,6 +97,9 @@ pub enum CompressionError {
     /// A file could not be written.
     #[error(transparent)]
     File(#[from] FileError),
+    /// The study stopped before its end (its checkpoint continues it).
+    #[error(transparent)]
+    Stopped(#[from] crate::studies::StudyStop),
 }
 
 impl CompressionOptions {
@@ -321,7 +324,7 @@ pub fn largest_overlap(centres: &[[f64; 3]], radii: &[f64]) -> f64 {
 }
 
 /// One pass of the lid, recorded.
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, Serialize, serde::Deserialize)]
 pub struct Pass {
     /// "compress 1", "decompress 1", ...
     pub name: String,
@@ -336,7 +339,7 @@ pub struct Pass {
 }
 
 /// One closure's run.
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, Serialize, serde::Deserialize)]
 pub struct Run {
     /// The closure's name.
     pub variant: String,
@@ -482,13 +485,19 @@ pub fn scene(
     ))
 }
 
-/// Builds the bed and compresses it with every closure; `command` is
-/// recorded, `progress` shows progress bars.
+/// Builds the bed and compresses it with every closure (on one thread);
+/// `command` is recorded. With a checkpoint in `runtime`, each closure's
+/// run is kept in it as it finishes, and the run under way is continued.
 pub fn run_compression(
     opts: &CompressionOptions,
     command: &str,
-    progress: bool,
+    runtime: &crate::studies::StudyRuntime,
 ) -> Result<(CompressionReport, Scene), CompressionError> {
+    // One thread: the bed is too small for two to pay.
+    let runtime = crate::studies::StudyRuntime {
+        threads: 1,
+        ..runtime.clone()
+    };
     opts.validate()?;
     let hydrogel = Hydrogel::table_1(opts.mean_diameter);
     let bed = build_bed(opts)?;
@@ -500,24 +509,10 @@ pub fn run_compression(
     let mut runs = Vec::new();
     let mut first_scene = None;
     let mut steps_per_pass = 0;
-    for variant in &variants {
-        let scene = scene(&bed, variant, opts, &hydrogel)?;
-        let fail = |message: String| CompressionError::Run {
-            variant: variant.name.clone(),
-            message,
-        };
-        validate(&scene).map_err(|e| fail(e.to_string()))?;
-        steps_per_pass = scene.stages[1].steps;
-        let start = std::time::Instant::now();
-        let mut sys = build_system(&scene, 1);
-        let run_opts = RunOptions {
-            progress: crate::progress::Progress::bars(progress),
-            ..RunOptions::quiet(1)
-        };
-        let (outputs, err) = run_scene(&mut sys, &scene, &run_opts);
-        let passes = outputs
+    let read_passes = |stages: &[StageOutput], specs: &[StageSpec]| -> Vec<Pass> {
+        stages
             .iter()
-            .zip(&scene.stages)
+            .zip(specs)
             .map(|(stage, spec)| {
                 let walls = BoxWalls::read(stage, [lx, ly], hydrogel.youngs_modulus);
                 Pass {
@@ -527,13 +522,27 @@ pub fn run_compression(
                     walls,
                 }
             })
-            .collect();
-        runs.push(Run {
+            .collect()
+    };
+    for variant in &variants {
+        let scene = scene(&bed, variant, opts, &hydrogel)?;
+        let fail = |message: String| CompressionError::Run {
             variant: variant.name.clone(),
-            passes,
-            seconds: start.elapsed().as_secs_f64(),
-            stopped: err.map(|e| e.to_string()),
-        });
+            message,
+        };
+        validate(&scene).map_err(|e| fail(e.to_string()))?;
+        steps_per_pass = scene.stages[1].steps;
+        let run = runtime.part(&variant.name, || {
+            let outcome = runtime.run_scene(&variant.name, &scene)?;
+            let passes = read_passes(&outcome.stages, &scene.stages);
+            Ok::<_, CompressionError>(Run {
+                variant: variant.name.clone(),
+                passes,
+                seconds: outcome.wall_seconds,
+                stopped: outcome.error.map(|e| e.to_string()),
+            })
+        })?;
+        runs.push(run);
         first_scene.get_or_insert(scene);
     }
     let report = CompressionReport {

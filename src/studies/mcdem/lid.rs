@@ -8,7 +8,7 @@ use crate::analysis::plot::{write_svg, Mark, Panel, PlotError, Series};
 use crate::engine::MultiContact;
 use crate::file_error::FileError;
 use crate::scene::protocols::lid::{lid_scene, LidError, LidOptions, LidRows};
-use crate::scene::{build_system, run_scene, RunOptions, Scene};
+use crate::scene::Scene;
 use serde::Serialize;
 use std::path::Path;
 
@@ -32,6 +32,9 @@ pub enum LidStudyError {
     /// Writing the plot.
     #[error(transparent)]
     Plot(#[from] PlotError),
+    /// The study stopped before its end (its checkpoint continues it).
+    #[error(transparent)]
+    Stopped(#[from] crate::studies::StudyStop),
 }
 
 /// The contact laws compared: plain Hertz and the standard closure at the
@@ -50,7 +53,7 @@ pub fn lid_variants(opts: &LidOptions) -> Vec<Variant> {
 }
 
 /// One contact law's run: the lid's rows over every pass.
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, Serialize, serde::Deserialize)]
 pub struct LidRun {
     /// The contact law.
     pub variant: String,
@@ -82,35 +85,31 @@ pub struct LidReport {
     pub runs: Vec<LidRun>,
 }
 
-/// Runs the lid protocol with each contact law; `progress` shows progress
-/// bars.
+/// Runs the lid protocol with each contact law. With a checkpoint in
+/// `runtime`, each law's run is kept in it as it finishes, and the run
+/// under way is continued.
 pub fn run_lid(
     opts: &LidOptions,
     command: &str,
-    threads: usize,
-    progress: bool,
+    runtime: &crate::studies::StudyRuntime,
 ) -> Result<(LidReport, Vec<Scene>), LidStudyError> {
     let mut runs = Vec::new();
     let mut scenes = Vec::new();
     for variant in lid_variants(opts) {
         let scene = lid_scene(opts, variant.multicontact, &variant.name)?;
-        let start = std::time::Instant::now();
-        let mut sys = build_system(&scene, threads);
-        let run_opts = RunOptions {
-            progress: crate::progress::Progress::bars(progress),
-            ..RunOptions::quiet(threads)
-        };
-        let (outputs, err) = run_scene(&mut sys, &scene, &run_opts);
-        let rows = LidRows::read(&outputs).map_err(|message| LidStudyError::Run {
-            variant: variant.name.clone(),
-            message,
+        let run = runtime.part(&variant.name, || {
+            let outcome = runtime.run_scene(&variant.name, &scene)?;
+            let rows = LidRows::read(&outcome.stages).map_err(|message| LidStudyError::Run {
+                variant: variant.name.clone(),
+                message,
+            })?;
+            Ok::<_, LidStudyError>(LidRun {
+                variant: variant.name.clone(),
+                rows,
+                seconds: outcome.wall_seconds,
+                stopped: outcome.error.map(|e| e.to_string()),
+            })
         })?;
-        let run = LidRun {
-            variant: variant.name.clone(),
-            rows,
-            seconds: start.elapsed().as_secs_f64(),
-            stopped: err.map(|e| e.to_string()),
-        };
         runs.push(run);
         scenes.push(scene);
     }

@@ -167,7 +167,7 @@ impl WalledBox {
 /// What a stage records of a box whose granular wall 0 is the floor, 1
 /// the lid and 2 to 5 the side walls (x lo, x hi, y lo, y hi), per
 /// recorded row.
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, Serialize, serde::Deserialize)]
 pub struct BoxWalls {
     /// Lid position (d); not written out (the studies give the lid's
     /// displacement or the volume fraction instead).

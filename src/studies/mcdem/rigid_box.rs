@@ -15,7 +15,7 @@
 use super::{BoxWalls, Closures, Hydrogel, Variant, WalledBox};
 use crate::analysis::plot::{write_svg, Mark, Panel, PlotError, Series};
 use crate::file_error::FileError;
-use crate::scene::{build_system, run_scene, validate, Mass, RunOptions, Scene, StageSpec};
+use crate::scene::{validate, Mass, Scene, StageSpec};
 use serde::Serialize;
 use std::path::Path;
 
@@ -77,6 +77,9 @@ pub enum BoxError {
     /// A file could not be written.
     #[error(transparent)]
     File(#[from] FileError),
+    /// The study stopped before its end (its checkpoint continues it).
+    #[error(transparent)]
+    Stopped(#[from] crate::studies::StudyStop),
 }
 
 impl BoxOptions {
@@ -115,7 +118,7 @@ impl BoxOptions {
 }
 
 /// The two arrangements.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, serde::Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Arrangement {
     /// One sphere in a cube of edge `d`.
@@ -155,7 +158,7 @@ impl Arrangement {
 }
 
 /// One squeeze: stresses against the lid's displacement.
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, Serialize, serde::Deserialize)]
 pub struct Curve {
     /// The arrangement.
     pub arrangement: Arrangement,
@@ -225,8 +228,18 @@ pub fn scene(
     )
 }
 
-/// Runs every arrangement with every closure; `command` is recorded.
-pub fn run_box(opts: &BoxOptions, command: &str) -> Result<BoxReport, BoxError> {
+/// Runs every arrangement with every closure (on one thread); `command`
+/// is recorded. With a checkpoint in `runtime`, each squeeze is kept in it
+/// as it finishes, and the one under way is continued.
+pub fn run_box(
+    opts: &BoxOptions,
+    command: &str,
+    runtime: &crate::studies::StudyRuntime,
+) -> Result<BoxReport, BoxError> {
+    let runtime = crate::studies::StudyRuntime {
+        threads: 1,
+        ..runtime.clone()
+    };
     opts.validate()?;
     let hydrogel = Hydrogel::table_1(opts.diameter);
     let variants = opts.closures.variants();
@@ -242,19 +255,22 @@ pub fn run_box(opts: &BoxOptions, command: &str) -> Result<BoxReport, BoxError> 
             };
             validate(&scene).map_err(|e| fail(e.to_string()))?;
             steps = scene.stages[0].steps;
-            let mut sys = build_system(&scene, 1);
-            let (outputs, err) = run_scene(&mut sys, &scene, &RunOptions::quiet(1));
-            if let Some(err) = err {
-                return Err(fail(err.to_string()));
-            }
-            let edge = scene.simbox.lengths[0] - 1.0;
-            let walls = BoxWalls::read(&outputs[0], [edge; 2], hydrogel.youngs_modulus);
-            curves.push(Curve {
-                arrangement,
-                variant: variant.name.clone(),
-                displacement: walls.lid.iter().map(|z| (edge - z) / 0.5).collect(),
-                walls,
-            });
+            let key = format!("{}/{}", arrangement.name(), variant.name);
+            let curve = runtime.part(&key, || {
+                let outcome = runtime.run_scene(&key, &scene)?;
+                if let Some(err) = outcome.error {
+                    return Err(fail(err.to_string()));
+                }
+                let edge = scene.simbox.lengths[0] - 1.0;
+                let walls = BoxWalls::read(&outcome.stages[0], [edge; 2], hydrogel.youngs_modulus);
+                Ok(Curve {
+                    arrangement,
+                    variant: variant.name.clone(),
+                    displacement: walls.lid.iter().map(|z| (edge - z) / 0.5).collect(),
+                    walls,
+                })
+            })?;
+            curves.push(curve);
         }
     }
     Ok(BoxReport {
