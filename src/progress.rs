@@ -13,6 +13,25 @@ use std::path::{Path, PathBuf};
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant, SystemTime, UNIX_EPOCH};
 
+/// `--quiet` and `--progress-log`, as every long command takes them.
+#[derive(Clone, Debug, Default, clap::Args)]
+pub struct ProgressArgs {
+    /// No progress bars (they are drawn only when stderr is a terminal).
+    #[arg(long)]
+    pub quiet: bool,
+    /// Append progress as JSON lines to this file (for batch jobs): a line
+    /// per stage start and finish, and one every 10 s.
+    #[arg(long)]
+    pub progress_log: Option<PathBuf>,
+}
+
+impl ProgressArgs {
+    /// The progress these options ask for.
+    pub fn progress(&self) -> std::io::Result<Progress> {
+        Progress::new(self.quiet, self.progress_log.as_deref())
+    }
+}
+
 /// Where progress goes: bars on stderr, a JSON-lines log, both or neither.
 #[derive(Clone, Debug, Default)]
 pub struct Progress {

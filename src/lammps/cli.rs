@@ -1,7 +1,7 @@
 //! `bpm run`: a scene through the native engine, or through LAMMPS with
 //! our styles in this process (under `mpirun`, on every rank).
 
-use crate::progress::Progress;
+use crate::progress::ProgressArgs;
 use crate::scene::checkpoint::CheckpointArgs;
 use crate::scene::{
     final_scene as final_scene_of, read_scene, run_native_report, write_scene, DumpOptions,
@@ -58,13 +58,8 @@ pub struct RunArgs {
     dump_forces: bool,
     #[command(flatten)]
     checkpoint: CheckpointArgs,
-    /// No progress bars (they are drawn only when stderr is a terminal).
-    #[arg(long)]
-    quiet: bool,
-    /// Append progress as JSON lines to this file (for batch jobs): a line
-    /// per stage start and finish, and one every 10 s.
-    #[arg(long)]
-    progress_log: Option<PathBuf>,
+    #[command(flatten)]
+    progress: ProgressArgs,
 }
 
 impl RunArgs {
@@ -82,11 +77,9 @@ impl RunArgs {
             dump_every,
             dump_forces,
             checkpoint,
-            quiet,
-            progress_log,
+            progress,
         } = self;
-        let progress =
-            Progress::new(quiet, progress_log.as_deref()).context("opening the progress log")?;
+        let progress = progress.progress().context("opening the progress log")?;
         let files = OutputFiles {
             thermo,
             dump: dump.map(|path| DumpOptions {

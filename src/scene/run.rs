@@ -14,7 +14,7 @@ use crate::engine::{
 use crate::progress::Progress;
 use rand::{Rng, SeedableRng};
 use std::borrow::Cow;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 /// Where a run streams its trajectory and thermo rows.
 #[derive(Clone, Debug, Default)]
@@ -150,21 +150,26 @@ impl Recorders {
                 reason,
             })
         };
+        // The files of the checkpoint, and those asked for now.
+        let mismatch = |what: &str, saved: Option<&Path>, asked: Option<&Path>| {
+            let name = |p: Option<&Path>| p.map_or("no file".into(), |p| p.display().to_string());
+            refused(format!(
+                "it {what} {}, this run asks for {}",
+                name(saved),
+                name(asked)
+            ))
+        };
         let thermo = match (&files.thermo, &checkpoint.thermo) {
             (None, None) => None,
             (Some(path), Some(saved)) if *path == saved.path => {
                 Some(ThermoWriter::reopen(path, saved.length)?)
             }
             (asked, saved) => {
-                return Err(refused(format!(
-                    "it streamed thermo rows to {}, this run asks for {}",
-                    saved
-                        .as_ref()
-                        .map_or("no file".into(), |s| s.path.display().to_string()),
-                    asked
-                        .as_ref()
-                        .map_or("no file".into(), |p| p.display().to_string())
-                )))
+                return Err(mismatch(
+                    "streamed thermo rows to",
+                    saved.as_ref().map(|s| s.path.as_path()),
+                    asked.as_deref(),
+                ))
             }
         };
         let dump = match (&files.dump, &checkpoint.dump) {
@@ -175,15 +180,11 @@ impl Recorders {
                 d.forces,
             )),
             (asked, saved) => {
-                return Err(refused(format!(
-                    "it wrote a dump to {}, this run asks for {}",
-                    saved
-                        .as_ref()
-                        .map_or("no file".into(), |s| s.path.display().to_string()),
-                    asked
-                        .as_ref()
-                        .map_or("no file".into(), |d| d.path.display().to_string())
-                )))
+                return Err(mismatch(
+                    "wrote a dump to",
+                    saved.as_ref().map(|s| s.path.as_path()),
+                    asked.as_ref().map(|d| d.path.as_path()),
+                ))
             }
         };
         Ok(Self {

@@ -2,10 +2,9 @@
 //! and the checkpoint that keeps its finished parts and its run under way;
 //! and the command-line options that set them.
 
-use crate::progress::Progress;
+use crate::progress::{Progress, ProgressArgs};
 use crate::scene::checkpoint::{CheckpointArgs, CheckpointError, StudyCheckpoint};
 use anyhow::Context;
-use std::path::PathBuf;
 
 /// How a study runs, beside what it runs: threads, progress, and the
 /// checkpoint that keeps its finished parts and its run under way.
@@ -126,13 +125,8 @@ pub enum StudyStop {
 pub struct RuntimeArgs {
     #[command(flatten)]
     checkpoint: CheckpointArgs,
-    /// No progress bars (they are drawn only when stderr is a terminal).
-    #[arg(long)]
-    quiet: bool,
-    /// Append progress as JSON lines to this file (for batch jobs): a line
-    /// per run's stage start and finish, and one every 10 s.
-    #[arg(long)]
-    progress_log: Option<PathBuf>,
+    #[command(flatten)]
+    progress: ProgressArgs,
 }
 
 impl RuntimeArgs {
@@ -146,7 +140,9 @@ impl RuntimeArgs {
     ) -> anyhow::Result<StudyRuntime> {
         Ok(StudyRuntime {
             threads,
-            progress: Progress::new(self.quiet, self.progress_log.as_deref())
+            progress: self
+                .progress
+                .progress()
                 .context("opening the progress log")?,
             checkpoint: self.checkpoint.study(study, options, threads)?,
             prefix: String::new(),

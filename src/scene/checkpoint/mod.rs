@@ -281,13 +281,18 @@ impl RunCheckpoint<'_> {
             )));
         }
         if self.threads != threads {
-            return Err(refused(format!(
-                "it was written with --threads {}; resume with --threads {} (results are bit-reproducible for a fixed thread count only)",
-                self.threads, self.threads
-            )));
+            return Err(refused(other_threads(self.threads)));
         }
         Ok(())
     }
+}
+
+/// Why a checkpoint written with `--threads saved` is refused for another
+/// count.
+fn other_threads(saved: usize) -> String {
+    format!(
+        "it was written with --threads {saved}; resume with --threads {saved} (results are bit-reproducible for a fixed thread count only)"
+    )
 }
 
 /// Writes `value` as a checkpoint file at `path`, through a temporary

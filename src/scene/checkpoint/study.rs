@@ -5,8 +5,8 @@
 //! way from its last checkpoint.
 
 use super::{
-    read_checked, write_atomically, CheckpointError, CheckpointEvery, CheckpointOptions,
-    CheckpointTarget, RunCheckpoint, CHECKPOINT_FORMAT,
+    other_threads, read_checked, write_atomically, CheckpointError, CheckpointEvery,
+    CheckpointOptions, CheckpointTarget, RunCheckpoint, CHECKPOINT_FORMAT,
 };
 use serde::de::DeserializeOwned;
 use serde::{Deserialize, Serialize};
@@ -93,10 +93,7 @@ impl StudyCheckpoint {
                 )));
             }
             if file.threads != threads {
-                return Err(refused(format!(
-                    "it was written with --threads {}; resume with --threads {} (results are bit-reproducible for a fixed thread count only)",
-                    file.threads, file.threads
-                )));
+                return Err(refused(other_threads(file.threads)));
             }
             state.parts = file.parts.into_owned();
             state.saved_run = file
