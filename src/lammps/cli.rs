@@ -121,9 +121,13 @@ impl RunArgs {
             write_scene(&final_path, &final_scene_of(&scene, &sys))?;
         }
         for s in &report.stages {
+            let steps = match s.stopped_at {
+                Some(done) => format!("{done} of {}", s.steps),
+                None => s.steps.to_string(),
+            };
             println!(
                 "stage {:<12} {:>9} steps  {:>8.2} s  neighbour builds {}",
-                s.name, s.steps, s.wall_seconds, s.neighbour_builds
+                s.name, steps, s.wall_seconds, s.neighbour_builds
             );
         }
         if let Some(e) = report.error {
