@@ -76,6 +76,7 @@ pub fn scratch_dir(name: &str) -> std::path::PathBuf {
 
 /// Every observable of a native-against-LAMMPS comparison of `name` within
 /// its `trajectory` tolerance (a missing tolerance fails too).
+#[cfg(feature = "lammps")]
 pub fn assert_within_trajectory_tolerances(name: &str, deviations: &[bpm::verify::Deviation]) {
     for d in deviations {
         let tol = bpm::verify::tolerances::tolerance(&format!("trajectory {}", d.observable));
