@@ -216,3 +216,46 @@ impl Task {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_log_has_a_line_per_start_update_and_finish_with_rate_and_time_left() {
+        let path = std::env::temp_dir().join(format!("bpm-progress-{}.jsonl", std::process::id()));
+        let _ = std::fs::remove_file(&path);
+        let progress = Progress::new(true, Some(&path))
+            .unwrap()
+            .log_every(Duration::ZERO);
+        assert!(!progress.shows_bars());
+        // A resumed task: 100 of 400 steps done before this session.
+        let mut task = progress.task("stage", 400, 100, true);
+        std::thread::sleep(Duration::from_millis(20));
+        task.set(200);
+        task.finish(400);
+        let lines: Vec<serde_json::Value> = std::fs::read_to_string(&path)
+            .unwrap()
+            .lines()
+            .map(|l| serde_json::from_str(l).unwrap())
+            .collect();
+        let events: Vec<(&str, u64)> = lines
+            .iter()
+            .map(|l| (l["event"].as_str().unwrap(), l["done"].as_u64().unwrap()))
+            .collect();
+        assert_eq!(events, [("start", 100), ("progress", 200), ("finish", 400)]);
+        assert!(lines[0]["rate_per_s"].is_null(), "no rate before a step");
+        // The rate counts this session's 100 steps only, and the time left
+        // is the 200 steps to go at that rate.
+        let rate = lines[1]["rate_per_s"].as_f64().unwrap();
+        let elapsed = lines[1]["elapsed_s"].as_f64().unwrap();
+        assert!(
+            (rate * elapsed - 100.0).abs() < 1e-6 * 100.0,
+            "{rate} {elapsed}"
+        );
+        let eta = lines[1]["eta_s"].as_f64().unwrap();
+        assert!((eta * rate - 200.0).abs() < 1e-6 * 200.0, "{eta} {rate}");
+        assert_eq!(lines[2]["eta_s"].as_f64(), Some(0.0));
+        let _ = std::fs::remove_file(&path);
+    }
+}
