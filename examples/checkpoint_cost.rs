@@ -7,7 +7,7 @@
 //!     cargo run --release --example checkpoint_cost -- 20 5
 
 use bpm::scene::builders::bulk::{build_bulk, BulkParams};
-use bpm::scene::checkpoint::{scene_identity, RunCheckpoint, CHECKPOINT_FORMAT};
+use bpm::scene::checkpoint::{scene_identity, RunCheckpoint};
 use bpm::scene::{build_system, run_scene, ForceField, RunOptions, StageSpec};
 use std::borrow::Cow;
 use std::time::Instant;
@@ -39,8 +39,6 @@ fn main() -> anyhow::Result<()> {
     for _ in 0..repeats {
         let t = Instant::now();
         let checkpoint = RunCheckpoint {
-            format: CHECKPOINT_FORMAT,
-            version: Cow::Borrowed(bpm::VERSION),
             scene: scene_identity(&scene),
             threads: 1,
             finished: Cow::Borrowed(&[]),

@@ -216,11 +216,13 @@ fn a_checkpoint_of_another_run_or_a_damaged_one_is_refused() {
     let message = resume_error(&dir, &scene, 1);
     assert!(message.contains("not a bpm checkpoint"), "{message}");
 
-    // Another version of the program.
-    std::fs::write(&path, &good).unwrap();
-    let mut saved = RunCheckpoint::read(&path, &scene, 1).unwrap();
-    saved.version = "0.0.1".into();
-    saved.write(&path).unwrap();
+    // Another version of the program: its header line names it.
+    let format = bpm::scene::checkpoint::CHECKPOINT_FORMAT;
+    let header = format!("bpm checkpoint format {format} version {}\n", bpm::VERSION);
+    assert!(good.starts_with(header.as_bytes()), "the header line");
+    let mut other = format!("bpm checkpoint format {format} version 0.0.1\n").into_bytes();
+    other.extend_from_slice(&good[header.len()..]);
+    std::fs::write(&path, other).unwrap();
     let message = resume_error(&dir, &scene, 1);
     assert!(message.contains("written by bpm 0.0.1"), "{message}");
 

@@ -434,6 +434,10 @@ pub fn squeeze_grains(
     let e_eff = effective_modulus(opts.moduli.k, opts.moduli.nu);
     let mut params = SqueezeParams::paper(radius, opts.max_overlap);
     params.records = opts.records;
+    let runtime = &StudyRuntime {
+        threads: opts.threads,
+        ..runtime.clone()
+    };
     let mut squeezes = Vec::new();
     for Grain {
         seed,
@@ -458,15 +462,11 @@ pub fn squeeze_grains(
             let scene = hertz_squeeze(&g, &params);
             let tag = format!("seed{seed}-rot{r}");
             let key = format!("{key_prefix}{tag}");
-            let runtime = StudyRuntime {
-                threads: opts.threads,
-                ..runtime.clone()
-            };
             let s = runtime.part(&key, || -> Result<Squeeze, HertzError> {
                 let t = std::time::Instant::now();
                 let (stage, stopped) = match opts.engine {
                     SqueezeEngine::Native | SqueezeEngine::Both => {
-                        squeeze_native(&scene, &tag, &runtime, &key)?
+                        squeeze_native(&scene, &tag, runtime, &key)?
                     }
                     SqueezeEngine::Lammps => {
                         let mut run = launcher.run(&scene, &tag, 1, true)?;

@@ -581,8 +581,10 @@ mod tests {
         (e / (2.0 * (1.0 - nu * nu)), g / (2.0 * (2.0 - nu)))
     }
 
-    #[test]
-    fn contact_torques_conserve_angular_momentum() {
+    /// Two spheres in contact, sliding and spinning, with rolling and
+    /// twisting friction on: coefficients, the spheres and their
+    /// separation.
+    fn spinning_pair() -> (GranularCoeffs, Sphere, Sphere, [f64; 3]) {
         let m = GranularMaterial {
             rolling: Some(SpringDashpotSlider {
                 stiffness: 20.0,
@@ -606,6 +608,12 @@ mod tests {
             mass: 2.0,
         };
         let del = [1.2, 0.9, -0.7];
+        (c, si, sj, del)
+    }
+
+    #[test]
+    fn contact_torques_conserve_angular_momentum() {
+        let (c, si, sj, del) = spinning_pair();
         let mut h = ContactHistory::default();
         for _ in 0..50 {
             let out = granular_contact(&c, &del, &si, &sj, &mut h, 0.01, true);
@@ -622,31 +630,9 @@ mod tests {
 
     #[test]
     fn forces_turn_with_the_frame() {
-        let m = GranularMaterial {
-            rolling: Some(SpringDashpotSlider {
-                stiffness: 20.0,
-                damping: 0.3,
-                friction: 0.1,
-            }),
-            twisting: Twisting::Marshall,
-            ..material()
-        };
-        let c = GranularCoeffs::of(&m);
+        let (c, si, sj, del) = spinning_pair();
         // A rotation by 90 degrees about z: (x, y, z) -> (-y, x, z).
         let turn = |a: [f64; 3]| [-a[1], a[0], a[2]];
-        let si = Sphere {
-            v: [0.01, -0.02, 0.03],
-            omega: [0.1, 0.2, -0.3],
-            radius: 0.8,
-            mass: 1.3,
-        };
-        let sj = Sphere {
-            v: [-0.01, 0.04, 0.0],
-            omega: [-0.2, 0.05, 0.1],
-            radius: 1.1,
-            mass: 2.0,
-        };
-        let del = [1.2, 0.9, -0.7];
         let rot = |s: &Sphere| Sphere {
             v: turn(s.v),
             omega: turn(s.omega),

@@ -30,8 +30,9 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
-/// The first bytes of every checkpoint file.
-const MAGIC: &[u8] = b"bpm checkpoint\n";
+/// The first bytes of every checkpoint file, before its header line
+/// `format F version V`.
+const MAGIC: &[u8] = b"bpm checkpoint ";
 
 /// The layout of [`RunCheckpoint`]; raised whenever it changes.
 pub const CHECKPOINT_FORMAT: u32 = 1;
@@ -214,10 +215,6 @@ pub struct StageProgress<'a> {
 /// Everything needed to continue a native run.
 #[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct RunCheckpoint<'a> {
-    /// [`CHECKPOINT_FORMAT`] when written.
-    pub format: u32,
-    /// The version of this program that wrote it.
-    pub version: Cow<'a, str>,
     /// The scene's identity ([`scene_identity`]).
     pub scene: String,
     /// Threads of the force passes.
@@ -308,7 +305,9 @@ fn write_atomically<T: Serialize>(path: &Path, value: &T) -> Result<(), Checkpoi
     let partial = path.with_file_name(name);
     let file = std::fs::File::create(&partial).map_err(io)?;
     let mut out = std::io::BufWriter::new(file);
-    out.write_all(MAGIC).map_err(io)?;
+    out.write_all(MAGIC)
+        .and_then(|_| writeln!(out, "format {CHECKPOINT_FORMAT} version {}", crate::VERSION))
+        .map_err(io)?;
     ciborium::into_writer(value, &mut out).map_err(|e| CheckpointError::Io {
         path: path.to_path_buf(),
         cause: std::io::Error::other(e.to_string()),
@@ -329,25 +328,23 @@ fn read_checked<T: serde::de::DeserializeOwned>(path: &Path) -> Result<T, Checkp
         path: path.to_path_buf(),
         reason,
     };
-    let Some(body) = bytes.strip_prefix(MAGIC) else {
-        return Err(malformed("it is not a bpm checkpoint file".into()));
-    };
-    // The format and version are read first, so a checkpoint of another
-    // layout is refused by name, not by a decoding error.
-    #[derive(Deserialize)]
-    struct Header {
-        format: u32,
-        version: String,
-    }
-    let header: Header = ciborium::from_reader(body)
-        .map_err(|e| malformed(format!("damaged or truncated ({e})")))?;
-    if header.format != CHECKPOINT_FORMAT || header.version != crate::VERSION {
+    let not_ours = || malformed("it is not a bpm checkpoint file".into());
+    let rest = bytes.strip_prefix(MAGIC).ok_or_else(not_ours)?;
+    // The header line names the format and version, so a checkpoint of
+    // another layout is refused by name, before its body is decoded.
+    let end = rest.iter().position(|&b| b == b'\n').ok_or_else(not_ours)?;
+    let (header, body) = (String::from_utf8_lossy(&rest[..end]), &rest[end + 1..]);
+    let ours = format!("format {CHECKPOINT_FORMAT} version {}", crate::VERSION);
+    if header != ours {
+        let words: Vec<&str> = header.split(' ').collect();
+        let (format, version) = match words[..] {
+            ["format", f, "version", v] => (f, v),
+            _ => return Err(not_ours()),
+        };
         return Err(CheckpointError::Refused {
             path: path.to_path_buf(),
             reason: format!(
-                "it was written by bpm {} (checkpoint format {}); this is bpm {} (format {CHECKPOINT_FORMAT}): rerun from the start with this version",
-                header.version,
-                header.format,
+                "it was written by bpm {version} (checkpoint format {format}); this is bpm {} (format {CHECKPOINT_FORMAT}): rerun from the start with this version",
                 crate::VERSION
             ),
         });
@@ -418,8 +415,6 @@ impl Checkpointer {
         dump: Option<StreamedFile>,
     ) -> Result<(), CheckpointError> {
         let checkpoint = RunCheckpoint {
-            format: CHECKPOINT_FORMAT,
-            version: Cow::Borrowed(crate::VERSION),
             scene: self.scene.clone(),
             threads: self.threads,
             finished: Cow::Borrowed(finished),

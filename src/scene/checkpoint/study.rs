@@ -6,7 +6,7 @@
 
 use super::{
     other_threads, read_checked, write_atomically, CheckpointError, CheckpointEvery,
-    CheckpointOptions, CheckpointTarget, RunCheckpoint, CHECKPOINT_FORMAT,
+    CheckpointOptions, CheckpointTarget, RunCheckpoint,
 };
 use serde::de::DeserializeOwned;
 use serde::{Deserialize, Serialize};
@@ -40,8 +40,6 @@ struct State {
 /// The file's layout.
 #[derive(Serialize, Deserialize)]
 struct StudyFile<'a> {
-    format: u32,
-    version: Cow<'a, str>,
     study: Cow<'a, str>,
     options: Cow<'a, str>,
     threads: usize,
@@ -209,8 +207,6 @@ impl StudyCheckpoint {
 impl State {
     fn write(&self, run: Option<(&str, &RunCheckpoint<'_>)>) -> Result<(), CheckpointError> {
         let file = StudyFile {
-            format: CHECKPOINT_FORMAT,
-            version: Cow::Borrowed(crate::VERSION),
             study: Cow::Borrowed(&self.study),
             options: Cow::Borrowed(&self.options),
             threads: self.threads,
