@@ -36,10 +36,8 @@ use super::granular::{
     corrected_granular_contact, granular_wall_contact, ContactForce, ContactHistory,
     GranularCoeffs, WallPlane,
 };
-use super::multicontact::{
-    group_by_sphere, pair_contact_points, surface_corrections, Closure, ContactPoint,
-};
-use super::{HalfSpace, Ownership, Sphere, Tally, NEIGHMASK};
+use super::multicontact::{group_by_sphere, pair_contact_points, Closure, ContactPoint};
+use super::{HalfSpace, Ownership, Sphere, SurfaceCorrections, Tally, NEIGHMASK};
 
 /// Values per contact in the memory: `xi` (3), rolling (3), twist and the
 /// normal force.
@@ -356,6 +354,7 @@ pub struct GranularList {
     grouped: Vec<Entry>,
     points: Vec<ContactPoint>,
     deltas: Vec<f64>,
+    lanes: SurfaceCorrections,
     /// The memory rows before a pass that renews them.
     previous: Vec<f64>,
     /// The walls of the coming passes.
@@ -378,6 +377,7 @@ impl GranularList {
             grouped: Vec::new(),
             points: Vec::new(),
             deltas: Vec::new(),
+            lanes: SurfaceCorrections::default(),
             previous: Vec::new(),
             walls: Vec::new(),
             wall_forces: Vec::new(),
@@ -524,7 +524,7 @@ impl GranularList {
             if range.len() < 2 || self.points[range.clone()].iter().all(|p| p.force == 0.0) {
                 continue;
             }
-            summary.switched_off += surface_corrections(
+            summary.switched_off += self.lanes.compute(
                 &closure.half_space,
                 &closure.closure,
                 radius[a],
@@ -835,7 +835,7 @@ impl GranularList {
 mod tests {
     use super::*;
     use crate::kernels::{granular_contact, GranularMaterial, NormalDamping, SpringDashpotSlider};
-    use crate::kernels::{ContactPoint, WallTouch};
+    use crate::kernels::{surface_corrections, ContactPoint, WallTouch};
     use crate::kernels::{MprSwitch, MprTest, Twisting};
 
     fn material() -> GranularMaterial {

@@ -11,6 +11,7 @@
 
 mod bond;
 mod bond_rows;
+mod closure_lanes;
 mod diagnosis;
 mod fault;
 mod geometry;
@@ -31,6 +32,7 @@ pub use bond_rows::{
     gather_forces, gather_forces_on, gather_volumes, row_forces, row_forces_on, row_volumes,
     row_volumes_on, BondRows, BondRowsError, RowInputs,
 };
+pub use closure_lanes::SurfaceCorrections;
 pub use diagnosis::{stable_timestep, verlet_limit, LIMIT_MARGIN, MULTIBODY_LIMIT, STIFFEST_MODE};
 pub use fault::{Fault, FaultKind, ForcePass, COLLAPSED_BELOW, DEEP_OVERLAP, OVERSTRETCHED_ABOVE};
 pub use geometry::{MinimumImage, Separation, Unwrapped};

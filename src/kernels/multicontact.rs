@@ -115,6 +115,18 @@ impl HalfSpace {
         }
     }
 
+    /// `(scale, in_plane, compressible)`: `-gamma (1 + nu) / (2 pi E)`,
+    /// `3 - 4 nu` and `1 - 2 nu` (0 when negligible), for kernels that
+    /// form [`Self::displacement`] themselves.
+    pub(super) fn coefficients(&self) -> (f64, f64, f64) {
+        (self.scale, self.in_plane, self.compressible)
+    }
+
+    /// `1 - 2 nu`, or 0 when negligible.
+    pub(super) fn compressible(&self) -> f64 {
+        self.compressible
+    }
+
     /// `delta_kc`: the displacement of the surface at contact `c` by the
     /// force on contact `k`; 0 for coincident points.
     #[inline]

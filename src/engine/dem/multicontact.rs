@@ -1,7 +1,7 @@
 //! The multi-contact closure as a pass before the contact forces: from
 //! every sphere's contacts and their normal forces at the last evaluation,
 //! the radius correction of each side of each pair and of each sphere at
-//! each wall (`kernels::surface_corrections`).
+//! each wall (`kernels::SurfaceCorrections`).
 //!
 //! Each sphere's contacts are its listed pairs within reach and the walls
 //! within reach. A contact point is where the two surfaces meet, halfway
@@ -19,8 +19,8 @@ use super::super::neighbor::NeighbourList;
 use super::super::simbox::MinimumImage;
 use super::wall::ActiveGranularWall;
 use crate::kernels::{
-    group_by_sphere, pair_contact_points, surface_corrections, Closure, ContactHistory,
-    ContactPoint, GranularMaterial, HalfSpace, MprSwitch, MprTest,
+    pair_contact_points, Closure, ContactHistory, ContactPoint, GranularMaterial, HalfSpace,
+    MprSwitch, MprTest, SurfaceCorrections, WallPlane,
 };
 use serde::{Deserialize, Serialize};
 
@@ -93,16 +93,8 @@ impl MultiContact {
 enum Side {
     /// A pair-list entry: `side` 0 is the row's sphere, 1 its neighbour.
     Pair { entry: u32, side: u8 },
-    /// A wall (the sphere is the entry's).
+    /// A wall (the sphere is the one whose contacts these are).
     Wall(u32),
-}
-
-/// A contact of one sphere, before grouping by sphere.
-#[derive(Clone, Copy, Debug)]
-struct Entry {
-    sphere: u32,
-    side: Side,
-    point: ContactPoint,
 }
 
 /// What one pass found: the extreme corrections, how many the advanced
@@ -146,11 +138,22 @@ pub struct ClosurePass {
     settings: MultiContact,
     closure: Closure,
     half_space: HalfSpace,
-    entries: Vec<Entry>,
+    /// Per pair-list entry, the pair's distance, or NaN when it is out of
+    /// reach.
+    distance: Vec<f64>,
+    /// Per granular wall, per sphere, its centre's distance from the
+    /// wall, or NaN when out of reach.
+    wall_distance: Vec<Vec<f64>>,
+    /// Sphere `i`'s contacts are `offsets[i]..offsets[i + 1]` of `sides`
+    /// and `points`.
     offsets: Vec<usize>,
-    grouped: Vec<Entry>,
+    /// Where each contact's correction goes, grouped by sphere.
+    sides: Vec<Side>,
     points: Vec<ContactPoint>,
+    /// Each sphere's next free slot while the contacts are placed.
+    cursor: Vec<usize>,
     deltas: Vec<f64>,
+    lanes: SurfaceCorrections,
     /// Per pair-list entry, the corrections of its two sides.
     pair: Vec<[f64; 2]>,
     /// Per wall, per sphere, the sphere's correction at the wall.
@@ -170,11 +173,14 @@ impl ClosurePass {
                 material.youngs_modulus,
                 material.poisson_ratio,
             ),
-            entries: Vec::new(),
+            distance: Vec::new(),
+            wall_distance: Vec::new(),
             offsets: Vec::new(),
-            grouped: Vec::new(),
+            sides: Vec::new(),
             points: Vec::new(),
+            cursor: Vec::new(),
             deltas: Vec::new(),
+            lanes: SurfaceCorrections::default(),
             pair: Vec::new(),
             wall: Vec::new(),
             report: ClosureReport::default(),
@@ -215,24 +221,17 @@ impl ClosurePass {
         let (x, radius) = (input.x, input.radius);
         let n = x.len();
         let reach_factor = 1.0 + self.settings.reach;
-        self.collect(sep, input.neighbours, x, radius, pair_history, reach_factor);
-        for (w, (wall, history)) in walls.iter().zip(wall_history).enumerate() {
-            let plane = wall.plane(input.elapsed);
-            for i in 0..n {
-                let distance = plane.distance(&x[i]);
-                if distance <= 0.0 || distance >= reach_factor * radius[i] {
-                    continue;
-                }
-                // On the wall's plane: a rigid wall does not give way.
-                let point = plane.contact_point(distance);
-                self.entries.push(Entry {
-                    sphere: i as u32,
-                    side: Side::Wall(w as u32),
-                    point: ContactPoint::new(point, history[i].normal_force, radius[i]),
-                });
-            }
-        }
-        self.group(n);
+        let planes: Vec<_> = walls.iter().map(|w| w.plane(input.elapsed)).collect();
+        self.count(sep, input.neighbours, x, radius, &planes, reach_factor);
+        self.place(
+            sep,
+            input.neighbours,
+            x,
+            radius,
+            pair_history,
+            &planes,
+            wall_history,
+        );
         self.pair.clear();
         self.pair
             .resize(input.neighbours.neighbours.len(), [0.0; 2]);
@@ -249,17 +248,17 @@ impl ClosurePass {
             if range.len() < 2 || self.points[range.clone()].iter().all(|p| p.force == 0.0) {
                 continue;
             }
-            switched_off += surface_corrections(
+            switched_off += self.lanes.compute(
                 &self.half_space,
                 &self.closure,
                 radius[i],
                 &self.points[range.clone()],
                 &mut self.deltas[range.clone()],
             );
-            for (e, &delta) in self.grouped[range.clone()].iter().zip(&self.deltas[range]) {
-                match e.side {
+            for (side, &delta) in self.sides[range.clone()].iter().zip(&self.deltas[range]) {
+                match *side {
                     Side::Pair { entry, side } => self.pair[entry as usize][side as usize] = delta,
-                    Side::Wall(w) => self.wall[w as usize][e.sphere as usize] = delta,
+                    Side::Wall(w) => self.wall[w as usize][i] = delta,
                 }
             }
         }
@@ -267,60 +266,111 @@ impl ClosurePass {
         self.report.switched_off = switched_off;
     }
 
-    /// Every listed pair within reach, as two contact entries.
-    fn collect(
+    /// Measures every listed pair and each sphere's distance from every
+    /// wall, and counts each sphere's contacts within reach into
+    /// `offsets`.
+    fn count(
+        &mut self,
+        sep: &MinimumImage,
+        list: &NeighbourList,
+        x: &[[f64; 3]],
+        radius: &[f64],
+        planes: &[WallPlane],
+        reach_factor: f64,
+    ) {
+        let n = x.len();
+        self.offsets.clear();
+        self.offsets.resize(n + 1, 0);
+        self.distance.clear();
+        self.distance.resize(list.neighbours.len(), f64::NAN);
+        for i in 0..n {
+            for k in list.offsets[i]..list.offsets[i + 1] {
+                let j = list.neighbours[k] as usize;
+                let (del, _) = sep.delta_image(&x[i], &x[j]);
+                let r = (del[0] * del[0] + del[1] * del[1] + del[2] * del[2]).sqrt();
+                if r < reach_factor * (radius[i] + radius[j]) {
+                    self.distance[k] = r;
+                    self.offsets[i + 1] += 1;
+                    self.offsets[j + 1] += 1;
+                }
+            }
+        }
+        self.wall_distance.resize(planes.len(), Vec::new());
+        for (plane, distances) in planes.iter().zip(&mut self.wall_distance) {
+            distances.clear();
+            distances.extend((0..n).map(|i| {
+                let distance = plane.distance(&x[i]);
+                if distance <= 0.0 || distance >= reach_factor * radius[i] {
+                    f64::NAN
+                } else {
+                    distance
+                }
+            }));
+            for (i, d) in distances.iter().enumerate() {
+                self.offsets[i + 1] += usize::from(!d.is_nan());
+            }
+        }
+        for i in 0..n {
+            self.offsets[i + 1] += self.offsets[i];
+        }
+    }
+
+    /// Places every contact within reach in its sphere's slots: the pairs
+    /// in list order, each as its row sphere's then its neighbour's
+    /// contact, then the walls in order. Each sphere's contacts keep that
+    /// order.
+    #[allow(clippy::too_many_arguments)]
+    fn place(
         &mut self,
         sep: &MinimumImage,
         list: &NeighbourList,
         x: &[[f64; 3]],
         radius: &[f64],
         history: &[ContactHistory],
-        reach_factor: f64,
+        planes: &[WallPlane],
+        wall_history: &[Vec<ContactHistory>],
     ) {
-        self.entries.clear();
+        let total = self.offsets[x.len()];
+        self.points.resize(total, ContactPoint::default());
+        self.sides.resize(total, Side::Wall(0));
+        self.deltas.resize(total, 0.0);
+        self.cursor.clear();
+        self.cursor.extend_from_slice(&self.offsets[..x.len()]);
         for i in 0..x.len() {
             for k in list.offsets[i]..list.offsets[i + 1] {
-                let j = list.neighbours[k] as usize;
-                let (del, _) = sep.delta_image(&x[i], &x[j]);
-                let r = (del[0] * del[0] + del[1] * del[1] + del[2] * del[2]).sqrt();
-                let radsum = radius[i] + radius[j];
-                if r >= reach_factor * radsum {
+                let r = self.distance[k];
+                if r.is_nan() {
                     continue;
                 }
-                let [pi, pj] =
+                let j = list.neighbours[k] as usize;
+                let (del, _) = sep.delta_image(&x[i], &x[j]);
+                let points =
                     pair_contact_points(&del, r, radius[i], radius[j], history[k].normal_force);
-                self.entries.push(Entry {
-                    sphere: i as u32,
-                    side: Side::Pair {
+                for (side, (sphere, point)) in [i, j].into_iter().zip(points).enumerate() {
+                    let slot = self.cursor[sphere];
+                    self.cursor[sphere] += 1;
+                    self.points[slot] = point;
+                    self.sides[slot] = Side::Pair {
                         entry: k as u32,
-                        side: 0,
-                    },
-                    point: pi,
-                });
-                self.entries.push(Entry {
-                    sphere: j as u32,
-                    side: Side::Pair {
-                        entry: k as u32,
-                        side: 1,
-                    },
-                    point: pj,
-                });
+                        side: side as u8,
+                    };
+                }
             }
         }
-    }
-
-    /// Groups the entries by sphere.
-    fn group(&mut self, n: usize) {
-        group_by_sphere(
-            &self.entries,
-            n,
-            |e| e.sphere as usize,
-            |e| e.point,
-            &mut self.offsets,
-            &mut self.grouped,
-            &mut self.points,
-        );
-        self.deltas.resize(self.entries.len(), 0.0);
+        let walls = planes.iter().zip(&self.wall_distance).zip(wall_history);
+        for (w, ((plane, distances), history)) in walls.enumerate() {
+            for (i, &distance) in distances.iter().enumerate() {
+                if distance.is_nan() {
+                    continue;
+                }
+                let slot = self.cursor[i];
+                self.cursor[i] += 1;
+                // On the wall's plane: a rigid wall does not give way.
+                let point = plane.contact_point(distance);
+                self.points[slot] = ContactPoint::new(point, history[i].normal_force, radius[i]);
+                self.sides[slot] = Side::Wall(w as u32);
+            }
+        }
     }
 
     /// The extremes of the corrections, the first contact beyond reach
@@ -328,16 +378,18 @@ impl ClosurePass {
     fn survey(&self, list: &NeighbourList, radius: &[f64]) -> ClosureReport {
         let mut report = ClosureReport::default();
         let reach = self.settings.reach;
-        for e in &self.grouped {
-            let delta = match e.side {
-                Side::Pair { entry, side } => self.pair[entry as usize][side as usize],
-                Side::Wall(w) => self.wall[w as usize][e.sphere as usize],
-            };
-            let ratio = delta / radius[e.sphere as usize];
-            report.largest = report.largest.max(ratio);
-            report.smallest = report.smallest.min(ratio);
-            if ratio <= -1.0 && report.collapsed.is_none() {
-                report.collapsed = Some((e.sphere as usize, ratio));
+        for i in 0..radius.len() {
+            for side in &self.sides[self.offsets[i]..self.offsets[i + 1]] {
+                let delta = match *side {
+                    Side::Pair { entry, side } => self.pair[entry as usize][side as usize],
+                    Side::Wall(w) => self.wall[w as usize][i],
+                };
+                let ratio = delta / radius[i];
+                report.largest = report.largest.max(ratio);
+                report.smallest = report.smallest.min(ratio);
+                if ratio <= -1.0 && report.collapsed.is_none() {
+                    report.collapsed = Some((i, ratio));
+                }
             }
         }
         if report.largest <= reach {
