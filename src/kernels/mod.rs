@@ -16,6 +16,7 @@ mod diagnosis;
 mod fault;
 mod geometry;
 mod granular;
+mod granular_lanes;
 mod granular_list;
 mod isa;
 mod multicontact;
@@ -41,6 +42,7 @@ pub use granular::{
     tsuji_prefactor, ContactForce, ContactHistory, GranularCoeffs, GranularMaterial, NormalDamping,
     Sphere, SpringDashpotSlider, Twisting, WallPlane, WallTouch,
 };
+pub use granular_lanes::{hertz_mindlin_block, BlockForces, ContactBlock, CONTACT_LANES};
 pub use granular_list::{
     CorrectionSummary, GranularList, Layout, ListAtoms, ListClosure, ListError, ListWall,
     HISTORY_VALUES,

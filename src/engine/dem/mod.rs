@@ -25,8 +25,8 @@ use super::simbox::MinimumImage;
 use super::timers::Stage;
 use super::EngineError;
 use crate::kernels::{
-    corrected_granular_contact, ContactForce, ContactHistory, GranularCoeffs, GranularMaterial,
-    Sphere, Tally,
+    corrected_granular_contact, hertz_mindlin_block, ContactBlock, ContactForce, ContactHistory,
+    GranularCoeffs, GranularMaterial, Isa, Sphere, Tally, CONTACT_LANES,
 };
 
 /// DEM spheres of one material.
@@ -50,6 +50,11 @@ pub struct DemModel {
     closure: Option<ClosurePass>,
     /// What the last force evaluation found.
     report: DemReport,
+    /// The instruction set of the contact blocks.
+    isa: Isa,
+    /// Whether Hertz-Mindlin contacts are formed four at a time (the
+    /// default; rolling or twisting resistance is always one at a time).
+    contact_blocks: bool,
 }
 
 /// What a step or a stage changes in the model: the current force field,
@@ -96,6 +101,8 @@ impl DemModel {
             stage_start: true,
             closure: multicontact.map(|m| ClosurePass::new(m, &material)),
             report: DemReport::default(),
+            isa: Isa::detect(),
+            contact_blocks: true,
         }
     }
 
@@ -133,12 +140,121 @@ impl DemModel {
         self.closure = multicontact.map(|m| ClosurePass::new(m, &material));
     }
 
+    /// Forms contacts four at a time (`true`, the default) or one at a
+    /// time: the same numbers bit for bit, at another speed (for tests and
+    /// benchmarks).
+    pub fn set_contact_blocks(&mut self, on: bool) {
+        self.contact_blocks = on;
+    }
+
     /// The per-contact histories.
     pub fn contacts(&self) -> &ContactStore {
         &self.contacts
     }
 
     fn forces(
+        &mut self,
+        sep: &MinimumImage,
+        input: &ForceInput<'_>,
+        f: &mut [[f64; 3]],
+        torque: Option<&mut [[f64; 3]]>,
+    ) -> Tally {
+        if self.coeffs.has_rolling_or_twisting() || !self.contact_blocks {
+            self.forces_one_by_one(sep, input, f, torque)
+        } else {
+            self.forces_in_blocks(sep, input, f, torque)
+        }
+    }
+
+    /// The contact forces of Hertz-Mindlin without rolling or twisting,
+    /// touching pairs gathered four at a time into
+    /// [`hertz_mindlin_block`]: the same forces, torques and histories as
+    /// one pair at a time, bit for bit, added in the same order.
+    fn forces_in_blocks(
+        &mut self,
+        sep: &MinimumImage,
+        input: &ForceInput<'_>,
+        f: &mut [[f64; 3]],
+        torque: Option<&mut [[f64; 3]]>,
+    ) -> Tally {
+        let omega = input.omega.unwrap_or(&[]);
+        let (x, v, radius, mass) = (input.x, input.v, input.radius, input.mass);
+        let list = input.neighbours;
+        let corrections = self.closure.as_ref().map(|c| c.pair_corrections());
+        let (dt, update) = match input.step_dt {
+            Some(dt) => (dt, true),
+            None => (0.0, false),
+        };
+        let history = &mut self.contacts.history;
+        let mut tally = Tally::default();
+        let mut block = ContactBlock::default();
+        // Each lane's pair (i, j) and list entry.
+        let mut pairs = [(0usize, 0usize, 0usize); CONTACT_LANES];
+        let mut filled = 0;
+        let mut sink = BlockSink {
+            isa: self.isa,
+            coeffs: &self.coeffs,
+            dt,
+            update,
+            f,
+            torque,
+            tally: input.tally.then_some(&mut tally),
+        };
+        for i in 0..x.len() {
+            let xi = x[i];
+            for k in list.offsets[i]..list.offsets[i + 1] {
+                let j = list.neighbours[k] as usize;
+                let (del, image) = sep.delta_image(&xi, &x[j]);
+                let rsq = del[0] * del[0] + del[1] * del[1] + del[2] * del[2];
+                let moved = corrections.map_or([0.0; 2], |c| c[k]);
+                let radsum = (radius[i] + moved[0]) + (radius[j] + moved[1]);
+                // A surface moved past its centre (radsum <= 0) is caught
+                // by the closure's report; it is no contact here.
+                if radsum <= 0.0 || rsq >= radsum * radsum {
+                    history[k] = Default::default();
+                    continue;
+                }
+                let mut vj = v[j];
+                // A partner across a Lees-Edwards face is an image moving
+                // with the boundary.
+                if let (Some(le), true) = (&input.lees_edwards, image != [0.0; 3]) {
+                    for (v, w) in vj.iter_mut().zip(le.image_velocity(&image)) {
+                        *v += w;
+                    }
+                }
+                let l = filled;
+                for d in 0..3 {
+                    block.del[d][l] = del[d];
+                    block.v[0][d][l] = v[i][d];
+                    block.v[1][d][l] = vj[d];
+                    block.omega[0][d][l] = omega.get(i).map_or(0.0, |w| w[d]);
+                    block.omega[1][d][l] = omega.get(j).map_or(0.0, |w| w[d]);
+                    block.tangential[d][l] = history[k].tangential[d];
+                }
+                for (side, sphere) in [i, j].into_iter().enumerate() {
+                    block.radius[side][l] = radius[sphere];
+                    block.mass[side][l] = mass[sphere];
+                    block.moved[side][l] = moved[side];
+                }
+                pairs[l] = (i, j, k);
+                filled += 1;
+                if filled == CONTACT_LANES {
+                    sink.flush(&mut block, &pairs, history);
+                    filled = 0;
+                }
+            }
+        }
+        if filled > 0 {
+            // The spare lanes repeat the first contact and are not read.
+            block.fill_from_first(filled);
+            sink.flush(&mut block, &pairs[..filled], history);
+        }
+        tally
+    }
+
+    /// The contact forces one pair at a time: the law with rolling or
+    /// twisting resistance.
+    fn forces_one_by_one(
         &mut self,
         sep: &MinimumImage,
         input: &ForceInput<'_>,
@@ -215,6 +331,52 @@ impl DemModel {
             }
         }
         tally
+    }
+}
+
+/// Where a block of contacts goes: the forces, torques and virial of the
+/// pass. (Components are added `for d in 0..3` over several arrays.)
+struct BlockSink<'a> {
+    isa: Isa,
+    coeffs: &'a GranularCoeffs,
+    dt: f64,
+    update: bool,
+    f: &'a mut [[f64; 3]],
+    torque: Option<&'a mut [[f64; 3]]>,
+    tally: Option<&'a mut Tally>,
+}
+
+#[allow(clippy::needless_range_loop)]
+impl BlockSink<'_> {
+    /// Forms `block` and adds the contacts of its first `pairs.len()`
+    /// lanes (each `(i, j, list entry)`), in lane order.
+    fn flush(
+        &mut self,
+        block: &mut ContactBlock,
+        pairs: &[(usize, usize, usize)],
+        history: &mut [ContactHistory],
+    ) {
+        let out = hertz_mindlin_block(self.isa, self.coeffs, block, self.dt, self.update);
+        for (l, &(i, j, k)) in pairs.iter().enumerate() {
+            let h = &mut history[k];
+            h.tangential = std::array::from_fn(|d| block.tangential[d][l]);
+            h.normal_force = out.normal_force[l];
+            let force: [f64; 3] = std::array::from_fn(|d| out.force[d][l]);
+            for d in 0..3 {
+                self.f[i][d] += force[d];
+                self.f[j][d] -= force[d];
+            }
+            if let Some(t) = self.torque.as_deref_mut() {
+                for d in 0..3 {
+                    t[i][d] += out.torque[0][d][l];
+                    t[j][d] += out.torque[1][d][l];
+                }
+            }
+            if let Some(tally) = self.tally.as_deref_mut() {
+                let del = std::array::from_fn(|d| block.del[d][l]);
+                tally.add_vector(1.0, &del, &force);
+            }
+        }
     }
 }
 

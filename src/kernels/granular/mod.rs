@@ -52,6 +52,7 @@ pub use twisting::Twisting;
 
 use normal::youngs_compliance;
 use serde::{Deserialize, Serialize};
+pub(crate) use tangential::FRAME_EPSILON;
 use tangential::{rotate_into_plane, shear_compliance, slider};
 
 /// Material and friction of DEM spheres of one material: the scene's

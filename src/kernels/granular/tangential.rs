@@ -10,7 +10,7 @@
 
 /// Below this, a history component out of the tangent plane is left as is
 /// (LAMMPS's `EPSILON` in the frame update test).
-const FRAME_EPSILON: f64 = 1e-10;
+pub(crate) const FRAME_EPSILON: f64 = 1e-10;
 
 /// One body's share `(2 - nu) / G = 2 (2 - nu) (1 + nu) / E` of Mindlin's
 /// tangential compliance (formed as LAMMPS forms it): `G_eff = 1 / (sum of
