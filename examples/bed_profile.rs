@@ -40,6 +40,15 @@ fn main() -> anyhow::Result<()> {
         stage.wall_seconds / (steps as f64 * particles) * 1e9
     );
     println!("timers: {:?}", stage.timers);
+    if let Some(dem) = sys.model_as::<bpm::engine::DemModel>() {
+        let touching = dem
+            .contacts()
+            .history
+            .iter()
+            .filter(|h| h.normal_force != 0.0)
+            .count();
+        println!("touching pairs at the end: {touching}");
+    }
     let radii = &sys.particles.radius;
     let rmax = radii.iter().cloned().fold(0.0, f64::max);
     println!(

@@ -229,7 +229,8 @@ fn receiver_sums<const COMPRESSIBLE: bool>(
         for l in 0..LANES {
             let w = [cx[l] - pk[0], cy[l] - pk[1], cz[l] - pk[2]];
             let d = (w[0] * w[0] + w[1] * w[1] + w[2] * w[2]).sqrt();
-            let u = [w[0] / d, w[1] / d, w[2] / d];
+            let inv_d = 1.0 / d;
+            let u = [w[0] * inv_d, w[1] * inv_d, w[2] * inv_d];
             let nk_u = nk[0] * u[0] + nk[1] * u[1] + nk[2] * u[2];
             let nc_u = ncx[l] * u[0] + ncy[l] * u[1] + ncz[l] * u[2];
             let nk_nc = nk[0] * ncx[l] + nk[1] * ncy[l] + nk[2] * ncz[l];
@@ -241,7 +242,7 @@ fn receiver_sums<const COMPRESSIBLE: bool>(
                 // one-term loop's skipped subtraction.
                 bracket -= if denominator > NEGLIGIBLE { term } else { 0.0 };
             }
-            let t = force / d * bracket;
+            let t = force * inv_d * bracket;
             terms[l] = if d <= coincident { 0.0 } else { t };
         }
         for l in 0..LANES {

@@ -201,7 +201,9 @@ fn block_lanes(c: &GranularCoeffs, block: &mut ContactBlock, dt: f64, update: bo
         ];
         let magnitude = (fs[0] * fs[0] + fs[1] * fs[1] + fs[2] * fs[2]).sqrt();
         let capped = magnitude > fscrit;
-        let loaded = (h[0] * h[0] + h[1] * h[1] + h[2] * h[2]).sqrt() != 0.0;
+        // `|h| != 0` exactly when `h . h != 0` (a square root is zero
+        // only at zero, and NaN either way).
+        let loaded = h[0] * h[0] + h[1] * h[1] + h[2] * h[2] != 0.0;
         for d in 0..3 {
             let slid =
                 -1.0 / k_tangential * (fscrit * fs[d] / magnitude + damp_tangential * vtr[d]);

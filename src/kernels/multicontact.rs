@@ -140,7 +140,9 @@ impl HalfSpace {
         if d <= COINCIDENT_POINTS * radius {
             return 0.0;
         }
-        let u = [w[0] / d, w[1] / d, w[2] / d];
+        // One division for the four quotients by `d`.
+        let inv_d = 1.0 / d;
+        let u = [w[0] * inv_d, w[1] * inv_d, w[2] * inv_d];
         let nk_u = dot(&k.normal, &u);
         let nc_u = dot(&c.normal, &u);
         let nk_nc = dot(&k.normal, &c.normal);
@@ -149,7 +151,7 @@ impl HalfSpace {
         if self.compressible != 0.0 && denominator > NEGLIGIBLE {
             bracket -= self.compressible * (nk_nc + nc_u) / denominator;
         }
-        self.scale * k.force / d * bracket
+        self.scale * k.force * inv_d * bracket
     }
 }
 

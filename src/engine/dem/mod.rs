@@ -200,8 +200,9 @@ impl DemModel {
             torque,
             tally: input.tally.then_some(&mut tally),
         };
+        let spin = |i: usize| omega.get(i).copied().unwrap_or([0.0; 3]);
         for i in 0..x.len() {
-            let xi = x[i];
+            let (xi, vi, wi) = (x[i], v[i], spin(i));
             for k in list.offsets[i]..list.offsets[i + 1] {
                 let j = list.neighbours[k] as usize;
                 let (del, image) = sep.delta_image(&xi, &x[j]);
@@ -222,14 +223,14 @@ impl DemModel {
                         *v += w;
                     }
                 }
-                let l = filled;
+                let (l, wj, h) = (filled, spin(j), history[k].tangential);
                 for d in 0..3 {
                     block.del[d][l] = del[d];
-                    block.v[0][d][l] = v[i][d];
+                    block.v[0][d][l] = vi[d];
                     block.v[1][d][l] = vj[d];
-                    block.omega[0][d][l] = omega.get(i).map_or(0.0, |w| w[d]);
-                    block.omega[1][d][l] = omega.get(j).map_or(0.0, |w| w[d]);
-                    block.tangential[d][l] = history[k].tangential[d];
+                    block.omega[0][d][l] = wi[d];
+                    block.omega[1][d][l] = wj[d];
+                    block.tangential[d][l] = h[d];
                 }
                 for (side, sphere) in [i, j].into_iter().enumerate() {
                     block.radius[side][l] = radius[sphere];
