@@ -141,6 +141,8 @@ pub struct ClosurePass {
     /// Per pair-list entry, the pair's distance, or NaN when it is out of
     /// reach.
     distance: Vec<f64>,
+    /// The granular walls' planes at this pass.
+    planes: Vec<WallPlane>,
     /// Per granular wall, per sphere, its centre's distance from the
     /// wall, or NaN when out of reach.
     wall_distance: Vec<Vec<f64>>,
@@ -174,6 +176,7 @@ impl ClosurePass {
                 material.poisson_ratio,
             ),
             distance: Vec::new(),
+            planes: Vec::new(),
             wall_distance: Vec::new(),
             offsets: Vec::new(),
             sides: Vec::new(),
@@ -221,7 +224,9 @@ impl ClosurePass {
         let (x, radius) = (input.x, input.radius);
         let n = x.len();
         let reach_factor = 1.0 + self.settings.reach;
-        let planes: Vec<_> = walls.iter().map(|w| w.plane(input.elapsed)).collect();
+        let mut planes = std::mem::take(&mut self.planes);
+        planes.clear();
+        planes.extend(walls.iter().map(|w| w.plane(input.elapsed)));
         self.count(sep, input.neighbours, x, radius, &planes, reach_factor);
         self.place(
             sep,
@@ -232,6 +237,7 @@ impl ClosurePass {
             &planes,
             wall_history,
         );
+        self.planes = planes;
         self.pair.clear();
         self.pair
             .resize(input.neighbours.neighbours.len(), [0.0; 2]);
@@ -240,7 +246,7 @@ impl ClosurePass {
             w.clear();
             w.resize(n, 0.0);
         }
-        let mut switched_off = 0;
+        let mut report = ClosureReport::default();
         for i in 0..n {
             let range = self.offsets[i]..self.offsets[i + 1];
             // A sphere with one contact, or none that pressed, has nothing
@@ -248,7 +254,7 @@ impl ClosurePass {
             if range.len() < 2 || self.points[range.clone()].iter().all(|p| p.force == 0.0) {
                 continue;
             }
-            switched_off += self.lanes.compute(
+            report.switched_off += self.lanes.compute(
                 &self.half_space,
                 &self.closure,
                 radius[i],
@@ -260,10 +266,18 @@ impl ClosurePass {
                     Side::Pair { entry, side } => self.pair[entry as usize][side as usize] = delta,
                     Side::Wall(w) => self.wall[w as usize][i] = delta,
                 }
+                // The extremes over every contact: those of spheres with
+                // nothing to correct are 0 and change neither.
+                let ratio = delta / radius[i];
+                report.largest = report.largest.max(ratio);
+                report.smallest = report.smallest.min(ratio);
+                if ratio <= -1.0 && report.collapsed.is_none() {
+                    report.collapsed = Some((i, ratio));
+                }
             }
         }
-        self.report = self.survey(input.neighbours, radius);
-        self.report.switched_off = switched_off;
+        report.beyond_reach = self.beyond_reach(input.neighbours, radius, report.largest);
+        self.report = report;
     }
 
     /// Measures every listed pair and each sphere's distance from every
@@ -373,59 +387,43 @@ impl ClosurePass {
         }
     }
 
-    /// The extremes of the corrections, the first contact beyond reach
-    /// and the first surface moved onto its centre.
-    fn survey(&self, list: &NeighbourList, radius: &[f64]) -> ClosureReport {
-        let mut report = ClosureReport::default();
+    /// The first contact whose corrections reach beyond the closure's
+    /// reach, given the largest correction over its radius.
+    fn beyond_reach(
+        &self,
+        list: &NeighbourList,
+        radius: &[f64],
+        largest: f64,
+    ) -> Option<BeyondReach> {
         let reach = self.settings.reach;
-        for i in 0..radius.len() {
-            for side in &self.sides[self.offsets[i]..self.offsets[i + 1]] {
-                let delta = match *side {
-                    Side::Pair { entry, side } => self.pair[entry as usize][side as usize],
-                    Side::Wall(w) => self.wall[w as usize][i],
-                };
-                let ratio = delta / radius[i];
-                report.largest = report.largest.max(ratio);
-                report.smallest = report.smallest.min(ratio);
-                if ratio <= -1.0 && report.collapsed.is_none() {
-                    report.collapsed = Some((i, ratio));
-                }
-            }
-        }
-        if report.largest <= reach {
+        if largest <= reach {
             // Two corrections each within `reach` of their radii add up
             // to within `reach` of the radii's sum.
-            return report;
+            return None;
         }
-        'pairs: for i in 0..radius.len() {
+        for i in 0..radius.len() {
             for k in list.offsets[i]..list.offsets[i + 1] {
                 let j = list.neighbours[k] as usize;
                 let [a, b] = self.pair[k];
                 let ratio = (a + b) / (radius[i] + radius[j]);
                 if ratio > reach {
-                    report.beyond_reach = Some(BeyondReach {
+                    return Some(BeyondReach {
                         sphere: i,
                         partner: j,
                         wall: false,
                         ratio,
                     });
-                    break 'pairs;
                 }
             }
         }
-        if report.beyond_reach.is_none() {
-            for (w, deltas) in self.wall.iter().enumerate() {
-                if let Some(i) = (0..deltas.len()).find(|&i| deltas[i] > reach * radius[i]) {
-                    report.beyond_reach = Some(BeyondReach {
-                        sphere: i,
-                        partner: w,
-                        wall: true,
-                        ratio: deltas[i] / radius[i],
-                    });
-                    break;
-                }
-            }
-        }
-        report
+        self.wall.iter().enumerate().find_map(|(w, deltas)| {
+            let i = (0..deltas.len()).find(|&i| deltas[i] > reach * radius[i])?;
+            Some(BeyondReach {
+                sphere: i,
+                partner: w,
+                wall: true,
+                ratio: deltas[i] / radius[i],
+            })
+        })
     }
 }
