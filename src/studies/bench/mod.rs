@@ -23,6 +23,7 @@ use crate::scene::builders::bulk::{build_bulk, BulkParams};
 use crate::scene::builders::replicate::replicate;
 use crate::scene::{build_system, ForceField, Scene, StageSpec};
 use crate::studies::upstream::{speed, Configuration, ModernLammps};
+use crate::verify::liggghts::LiggghtsLaw;
 use crate::verify::single_point::SinglePointError;
 use serde::Serialize;
 use std::path::Path;
@@ -451,6 +452,7 @@ impl Bench {
             ));
         }
         goals.extend(self.packing_goals());
+        goals.extend(self.dem_goals());
         let (smallest, largest) = (
             sizes.iter().min().copied().unwrap_or(0),
             sizes.iter().max().copied().unwrap_or(0),
@@ -462,6 +464,33 @@ impl Bench {
             met: Some(sizes.len() >= 4 && smallest >= 3_000 && largest > 1_000_000),
         });
         goals
+    }
+
+    /// The DEM bed's goals (issue 33), from the LIGGGHTS case: native
+    /// Hertz at least 4x faster than LIGGGHTS's, and the standard closure
+    /// at most twice native Hertz's cost, on one thread.
+    fn dem_goals(&self) -> Vec<Goal> {
+        let speed = |law: LiggghtsLaw| {
+            self.liggghts
+                .as_ref()
+                .and_then(|l| l.speeds.iter().find(|s| s.law == law))
+        };
+        let (hertz, closure) = (speed(LiggghtsLaw::Hertz), speed(LiggghtsLaw::Closure));
+        vec![
+            Goal::at_least(
+                "DEM bed, Hertz: LIGGGHTS time / native's, 1 thread (x)".into(),
+                hertz.map_or(f64::NAN, |h| h.liggghts_over_native),
+                4.0,
+            ),
+            Goal::at_most(
+                "DEM bed: standard closure's cost / native Hertz's, 1 thread (x)".into(),
+                match (closure, hertz) {
+                    (Some(c), Some(h)) => c.native_ns / h.native_ns,
+                    _ => f64::NAN,
+                },
+                2.0,
+            ),
+        ]
     }
 
     /// The compaction workload's goals (issue 33): one thread at least 5x
@@ -1246,5 +1275,46 @@ mod tests {
             ..measured
         };
         assert_eq!(other.goals()[0].met, None);
+    }
+
+    #[test]
+    fn dem_goals_take_the_liggghts_case_and_say_when_it_is_missing() {
+        let speed = |law, liggghts_ns: f64, native_ns: f64| LiggghtsSpeed {
+            law,
+            particles: 514,
+            steps: 100,
+            liggghts_seconds: 1.0,
+            liggghts_ns,
+            native_seconds: 1.0,
+            native_ns,
+            native_2_threads_ns: native_ns,
+            liggghts_over_native: liggghts_ns / native_ns,
+            command: String::new(),
+        };
+        let liggghts = LiggghtsBench {
+            version: String::new(),
+            binary: String::new(),
+            steps: 100,
+            native: String::new(),
+            speeds: vec![
+                speed(LiggghtsLaw::Hertz, 200.0, 40.0),
+                speed(LiggghtsLaw::Closure, 8000.0, 100.0),
+            ],
+            failures: Vec::new(),
+        };
+        let mut bench = Bench {
+            size: 14.0,
+            cases: Vec::new(),
+            specialisations: Vec::new(),
+            upstream: Vec::new(),
+            debian: None,
+            packing: None,
+            liggghts: Some(liggghts),
+        };
+        let goals = bench.dem_goals();
+        assert_eq!((goals[0].measured, goals[0].met), (5.0, Some(true)));
+        assert_eq!((goals[1].measured, goals[1].met), (2.5, Some(false)));
+        bench.liggghts = None;
+        assert!(bench.dem_goals().iter().all(|g| g.met.is_none()));
     }
 }
