@@ -139,105 +139,290 @@ fn block_lanes(c: &GranularCoeffs, block: &mut ContactBlock, dt: f64, update: bo
         let radsum = ri[l] + rj[l];
         let (surface_i, surface_j) = (ri[l] + moved_i[l], rj[l] + moved_j[l]);
         let delta = (surface_i + surface_j) - r;
-        let n = [del[0] * rinv, del[1] * rinv, del[2] * rinv];
-        let reff = ri[l] * rj[l] / radsum;
-        let meff = mi[l] * mj[l] / (mi[l] + mj[l]);
-        let vr = [vi0[l] - vj0[l], vi1[l] - vj1[l], vi2[l] - vj2[l]];
-        let wr = [
-            surface_i * wi0[l] + surface_j * wj0[l],
-            surface_i * wi1[l] + surface_j * wj1[l],
-            surface_i * wi2[l] + surface_j * wj2[l],
-        ];
-        let arm_i = surface_i - 0.5 * delta;
-        let arm_j = surface_j - 0.5 * delta;
-
-        // The law (`contact_law`).
-        let vnnr = vr[0] * n[0] + vr[1] * n[1] + vr[2] * n[2];
-        let vn = [n[0] * vnnr, n[1] * vnnr, n[2] * vnnr];
-        let a = (delta * reff).sqrt();
-        let fne = c.normal_stiffness * delta * a;
-        let knfac = c.normal_stiffness * a;
-        let damp_normal = c.normal_damping * (meff * knfac).sqrt();
-        let fntot = fne - damp_normal * vnnr;
-        let fncrit = fntot.abs();
-        out.normal_force[l] = fncrit;
-        let vt = [vr[0] - vn[0], vr[1] - vn[1], vr[2] - vn[2]];
-        let vtr = [
-            vt[0] - (n[2] * wr[1] - n[1] * wr[2]),
-            vt[1] - (n[0] * wr[2] - n[2] * wr[0]),
-            vt[2] - (n[1] * wr[0] - n[0] * wr[1]),
-        ];
-        let damp_tangential = c.tangential_damping * damp_normal;
-        let k_tangential = c.tangential_stiffness * a;
-        let fscrit = c.sliding_friction * fncrit;
-
-        // The history's turn into the tangent plane and its advance
-        // (`rotate_into_plane`), taken only on a step.
+        let contact = LaneContact {
+            n: [del[0] * rinv, del[1] * rinv, del[2] * rinv],
+            delta,
+            reff: ri[l] * rj[l] / radsum,
+            meff: mi[l] * mj[l] / (mi[l] + mj[l]),
+            vr: [vi0[l] - vj0[l], vi1[l] - vj1[l], vi2[l] - vj2[l]],
+            wr: [
+                surface_i * wi0[l] + surface_j * wj0[l],
+                surface_i * wi1[l] + surface_j * wj1[l],
+                surface_i * wi2[l] + surface_j * wj2[l],
+            ],
+            arm_i: surface_i - 0.5 * delta,
+            arm_j: surface_j - 0.5 * delta,
+        };
         let mut h = [
             block.tangential[0][l],
             block.tangential[1][l],
             block.tangential[2][l],
         ];
-        let along = h[0] * n[0] + h[1] * n[1] + h[2] * n[2];
-        let turn = update && along.abs() * k_tangential > FRAME_EPSILON * fscrit;
-        let before = (h[0] * h[0] + h[1] * h[1] + h[2] * h[2]).sqrt();
-        let flat = [
-            h[0] - along * n[0],
-            h[1] - along * n[1],
-            h[2] - along * n[2],
-        ];
-        let after = (flat[0] * flat[0] + flat[1] * flat[1] + flat[2] * flat[2]).sqrt();
-        let s = if after > 0.0 { before / after } else { 0.0 };
+        let lane = lane_law(c, &contact, &mut h, dt, update);
         for d in 0..3 {
-            h[d] = if turn { flat[d] * s } else { h[d] };
-            h[d] = if update { h[d] + vtr[d] * dt } else { h[d] };
-        }
-
-        // The spring-dashpot-slider (`slider`).
-        let mut fs = [
-            -k_tangential * h[0] - damp_tangential * vtr[0],
-            -k_tangential * h[1] - damp_tangential * vtr[1],
-            -k_tangential * h[2] - damp_tangential * vtr[2],
-        ];
-        let magnitude = (fs[0] * fs[0] + fs[1] * fs[1] + fs[2] * fs[2]).sqrt();
-        let capped = magnitude > fscrit;
-        // `|h| != 0` exactly when `h . h != 0` (a square root is zero
-        // only at zero, and NaN either way).
-        let loaded = h[0] * h[0] + h[1] * h[1] + h[2] * h[2] != 0.0;
-        for d in 0..3 {
-            let slid =
-                -1.0 / k_tangential * (fscrit * fs[d] / magnitude + damp_tangential * vtr[d]);
-            let scaled = fs[d] * (fscrit / magnitude);
-            h[d] = if capped && loaded { slid } else { h[d] };
-            fs[d] = if capped {
-                if loaded {
-                    scaled
-                } else {
-                    0.0
-                }
-            } else {
-                fs[d]
-            };
             block.tangential[d][l] = h[d];
+            out.force[d][l] = lane.force[d];
+            out.torque[0][d][l] = lane.torque_i[d];
+            out.torque[1][d][l] = lane.torque_j[d];
         }
+        out.normal_force[l] = lane.normal_force;
+    }
+    out
+}
 
-        let force = [
+/// Four spheres touching one flat wall, component by component.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct WallBlock {
+    /// Each centre's distance from the wall's plane.
+    pub distance: Lanes,
+    /// Each surface moved out at the wall (the closure's; 0 for Hertz).
+    pub correction: Lanes,
+    /// Velocities.
+    pub v: [Lanes; 3],
+    /// Angular velocities.
+    pub omega: [Lanes; 3],
+    /// Radii.
+    pub radius: Lanes,
+    /// Masses.
+    pub mass: Lanes,
+    /// The tangential history `xi`, read and written.
+    pub tangential: [Lanes; 3],
+}
+
+impl WallBlock {
+    /// Copies lane 0 into lanes `from..` (see
+    /// [`ContactBlock::fill_from_first`]).
+    pub fn fill_from_first(&mut self, from: usize) {
+        for l in from..CONTACT_LANES {
+            self.distance[l] = self.distance[0];
+            self.correction[l] = self.correction[0];
+            self.radius[l] = self.radius[0];
+            self.mass[l] = self.mass[0];
+            for d in 0..3 {
+                self.v[d][l] = self.v[d][0];
+                self.omega[d][l] = self.omega[d][0];
+                self.tangential[d][l] = self.tangential[d][0];
+            }
+        }
+    }
+}
+
+/// What a block of wall contacts gives.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct WallForces {
+    /// Force on each sphere.
+    pub force: [Lanes; 3],
+    /// Torque on each sphere.
+    pub torque: [Lanes; 3],
+    /// The total normal force's magnitude, which the history records.
+    pub normal_force: Lanes,
+}
+
+/// [`hertz_mindlin_block`] for four spheres touching the flat wall whose
+/// unit normal (towards the spheres) is `normal` and whose velocity is
+/// `velocity`: `granular_wall_contact` lane by lane, the same bits.
+pub fn hertz_mindlin_wall_block(
+    isa: Isa,
+    coeffs: &GranularCoeffs,
+    normal: &[f64; 3],
+    velocity: &[f64; 3],
+    block: &mut WallBlock,
+    dt: f64,
+    update: bool,
+) -> WallForces {
+    assert!(
+        !coeffs.has_rolling_or_twisting(),
+        "the contact lanes have no rolling or twisting resistance"
+    );
+    let wall = (normal, velocity);
+    #[cfg(target_arch = "x86_64")]
+    if isa == Isa::Avx2 && Isa::Avx2.available() {
+        // SAFETY: the processor has AVX2 (checked just above).
+        return unsafe { wall_block_avx2(coeffs, wall, block, dt, update) };
+    }
+    let _ = isa;
+    wall_block_lanes(coeffs, wall, block, dt, update)
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+unsafe fn wall_block_avx2(
+    coeffs: &GranularCoeffs,
+    wall: (&[f64; 3], &[f64; 3]),
+    block: &mut WallBlock,
+    dt: f64,
+    update: bool,
+) -> WallForces {
+    wall_block_lanes(coeffs, wall, block, dt, update)
+}
+
+/// `granular_wall_contact` lane by lane.
+#[inline(always)]
+fn wall_block_lanes(
+    c: &GranularCoeffs,
+    (normal, wall_velocity): (&[f64; 3], &[f64; 3]),
+    block: &mut WallBlock,
+    dt: f64,
+    update: bool,
+) -> WallForces {
+    let mut out = WallForces::default();
+    for l in 0..CONTACT_LANES {
+        let distance = block.distance[l];
+        let surface = block.radius[l] + block.correction[l];
+        let rinv = 1.0 / distance;
+        let v = [block.v[0][l], block.v[1][l], block.v[2][l]];
+        let omega = [block.omega[0][l], block.omega[1][l], block.omega[2][l]];
+        let contact = LaneContact {
+            n: [
+                distance * normal[0] * rinv,
+                distance * normal[1] * rinv,
+                distance * normal[2] * rinv,
+            ],
+            delta: surface - distance,
+            reff: block.radius[l],
+            meff: block.mass[l],
+            vr: [
+                v[0] - wall_velocity[0],
+                v[1] - wall_velocity[1],
+                v[2] - wall_velocity[2],
+            ],
+            wr: [surface * omega[0], surface * omega[1], surface * omega[2]],
+            arm_i: surface,
+            arm_j: 0.0,
+        };
+        let mut h = [
+            block.tangential[0][l],
+            block.tangential[1][l],
+            block.tangential[2][l],
+        ];
+        let lane = lane_law(c, &contact, &mut h, dt, update);
+        for d in 0..3 {
+            block.tangential[d][l] = h[d];
+            out.force[d][l] = lane.force[d];
+            out.torque[d][l] = lane.torque_i[d];
+        }
+        out.normal_force[l] = lane.normal_force;
+    }
+    out
+}
+
+/// One lane's contact, as `contact_law` reads it (without the relative
+/// rotation, which only rolling and twisting use).
+struct LaneContact {
+    n: [f64; 3],
+    delta: f64,
+    reff: f64,
+    meff: f64,
+    vr: [f64; 3],
+    wr: [f64; 3],
+    arm_i: f64,
+    arm_j: f64,
+}
+
+/// One lane's result.
+struct LaneForce {
+    force: [f64; 3],
+    torque_i: [f64; 3],
+    torque_j: [f64; 3],
+    normal_force: f64,
+}
+
+/// `contact_law` without rolling or twisting, its branches as selects;
+/// `h` is the tangential history.
+#[inline(always)]
+fn lane_law(
+    c: &GranularCoeffs,
+    contact: &LaneContact,
+    h: &mut [f64; 3],
+    dt: f64,
+    update: bool,
+) -> LaneForce {
+    let LaneContact {
+        n,
+        delta,
+        reff,
+        meff,
+        vr,
+        wr,
+        arm_i,
+        arm_j,
+    } = *contact;
+    let vnnr = vr[0] * n[0] + vr[1] * n[1] + vr[2] * n[2];
+    let vn = [n[0] * vnnr, n[1] * vnnr, n[2] * vnnr];
+    let a = (delta * reff).sqrt();
+    let fne = c.normal_stiffness * delta * a;
+    let knfac = c.normal_stiffness * a;
+    let damp_normal = c.normal_damping * (meff * knfac).sqrt();
+    let fntot = fne - damp_normal * vnnr;
+    let fncrit = fntot.abs();
+    let vt = [vr[0] - vn[0], vr[1] - vn[1], vr[2] - vn[2]];
+    let vtr = [
+        vt[0] - (n[2] * wr[1] - n[1] * wr[2]),
+        vt[1] - (n[0] * wr[2] - n[2] * wr[0]),
+        vt[2] - (n[1] * wr[0] - n[0] * wr[1]),
+    ];
+    let damp_tangential = c.tangential_damping * damp_normal;
+    let k_tangential = c.tangential_stiffness * a;
+    let fscrit = c.sliding_friction * fncrit;
+
+    // The history's turn into the tangent plane and its advance
+    // (`rotate_into_plane`), taken only on a step.
+    let along = h[0] * n[0] + h[1] * n[1] + h[2] * n[2];
+    let turn = update && along.abs() * k_tangential > FRAME_EPSILON * fscrit;
+    let before = (h[0] * h[0] + h[1] * h[1] + h[2] * h[2]).sqrt();
+    let flat = [
+        h[0] - along * n[0],
+        h[1] - along * n[1],
+        h[2] - along * n[2],
+    ];
+    let after = (flat[0] * flat[0] + flat[1] * flat[1] + flat[2] * flat[2]).sqrt();
+    let s = if after > 0.0 { before / after } else { 0.0 };
+    for d in 0..3 {
+        h[d] = if turn { flat[d] * s } else { h[d] };
+        h[d] = if update { h[d] + vtr[d] * dt } else { h[d] };
+    }
+
+    // The spring-dashpot-slider (`slider`).
+    let mut fs = [
+        -k_tangential * h[0] - damp_tangential * vtr[0],
+        -k_tangential * h[1] - damp_tangential * vtr[1],
+        -k_tangential * h[2] - damp_tangential * vtr[2],
+    ];
+    let magnitude = (fs[0] * fs[0] + fs[1] * fs[1] + fs[2] * fs[2]).sqrt();
+    let capped = magnitude > fscrit;
+    // `|h| != 0` exactly when `h . h != 0` (a square root is zero only at
+    // zero, and NaN either way).
+    let loaded = h[0] * h[0] + h[1] * h[1] + h[2] * h[2] != 0.0;
+    for d in 0..3 {
+        let slid = -1.0 / k_tangential * (fscrit * fs[d] / magnitude + damp_tangential * vtr[d]);
+        let scaled = fs[d] * (fscrit / magnitude);
+        h[d] = if capped && loaded { slid } else { h[d] };
+        fs[d] = if capped {
+            if loaded {
+                scaled
+            } else {
+                0.0
+            }
+        } else {
+            fs[d]
+        };
+    }
+
+    let tor = [
+        n[1] * fs[2] - n[2] * fs[1],
+        n[2] * fs[0] - n[0] * fs[2],
+        n[0] * fs[1] - n[1] * fs[0],
+    ];
+    LaneForce {
+        force: [
             n[0] * fntot + fs[0],
             n[1] * fntot + fs[1],
             n[2] * fntot + fs[2],
-        ];
-        let tor = [
-            n[1] * fs[2] - n[2] * fs[1],
-            n[2] * fs[0] - n[0] * fs[2],
-            n[0] * fs[1] - n[1] * fs[0],
-        ];
-        for d in 0..3 {
-            out.force[d][l] = force[d];
-            out.torque[0][d][l] = -arm_i * tor[d];
-            out.torque[1][d][l] = -arm_j * tor[d];
-        }
+        ],
+        torque_i: tor.map(|t| -arm_i * t),
+        torque_j: tor.map(|t| -arm_j * t),
+        normal_force: fncrit,
     }
-    out
 }
 
 #[cfg(test)]
@@ -381,6 +566,87 @@ mod tests {
             }
         }
         assert!(slid > 100 && stuck > 100, "{slid} changed, {stuck} kept");
+    }
+
+    #[test]
+    fn wall_blocks_give_the_one_contact_kernels_results_bit_for_bit() {
+        use super::super::granular::{granular_wall_contact, WallPlane};
+        let mut rng = ChaCha8Rng::seed_from_u64(5);
+        let coeffs = GranularCoeffs::of(&GranularMaterial {
+            youngs_modulus: 30.0,
+            poisson_ratio: 0.3,
+            restitution: 0.6,
+            damping: NormalDamping::Tsuji,
+            tangential_damping: 1.0,
+            sliding_friction: 0.2,
+            rolling: None,
+            twisting: Twisting::None,
+        });
+        let mut capped = 0;
+        for isa in [Isa::Portable, Isa::Avx2] {
+            for (axis, sign) in [(0, 1.0), (2, -1.0), (1, 1.0)] {
+                let plane = WallPlane {
+                    axis,
+                    sign,
+                    position: 0.3,
+                    velocity: -0.05,
+                };
+                for update in [true, false] {
+                    for _ in 0..100 {
+                        let spheres: Vec<_> = (0..CONTACT_LANES)
+                            .map(|_| random_contact(&mut rng))
+                            .collect();
+                        let mut block = WallBlock::default();
+                        let mut touches = Vec::new();
+                        for (l, (_, s, _, moved, history)) in spheres.iter().enumerate() {
+                            let distance = (s.radius + moved[0]) * rng.gen_range(0.9..0.999);
+                            let touch = plane.touch(distance, moved[0]);
+                            block.distance[l] = distance;
+                            block.correction[l] = moved[0];
+                            block.radius[l] = s.radius;
+                            block.mass[l] = s.mass;
+                            for d in 0..3 {
+                                block.v[d][l] = s.v[d];
+                                block.omega[d][l] = s.omega[d];
+                                block.tangential[d][l] = history[d];
+                            }
+                            touches.push(touch);
+                        }
+                        let (normal, velocity) = (touches[0].normal, touches[0].velocity);
+                        let out = hertz_mindlin_wall_block(
+                            isa, &coeffs, &normal, &velocity, &mut block, 0.01, update,
+                        );
+                        for (l, ((_, s, _, _, history), touch)) in
+                            spheres.iter().zip(&touches).enumerate()
+                        {
+                            let mut h = ContactHistory {
+                                tangential: *history,
+                                ..ContactHistory::default()
+                            };
+                            let expected =
+                                granular_wall_contact(&coeffs, touch, s, &mut h, 0.01, update);
+                            let lane = |v: &[Lanes; 3]| -> [u64; 3] {
+                                std::array::from_fn(|d| v[d][l].to_bits())
+                            };
+                            let bits = |v: &[f64; 3]| -> [u64; 3] { v.map(f64::to_bits) };
+                            let case = format!("{isa:?} axis {axis} update {update} lane {l}");
+                            assert_eq!(lane(&out.force), bits(&expected.force), "{case}");
+                            assert_eq!(lane(&out.torque), bits(&expected.torque_i), "{case}");
+                            assert_eq!(lane(&block.tangential), bits(&h.tangential), "{case}");
+                            assert_eq!(out.normal_force[l].to_bits(), h.normal_force.to_bits());
+                            let f = expected.force;
+                            let tangential = (0..3)
+                                .filter(|&d| d != axis)
+                                .map(|d| f[d] * f[d])
+                                .sum::<f64>()
+                                .sqrt();
+                            capped += usize::from(tangential > 0.999 * 0.2 * h.normal_force);
+                        }
+                    }
+                }
+            }
+        }
+        assert!(capped > 50, "{capped} sliding wall contacts");
     }
 
     #[test]

@@ -42,7 +42,10 @@ pub use granular::{
     tsuji_prefactor, ContactForce, ContactHistory, GranularCoeffs, GranularMaterial, NormalDamping,
     Sphere, SpringDashpotSlider, Twisting, WallPlane, WallTouch,
 };
-pub use granular_lanes::{hertz_mindlin_block, BlockForces, ContactBlock, CONTACT_LANES};
+pub use granular_lanes::{
+    hertz_mindlin_block, hertz_mindlin_wall_block, BlockForces, ContactBlock, WallBlock,
+    WallForces, CONTACT_LANES,
+};
 pub use granular_list::{
     CorrectionSummary, GranularList, Layout, ListAtoms, ListClosure, ListError, ListWall,
     HISTORY_VALUES,

@@ -518,6 +518,7 @@ impl ParticleModel for DemModel {
                 out.torque.as_deref_mut(),
                 history,
                 corrections,
+                self.contact_blocks.then_some(self.isa),
             ));
             report
                 .wall_positions
