@@ -116,18 +116,9 @@ impl SurfaceCorrections {
             let sums = self.block_sums(half_space, radius, take, block, contacts);
             let lanes = (contacts.len() - b * LANES).min(LANES);
             for l in 0..lanes {
-                let (sum, dropped) = (sums.sum[l], sums.dropped[l]);
-                corrections[b * LANES + l] = match switch {
-                    MprSwitch::WholeContact if dropped > 0 => {
-                        switched_off += 1;
-                        0.0
-                    }
-                    MprSwitch::WholeContact => sum,
-                    MprSwitch::PerTerm => {
-                        switched_off += dropped;
-                        sum
-                    }
-                };
+                let (correction, off) = switch.apply(sums.sum[l], sums.dropped[l]);
+                corrections[b * LANES + l] = correction;
+                switched_off += off;
             }
         }
         switched_off

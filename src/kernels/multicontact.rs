@@ -55,6 +55,20 @@ pub enum MprSwitch {
     PerTerm,
 }
 
+impl MprSwitch {
+    /// A contact's correction from the `sum` of its kept terms when
+    /// `dropped` were beyond the limit, and how many this switched off
+    /// (contacts or terms).
+    #[inline]
+    pub fn apply(self, sum: f64, dropped: usize) -> (f64, usize) {
+        match self {
+            MprSwitch::WholeContact if dropped > 0 => (0.0, 1),
+            MprSwitch::WholeContact => (sum, 0),
+            MprSwitch::PerTerm => (sum, dropped),
+        }
+    }
+}
+
 /// How a term is compared with the maximum penetration ratio.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
@@ -289,17 +303,9 @@ pub fn surface_corrections(
                         sum += t;
                     }
                 }
-                match switch {
-                    MprSwitch::WholeContact if dropped > 0 => {
-                        switched_off += 1;
-                        0.0
-                    }
-                    MprSwitch::WholeContact => sum,
-                    MprSwitch::PerTerm => {
-                        switched_off += dropped;
-                        sum
-                    }
-                }
+                let (correction, off) = switch.apply(sum, dropped);
+                switched_off += off;
+                correction
             }
         };
     }

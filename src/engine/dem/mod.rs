@@ -178,8 +178,7 @@ impl DemModel {
         torque: Option<&mut [[f64; 3]]>,
     ) -> Tally {
         let omega = input.omega.unwrap_or(&[]);
-        let (x, v, radius, mass) = (input.x, input.v, input.radius, input.mass);
-        let list = input.neighbours;
+        let (v, radius, mass) = (input.v, input.radius, input.mass);
         let corrections = self.closure.as_ref().map(|c| c.pair_corrections());
         let (dt, update) = match input.step_dt {
             Some(dt) => (dt, true),
@@ -201,50 +200,36 @@ impl DemModel {
             tally: input.tally.then_some(&mut tally),
         };
         let spin = |i: usize| omega.get(i).copied().unwrap_or([0.0; 3]);
-        for i in 0..x.len() {
-            let (xi, vi, wi) = (x[i], v[i], spin(i));
-            for k in list.offsets[i]..list.offsets[i + 1] {
-                let j = list.neighbours[k] as usize;
-                let (del, image) = sep.delta_image(&xi, &x[j]);
-                let rsq = del[0] * del[0] + del[1] * del[1] + del[2] * del[2];
-                let moved = corrections.map_or([0.0; 2], |c| c[k]);
-                let radsum = (radius[i] + moved[0]) + (radius[j] + moved[1]);
-                // A surface moved past its centre (radsum <= 0) is caught
-                // by the closure's report; it is no contact here.
-                if radsum <= 0.0 || rsq >= radsum * radsum {
-                    history[k] = Default::default();
-                    continue;
-                }
-                let mut vj = v[j];
-                // A partner across a Lees-Edwards face is an image moving
-                // with the boundary.
-                if let (Some(le), true) = (&input.lees_edwards, image != [0.0; 3]) {
-                    for (v, w) in vj.iter_mut().zip(le.image_velocity(&image)) {
-                        *v += w;
-                    }
-                }
-                let (l, wj, h) = (filled, spin(j), history[k].tangential);
-                for d in 0..3 {
-                    block.del[d][l] = del[d];
-                    block.v[0][d][l] = vi[d];
-                    block.v[1][d][l] = vj[d];
-                    block.omega[0][d][l] = wi[d];
-                    block.omega[1][d][l] = wj[d];
-                    block.tangential[d][l] = h[d];
-                }
-                for (side, sphere) in [i, j].into_iter().enumerate() {
-                    block.radius[side][l] = radius[sphere];
-                    block.mass[side][l] = mass[sphere];
-                    block.moved[side][l] = moved[side];
-                }
-                pairs[l] = (i, j, k);
-                filled += 1;
-                if filled == CONTACT_LANES {
-                    sink.flush(&mut block, &pairs, history);
-                    filled = 0;
-                }
+        touching_pairs(sep, input, corrections, history, |pair, history| {
+            let TouchingPair {
+                i,
+                j,
+                entry,
+                del,
+                partner_velocity,
+                moved,
+            } = pair;
+            let (l, wi, wj, h) = (filled, spin(i), spin(j), history[entry].tangential);
+            for d in 0..3 {
+                block.del[d][l] = del[d];
+                block.v[0][d][l] = v[i][d];
+                block.v[1][d][l] = partner_velocity[d];
+                block.omega[0][d][l] = wi[d];
+                block.omega[1][d][l] = wj[d];
+                block.tangential[d][l] = h[d];
             }
-        }
+            for (side, sphere) in [i, j].into_iter().enumerate() {
+                block.radius[side][l] = radius[sphere];
+                block.mass[side][l] = mass[sphere];
+                block.moved[side][l] = moved[side];
+            }
+            pairs[l] = (i, j, entry);
+            filled += 1;
+            if filled == CONTACT_LANES {
+                sink.flush(&mut block, &pairs, history);
+                filled = 0;
+            }
+        });
         if filled > 0 {
             // The spare lanes repeat the first contact and are not read.
             block.fill_from_first(filled);
@@ -265,8 +250,7 @@ impl DemModel {
         // The engine gives rotational models angular velocities; without
         // them (a caller's choice) spheres count as not spinning.
         let omega = input.omega.unwrap_or(&[]);
-        let (x, v, radius, mass) = (input.x, input.v, input.radius, input.mass);
-        let list = input.neighbours;
+        let (v, radius, mass) = (input.v, input.radius, input.mass);
         let corrections = self.closure.as_ref().map(|c| c.pair_corrections());
         let (dt, update) = match input.step_dt {
             Some(dt) => (dt, true),
@@ -279,59 +263,110 @@ impl DemModel {
             radius: radius[i],
             mass: mass[i],
         };
-        for i in 0..x.len() {
-            let (si, xi) = (sphere(i), x[i]);
-            for k in list.offsets[i]..list.offsets[i + 1] {
-                let j = list.neighbours[k] as usize;
-                let (del, image) = sep.delta_image(&xi, &x[j]);
-                let rsq = del[0] * del[0] + del[1] * del[1] + del[2] * del[2];
-                let moved = corrections.map_or([0.0; 2], |c| c[k]);
-                let radsum = (si.radius + moved[0]) + (radius[j] + moved[1]);
-                let history = &mut self.contacts.history[k];
-                // A surface moved past its centre (radsum <= 0) is caught
-                // by the closure's report; it is no contact here.
-                if radsum <= 0.0 || rsq >= radsum * radsum {
-                    *history = Default::default();
-                    continue;
-                }
-                let mut sj = sphere(j);
-                // A partner across a Lees-Edwards face is an image moving
-                // with the boundary.
-                if let (Some(le), true) = (&input.lees_edwards, image != [0.0; 3]) {
-                    for (v, w) in sj.v.iter_mut().zip(le.image_velocity(&image)) {
-                        *v += w;
-                    }
-                }
-                let ContactForce {
-                    force,
-                    torque_i,
-                    torque_j,
-                } = corrected_granular_contact(
-                    &self.coeffs,
-                    &del,
-                    &si,
-                    &sj,
-                    moved,
-                    history,
-                    dt,
-                    update,
-                );
+        let history = &mut self.contacts.history;
+        touching_pairs(sep, input, corrections, history, |pair, history| {
+            let TouchingPair {
+                i,
+                j,
+                entry,
+                del,
+                partner_velocity,
+                moved,
+            } = pair;
+            let sj = Sphere {
+                v: partner_velocity,
+                ..sphere(j)
+            };
+            let ContactForce {
+                force,
+                torque_i,
+                torque_j,
+            } = corrected_granular_contact(
+                &self.coeffs,
+                &del,
+                &sphere(i),
+                &sj,
+                moved,
+                &mut history[entry],
+                dt,
+                update,
+            );
+            for d in 0..3 {
+                f[i][d] += force[d];
+                f[j][d] -= force[d];
+            }
+            if let Some(t) = torque.as_deref_mut() {
                 for d in 0..3 {
-                    f[i][d] += force[d];
-                    f[j][d] -= force[d];
-                }
-                if let Some(t) = torque.as_deref_mut() {
-                    for d in 0..3 {
-                        t[i][d] += torque_i[d];
-                        t[j][d] += torque_j[d];
-                    }
-                }
-                if input.tally {
-                    tally.add_vector(1.0, &del, &force);
+                    t[i][d] += torque_i[d];
+                    t[j][d] += torque_j[d];
                 }
             }
-        }
+            if input.tally {
+                tally.add_vector(1.0, &del, &force);
+            }
+        });
         tally
+    }
+}
+
+/// A listed pair whose surfaces overlap.
+struct TouchingPair {
+    i: usize,
+    j: usize,
+    /// Its pair-list entry (and contact history).
+    entry: usize,
+    /// `x_i - x_j`, the minimum image.
+    del: [f64; 3],
+    /// `j`'s velocity, or its image's across a Lees-Edwards face.
+    partner_velocity: [f64; 3],
+    /// The closure's corrections of the two surfaces (0 without it).
+    moved: [f64; 2],
+}
+
+/// Calls `touch` for every listed pair whose surfaces (moved by the
+/// closure's `corrections`) overlap, in list order, with the histories;
+/// clears the history of every other pair.
+#[inline(always)]
+fn touching_pairs(
+    sep: &MinimumImage,
+    input: &ForceInput<'_>,
+    corrections: Option<&[[f64; 2]]>,
+    history: &mut [ContactHistory],
+    mut touch: impl FnMut(TouchingPair, &mut [ContactHistory]),
+) {
+    let (x, v, radius, list) = (input.x, input.v, input.radius, input.neighbours);
+    for i in 0..x.len() {
+        let xi = x[i];
+        for k in list.offsets[i]..list.offsets[i + 1] {
+            let j = list.neighbours[k] as usize;
+            let (del, image) = sep.delta_image(&xi, &x[j]);
+            let rsq = del[0] * del[0] + del[1] * del[1] + del[2] * del[2];
+            let moved = corrections.map_or([0.0; 2], |c| c[k]);
+            let radsum = (radius[i] + moved[0]) + (radius[j] + moved[1]);
+            // A surface moved past its centre (radsum <= 0) is caught by
+            // the closure's report; it is no contact here.
+            if radsum <= 0.0 || rsq >= radsum * radsum {
+                history[k] = Default::default();
+                continue;
+            }
+            let mut partner_velocity = v[j];
+            // A partner across a Lees-Edwards face is an image moving with
+            // the boundary.
+            if let (Some(le), true) = (&input.lees_edwards, image != [0.0; 3]) {
+                for (v, w) in partner_velocity.iter_mut().zip(le.image_velocity(&image)) {
+                    *v += w;
+                }
+            }
+            let pair = TouchingPair {
+                i,
+                j,
+                entry: k,
+                del,
+                partner_velocity,
+                moved,
+            };
+            touch(pair, history);
+        }
     }
 }
 

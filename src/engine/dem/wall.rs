@@ -90,46 +90,40 @@ impl ActiveGranularWall {
         let mut block = WallBlock::default();
         let mut spheres = [0usize; CONTACT_LANES];
         let mut filled = 0;
-        let mut flush =
-            |block: &mut WallBlock, spheres: &[usize], history: &mut [ContactHistory]| {
-                let out = hertz_mindlin_wall_block(
-                    isa,
-                    &self.coeffs,
-                    &touch.normal,
-                    &touch.velocity,
-                    block,
-                    step,
-                    update,
-                );
-                for (l, &i) in spheres.iter().enumerate() {
-                    let force: [f64; 3] = std::array::from_fn(|d| out.force[d][l]);
-                    history[i].tangential = std::array::from_fn(|d| block.tangential[d][l]);
-                    history[i].normal_force = out.normal_force[l];
-                    for (fd, force) in f[i].iter_mut().zip(force) {
-                        *fd += force;
-                    }
-                    if let Some(t) = torque.as_deref_mut() {
-                        for (d, td) in t[i].iter_mut().enumerate() {
-                            *td += out.torque[d][l];
-                        }
-                    }
-                    contact.force += plane.load(&force);
+        let mut flush = |block: &mut WallBlock,
+                         spheres: &[usize],
+                         history: &mut [ContactHistory],
+                         load: &mut f64| {
+            let out = hertz_mindlin_wall_block(
+                isa,
+                &self.coeffs,
+                &touch.normal,
+                &touch.velocity,
+                block,
+                step,
+                update,
+            );
+            for (l, &i) in spheres.iter().enumerate() {
+                let force: [f64; 3] = std::array::from_fn(|d| out.force[d][l]);
+                history[i].tangential = std::array::from_fn(|d| block.tangential[d][l]);
+                history[i].normal_force = out.normal_force[l];
+                for (fd, force) in f[i].iter_mut().zip(force) {
+                    *fd += force;
                 }
-            };
+                if let Some(t) = torque.as_deref_mut() {
+                    for (d, td) in t[i].iter_mut().enumerate() {
+                        *td += out.torque[d][l];
+                    }
+                }
+                *load += plane.load(&force);
+            }
+        };
         for i in 0..x.len() {
-            let distance = plane.distance(&x[i]);
-            let correction = corrections.map_or(0.0, |c| c[i]);
-            let surface = radius[i] + correction;
-            // A surface moved past the centre is caught by the closure's
-            // report; it is no contact here.
-            if surface <= 0.0 || distance >= surface {
-                history[i] = ContactHistory::default();
+            let Some((distance, correction)) =
+                touching(&plane, input, corrections, i, &mut history[i], &mut contact)
+            else {
                 continue;
-            }
-            if distance <= 0.0 {
-                contact.through.get_or_insert(i);
-                continue;
-            }
+            };
             let l = filled;
             let omega = input.omega.map_or([0.0; 3], |o| o[i]);
             block.distance[l] = distance;
@@ -146,14 +140,14 @@ impl ActiveGranularWall {
             spheres[l] = i;
             filled += 1;
             if filled == CONTACT_LANES {
-                flush(&mut block, &spheres, history);
+                flush(&mut block, &spheres, history, &mut contact.force);
                 filled = 0;
             }
         }
         if filled > 0 {
             // The spare lanes repeat the first sphere and are not read.
             block.fill_from_first(filled);
-            flush(&mut block, &spheres[..filled], history);
+            flush(&mut block, &spheres[..filled], history, &mut contact.force);
         }
         contact
     }
@@ -173,19 +167,11 @@ impl ActiveGranularWall {
         let mut contact = WallContact::default();
         let (x, radius) = (input.x, input.radius);
         for i in 0..x.len() {
-            let distance = plane.distance(&x[i]);
-            let correction = corrections.map_or(0.0, |c| c[i]);
-            let surface = radius[i] + correction;
-            // A surface moved past the centre is caught by the closure's
-            // report; it is no contact here.
-            if surface <= 0.0 || distance >= surface {
-                history[i] = ContactHistory::default();
+            let Some((distance, correction)) =
+                touching(&plane, input, corrections, i, &mut history[i], &mut contact)
+            else {
                 continue;
-            }
-            if distance <= 0.0 {
-                contact.through.get_or_insert(i);
-                continue;
-            }
+            };
             let sphere = Sphere {
                 v: input.v[i],
                 omega: input.omega.map_or([0.0; 3], |o| o[i]),
@@ -207,4 +193,33 @@ impl ActiveGranularWall {
         }
         contact
     }
+}
+
+/// Sphere `i`'s distance from `plane` and its surface's correction there,
+/// when it touches the wall. Otherwise a sphere apart has its `history`
+/// cleared, and one whose centre is on or behind the plane is recorded in
+/// `contact`.
+#[inline(always)]
+fn touching(
+    plane: &WallPlane,
+    input: &ForceInput<'_>,
+    corrections: Option<&[f64]>,
+    i: usize,
+    history: &mut ContactHistory,
+    contact: &mut WallContact,
+) -> Option<(f64, f64)> {
+    let distance = plane.distance(&input.x[i]);
+    let correction = corrections.map_or(0.0, |c| c[i]);
+    let surface = input.radius[i] + correction;
+    // A surface moved past the centre is caught by the closure's report;
+    // it is no contact here.
+    if surface <= 0.0 || distance >= surface {
+        *history = ContactHistory::default();
+        return None;
+    }
+    if distance <= 0.0 {
+        contact.through.get_or_insert(i);
+        return None;
+    }
+    Some((distance, correction))
 }
