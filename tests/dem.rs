@@ -98,10 +98,17 @@ fn contact_history_survives_pair_list_rebuilds() {
 /// Contacts formed four at a time give the one-at-a-time path's
 /// trajectory bit for bit: sliding spheres under compression, affine
 /// shear, Lees-Edwards shear (partners' image velocities) and between
-/// granular walls, over enough steps for round-off to show.
+/// granular walls, with plain Hertz and with the standard and advanced
+/// multi-contact closures (corrected surfaces), over enough steps for
+/// round-off to show; positions, spins, recorded rows and every contact
+/// history must be identical.
 #[test]
 fn contact_blocks_follow_the_one_contact_path_bit_for_bit() {
+    use bpm::engine::MultiContact;
     use bpm::verify::{dem_trajectory, DemLoading};
+    fn bits(v: &[[f64; 3]]) -> Vec<[u64; 3]> {
+        v.iter().map(|x| x.map(f64::to_bits)).collect()
+    }
     let run = |scene: &bpm::scene::Scene, blocks: bool| {
         let mut sys = bpm::scene::build_system(scene, 1);
         sys.model_as_mut::<bpm::engine::DemModel>()
@@ -111,29 +118,50 @@ fn contact_blocks_follow_the_one_contact_path_bit_for_bit() {
             bpm::scene::run_scene(&mut sys, scene, &bpm::scene::RunOptions::quiet(1));
         assert!(error.is_none(), "{error:?}");
         let dem = sys.model_as::<bpm::engine::DemModel>().unwrap();
-        let kept = dem.contacts().remembered();
-        (
-            sys.particles.x.clone(),
-            sys.particles.rotation.as_ref().unwrap().omega.clone(),
-            stages[0].rows.clone(),
-            kept,
-        )
+        let histories: Vec<Vec<u64>> = dem
+            .contacts()
+            .history
+            .iter()
+            .map(|h| {
+                let values = h.tangential.iter().chain(&h.rolling);
+                values
+                    .chain([&h.twist, &h.normal_force])
+                    .map(|v| v.to_bits())
+                    .collect()
+            })
+            .collect();
+        let rows: Vec<Vec<u64>> = stages
+            .iter()
+            .flat_map(|s| &s.rows)
+            .map(|r| r.iter().map(|v| v.to_bits()).collect())
+            .collect();
+        let spins = &sys.particles.rotation.as_ref().unwrap().omega;
+        (bits(&sys.particles.x), bits(spins), rows, histories)
     };
+    let closures = [
+        None,
+        Some(MultiContact::standard(1.5)),
+        Some(MultiContact::advanced(1.5, 1e-3)),
+    ];
     for loading in [
         DemLoading::Compress,
         DemLoading::Shear,
         DemLoading::LeesEdwards,
         DemLoading::Walls,
     ] {
-        let scene = dem_trajectory(3, false, loading, 1000);
-        let (x, omega, rows, kept) = run(&scene, true);
-        assert!(kept > 20, "{loading:?}: {kept} loaded contacts");
-        let one = run(&scene, false);
-        assert!(
-            x == one.0 && omega == one.1,
-            "{loading:?}: positions or spins differ"
-        );
-        assert_eq!(rows, one.2, "{loading:?}: recorded rows differ");
+        for closure in closures {
+            let mut scene = dem_trajectory(3, false, loading, 1000);
+            scene.force_field.multicontact = closure;
+            let case = format!("{loading:?} {closure:?}");
+            let blocks = run(&scene, true);
+            let touching = blocks.3.iter().filter(|h| h[7] != 0).count();
+            assert!(touching > 20, "{case}: {touching} touching pairs");
+            let one = run(&scene, false);
+            assert!(blocks.0 == one.0, "{case}: positions differ");
+            assert!(blocks.1 == one.1, "{case}: spins differ");
+            assert!(blocks.2 == one.2, "{case}: recorded rows differ");
+            assert!(blocks.3 == one.3, "{case}: contact histories differ");
+        }
     }
 }
 

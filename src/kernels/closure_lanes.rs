@@ -2,8 +2,8 @@
 //!
 //! [`super::surface_corrections`] forms, for each contact `c` of a sphere,
 //! the half-space displacement from every other contact `k` that pressed,
-//! one term at a time: a square root and four divisions each, in a chain
-//! the processor cannot overlap. Here a sphere's contacts are packed as
+//! one term at a time: a square root and one or two divisions each, in a
+//! chain the processor cannot overlap. Here a sphere's contacts are packed as
 //! receivers into blocks of four lanes, and each source adds its term to a
 //! whole block in one pass of plain per-lane loops, which the compiler
 //! turns into vector instructions (two lanes of SSE2 in the portable
@@ -50,7 +50,7 @@ struct BlockSums {
 #[derive(Clone, Copy, Debug)]
 enum Take {
     All,
-    Below { limit: f64, magnitude: bool },
+    Below { limit: f64, test: MprTest },
 }
 
 /// The closure's corrections with reusable buffers: one per pass (or per
@@ -106,7 +106,7 @@ impl SurfaceCorrections {
             } => (
                 Take::Below {
                     limit: max_penetration_ratio * radius,
-                    magnitude: test == MprTest::Magnitude,
+                    test,
                 },
                 switch,
             ),
@@ -241,11 +241,10 @@ fn receiver_sums<const COMPRESSIBLE: bool>(
             let other = block.contact[l] != k;
             let kept = match take {
                 Take::All => other,
-                Take::Below { limit, magnitude } => {
-                    let beyond = if magnitude {
-                        t.abs() > limit
-                    } else {
-                        t > limit
+                Take::Below { limit, test } => {
+                    let beyond = match test {
+                        MprTest::Magnitude => t.abs() > limit,
+                        MprTest::Signed => t > limit,
                     };
                     sums.dropped[l] += usize::from(other && beyond);
                     other && !beyond
@@ -295,11 +294,15 @@ mod tests {
         let mut closures = vec![Closure::Standard];
         for switch in [MprSwitch::WholeContact, MprSwitch::PerTerm] {
             for test in [MprTest::Signed, MprTest::Magnitude] {
-                closures.push(Closure::Advanced {
-                    max_penetration_ratio: 2e-3,
-                    switch,
-                    test,
-                });
+                // Terms here are up to about 1e-2 (radius 1e-2): limits of
+                // 2e-3 and 5e-3 leave many terms on both sides.
+                for max_penetration_ratio in [0.2, 0.5] {
+                    closures.push(Closure::Advanced {
+                        max_penetration_ratio,
+                        switch,
+                        test,
+                    });
+                }
             }
         }
         closures
@@ -309,7 +312,7 @@ mod tests {
     fn lanes_give_the_one_term_loops_corrections_bit_for_bit() {
         let mut rng = ChaCha8Rng::seed_from_u64(7);
         let radius = 1e-2;
-        let mut checked = 0;
+        let (mut checked, mut switched) = (0, 0);
         // nu = 1/2 leaves the compressible term out; the others keep it.
         for nu in [0.5, 0.3, -0.2] {
             let half_space = HalfSpace::new(1.125, 5e3, nu);
@@ -336,11 +339,16 @@ mod tests {
                         );
                         assert_eq!(off, expected_off);
                         checked += usize::from(expected.iter().any(|&x| x != 0.0));
+                        switched += off;
                     }
                 }
             }
         }
         assert!(checked > 100, "only {checked} cases had a correction");
+        assert!(
+            switched > 200,
+            "only {switched} contacts or terms switched off"
+        );
     }
 
     #[test]

@@ -2,7 +2,7 @@
 //! [`super::corrected_granular_contact`] without rolling or twisting
 //! resistance, for blocks of four touching pairs.
 //!
-//! One contact's force is a chain of three square roots and three
+//! One contact's force is a chain of four square roots and three
 //! divisions (more while it slides) that the processor cannot overlap
 //! with much else. A block of four contacts is formed here in plain
 //! per-lane loops, which the compiler turns into vector instructions (two
@@ -463,7 +463,8 @@ mod tests {
         } else {
             [rng.gen_range(-0.02..0.02), rng.gen_range(-0.02..0.02)]
         };
-        let r = (si.radius + sj.radius) * rng.gen_range(0.9..0.999);
+        // Touching: the corrected surfaces overlap.
+        let r = (si.radius + moved[0] + sj.radius + moved[1]) * rng.gen_range(0.9..0.999);
         let del = direction.map(|c| r * c / length);
         let history = match rng.gen_range(0..3) {
             0 => [0.0; 3],
@@ -565,7 +566,10 @@ mod tests {
                 }
             }
         }
-        assert!(slid > 100 && stuck > 100, "{slid} changed, {stuck} kept");
+        assert!(
+            slid > 100 && stuck > 100,
+            "{slid} contacts sliding, {stuck} sticking"
+        );
     }
 
     #[test]

@@ -385,6 +385,10 @@ impl ClosurePass {
                 self.sides[slot] = Side::Wall(w as u32);
             }
         }
+        debug_assert!(
+            (0..x.len()).all(|i| self.cursor[i] == self.offsets[i + 1]),
+            "every sphere fills the slots it counted"
+        );
     }
 
     /// The first contact whose corrections reach beyond the closure's
