@@ -10,10 +10,10 @@
 //! build, four of AVX2 when the processor has it, chosen at run time).
 //!
 //! Each lane sums its own receiver's terms in source order, as the
-//! one-term loop does, and every term is formed by the same operations in
-//! the same order as [`HalfSpace::displacement`], without fused
-//! multiply-adds; the branches become selects that pick the same values.
-//! So the corrections are the same bit for bit on every instruction set.
+//! one-term loop does, and every term is formed by the function
+//! [`HalfSpace::displacement`] forms it with (branch-free, without fused
+//! multiply-adds). So the corrections are the same bit for bit on every
+//! instruction set.
 
 // Lanes are written `for l in 0..LANES` over several arrays at once, the
 // form the compiler turns into vector instructions.
@@ -21,7 +21,7 @@
 
 use super::isa::Isa;
 use super::multicontact::{
-    Closure, ContactPoint, HalfSpace, MprSwitch, MprTest, COINCIDENT_POINTS, NEGLIGIBLE,
+    Closure, ContactPoint, HalfSpace, MprSwitch, MprTest, COINCIDENT_POINTS,
 };
 
 /// Lanes per receiver block.
@@ -77,11 +77,6 @@ impl SurfaceCorrections {
             blocks: Vec::new(),
             sources: Vec::new(),
         }
-    }
-
-    /// The instruction set the terms are formed on.
-    pub fn isa(&self) -> Isa {
-        self.isa
     }
 
     /// [`super::surface_corrections`]: the correction of each of one
@@ -191,17 +186,14 @@ unsafe fn sums_avx2<const COMPRESSIBLE: bool>(args: SumArgs<'_>) -> BlockSums {
     receiver_sums::<COMPRESSIBLE>(args)
 }
 
-/// Each lane's receiver takes [`HalfSpace::displacement`] from every
-/// source but itself, in source order, operation for operation;
+/// Each lane's receiver takes [`HalfSpace::displacement`]'s term (the
+/// same function) from every source but itself, in source order;
 /// `COMPRESSIBLE` says whether the material's `1 - 2 nu` term is on.
 #[inline(always)]
 fn receiver_sums<const COMPRESSIBLE: bool>(
     (half_space, radius, take, block, contacts, sources): SumArgs<'_>,
 ) -> BlockSums {
-    let (scale, in_plane, compressible) = half_space.coefficients();
     let coincident = COINCIDENT_POINTS * radius;
-    let [cx, cy, cz] = &block.point;
-    let [ncx, ncy, ncz] = &block.normal;
     // The one-term loop's empty sum: `Iterator::sum`'s for the standard
     // closure, `0.0` for the advanced.
     let empty = match take {
@@ -213,28 +205,18 @@ fn receiver_sums<const COMPRESSIBLE: bool>(
         dropped: [0; LANES],
     };
     for &k in sources {
-        let source = &contacts[k];
-        let (pk, nk) = (source.point, source.normal);
-        let force = scale * source.force;
+        let source = (&contacts[k].point, &contacts[k].normal);
+        let scaled_force = half_space.scale() * contacts[k].force;
         let mut terms = [0.0; LANES];
         for l in 0..LANES {
-            let w = [cx[l] - pk[0], cy[l] - pk[1], cz[l] - pk[2]];
-            let d = (w[0] * w[0] + w[1] * w[1] + w[2] * w[2]).sqrt();
-            let inv_d = 1.0 / d;
-            let u = [w[0] * inv_d, w[1] * inv_d, w[2] * inv_d];
-            let nk_u = nk[0] * u[0] + nk[1] * u[1] + nk[2] * u[2];
-            let nc_u = ncx[l] * u[0] + ncy[l] * u[1] + ncz[l] * u[2];
-            let nk_nc = nk[0] * ncx[l] + nk[1] * ncy[l] + nk[2] * ncz[l];
-            let mut bracket = nk_u * nc_u + in_plane * nk_nc;
-            if COMPRESSIBLE {
-                let denominator = 1.0 + nk_u;
-                let term = compressible * (nk_nc + nc_u) / denominator;
-                // `x - 0` is `x` bit for bit, so the select matches the
-                // one-term loop's skipped subtraction.
-                bracket -= if denominator > NEGLIGIBLE { term } else { 0.0 };
-            }
-            let t = force * inv_d * bracket;
-            terms[l] = if d <= coincident { 0.0 } else { t };
+            let point = std::array::from_fn(|d| block.point[d][l]);
+            let normal = std::array::from_fn(|d| block.normal[d][l]);
+            terms[l] = half_space.term::<COMPRESSIBLE>(
+                source,
+                scaled_force,
+                (&point, &normal),
+                coincident,
+            );
         }
         for l in 0..LANES {
             let t = terms[l];

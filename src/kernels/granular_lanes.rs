@@ -19,7 +19,9 @@
 // form the compiler turns into vector instructions.
 #![allow(clippy::needless_range_loop)]
 
-use super::granular::{GranularCoeffs, FRAME_EPSILON};
+use super::granular::{
+    pair_contact, wall_contact, Contact, GranularCoeffs, Sphere, WallTouch, FRAME_EPSILON,
+};
 use super::isa::Isa;
 
 /// Contacts per block.
@@ -52,11 +54,6 @@ impl ContactBlock {
     /// Copies lane 0 into lanes `from..`: a partly filled block's spare
     /// lanes then form a finite contact, which the caller does not read.
     pub fn fill_from_first(&mut self, from: usize) {
-        fn spread(lanes: &mut Lanes, from: usize) {
-            for l in from..CONTACT_LANES {
-                lanes[l] = lanes[0];
-            }
-        }
         for d in 0..3 {
             spread(&mut self.del[d], from);
             spread(&mut self.tangential[d], from);
@@ -70,6 +67,13 @@ impl ContactBlock {
             spread(&mut self.mass[side], from);
             spread(&mut self.moved[side], from);
         }
+    }
+}
+
+/// Copies lane 0 of `lanes` into lanes `from..`.
+fn spread(lanes: &mut Lanes, from: usize) {
+    for l in from..CONTACT_LANES {
+        lanes[l] = lanes[0];
     }
 }
 
@@ -120,39 +124,21 @@ unsafe fn block_avx2(
 }
 
 /// `corrected_granular_contact` and `contact_law` (Hertz, Tsuji or
-/// restitution damping, Mindlin with sliding), lane by lane.
+/// restitution damping, Mindlin with sliding), lane by lane: the scalar
+/// kernel's own geometry (`pair_contact`), then [`lane_law`].
 #[inline(always)]
 fn block_lanes(c: &GranularCoeffs, block: &mut ContactBlock, dt: f64, update: bool) -> BlockForces {
     let mut out = BlockForces::default();
-    let [del0, del1, del2] = block.del;
-    let [[vi0, vi1, vi2], [vj0, vj1, vj2]] = block.v;
-    let [[wi0, wi1, wi2], [wj0, wj1, wj2]] = block.omega;
-    let [ri, rj] = block.radius;
-    let [mi, mj] = block.mass;
-    let [moved_i, moved_j] = block.moved;
+    let lane = |side: usize, l: usize| Sphere {
+        v: std::array::from_fn(|d| block.v[side][d][l]),
+        omega: std::array::from_fn(|d| block.omega[side][d][l]),
+        radius: block.radius[side][l],
+        mass: block.mass[side][l],
+    };
     for l in 0..CONTACT_LANES {
-        // The geometry (`corrected_granular_contact`).
-        let del = [del0[l], del1[l], del2[l]];
-        let rsq = del[0] * del[0] + del[1] * del[1] + del[2] * del[2];
-        let r = rsq.sqrt();
-        let rinv = 1.0 / r;
-        let radsum = ri[l] + rj[l];
-        let (surface_i, surface_j) = (ri[l] + moved_i[l], rj[l] + moved_j[l]);
-        let delta = (surface_i + surface_j) - r;
-        let contact = LaneContact {
-            n: [del[0] * rinv, del[1] * rinv, del[2] * rinv],
-            delta,
-            reff: ri[l] * rj[l] / radsum,
-            meff: mi[l] * mj[l] / (mi[l] + mj[l]),
-            vr: [vi0[l] - vj0[l], vi1[l] - vj1[l], vi2[l] - vj2[l]],
-            wr: [
-                surface_i * wi0[l] + surface_j * wj0[l],
-                surface_i * wi1[l] + surface_j * wj1[l],
-                surface_i * wi2[l] + surface_j * wj2[l],
-            ],
-            arm_i: surface_i - 0.5 * delta,
-            arm_j: surface_j - 0.5 * delta,
-        };
+        let del = std::array::from_fn(|d| block.del[d][l]);
+        let moved = [block.moved[0][l], block.moved[1][l]];
+        let contact = pair_contact(&del, &lane(0, l), &lane(1, l), moved);
         let mut h = [
             block.tangential[0][l],
             block.tangential[1][l],
@@ -193,16 +179,19 @@ impl WallBlock {
     /// Copies lane 0 into lanes `from..` (see
     /// [`ContactBlock::fill_from_first`]).
     pub fn fill_from_first(&mut self, from: usize) {
-        for l in from..CONTACT_LANES {
-            self.distance[l] = self.distance[0];
-            self.correction[l] = self.correction[0];
-            self.radius[l] = self.radius[0];
-            self.mass[l] = self.mass[0];
-            for d in 0..3 {
-                self.v[d][l] = self.v[d][0];
-                self.omega[d][l] = self.omega[d][0];
-                self.tangential[d][l] = self.tangential[d][0];
-            }
+        let scalars = [
+            &mut self.distance,
+            &mut self.correction,
+            &mut self.radius,
+            &mut self.mass,
+        ];
+        for lanes in scalars {
+            spread(lanes, from);
+        }
+        for d in 0..3 {
+            spread(&mut self.v[d], from);
+            spread(&mut self.omega[d], from);
+            spread(&mut self.tangential[d], from);
         }
     }
 }
@@ -256,7 +245,8 @@ unsafe fn wall_block_avx2(
     wall_block_lanes(coeffs, wall, block, dt, update)
 }
 
-/// `granular_wall_contact` lane by lane.
+/// `granular_wall_contact` lane by lane: its geometry (`wall_contact`),
+/// then [`lane_law`].
 #[inline(always)]
 fn wall_block_lanes(
     c: &GranularCoeffs,
@@ -267,29 +257,19 @@ fn wall_block_lanes(
 ) -> WallForces {
     let mut out = WallForces::default();
     for l in 0..CONTACT_LANES {
-        let distance = block.distance[l];
-        let surface = block.radius[l] + block.correction[l];
-        let rinv = 1.0 / distance;
-        let v = [block.v[0][l], block.v[1][l], block.v[2][l]];
-        let omega = [block.omega[0][l], block.omega[1][l], block.omega[2][l]];
-        let contact = LaneContact {
-            n: [
-                distance * normal[0] * rinv,
-                distance * normal[1] * rinv,
-                distance * normal[2] * rinv,
-            ],
-            delta: surface - distance,
-            reff: block.radius[l],
-            meff: block.mass[l],
-            vr: [
-                v[0] - wall_velocity[0],
-                v[1] - wall_velocity[1],
-                v[2] - wall_velocity[2],
-            ],
-            wr: [surface * omega[0], surface * omega[1], surface * omega[2]],
-            arm_i: surface,
-            arm_j: 0.0,
+        let touch = WallTouch {
+            distance: block.distance[l],
+            normal: *normal,
+            velocity: *wall_velocity,
+            correction: block.correction[l],
         };
+        let sphere = Sphere {
+            v: std::array::from_fn(|d| block.v[d][l]),
+            omega: std::array::from_fn(|d| block.omega[d][l]),
+            radius: block.radius[l],
+            mass: block.mass[l],
+        };
+        let contact = wall_contact(&touch, &sphere);
         let mut h = [
             block.tangential[0][l],
             block.tangential[1][l],
@@ -306,19 +286,6 @@ fn wall_block_lanes(
     out
 }
 
-/// One lane's contact, as `contact_law` reads it (without the relative
-/// rotation, which only rolling and twisting use).
-struct LaneContact {
-    n: [f64; 3],
-    delta: f64,
-    reff: f64,
-    meff: f64,
-    vr: [f64; 3],
-    wr: [f64; 3],
-    arm_i: f64,
-    arm_j: f64,
-}
-
 /// One lane's result.
 struct LaneForce {
     force: [f64; 3],
@@ -332,12 +299,12 @@ struct LaneForce {
 #[inline(always)]
 fn lane_law(
     c: &GranularCoeffs,
-    contact: &LaneContact,
+    contact: &Contact,
     h: &mut [f64; 3],
     dt: f64,
     update: bool,
 ) -> LaneForce {
-    let LaneContact {
+    let Contact {
         n,
         delta,
         reff,
@@ -346,6 +313,7 @@ fn lane_law(
         wr,
         arm_i,
         arm_j,
+        ..
     } = *contact;
     let vnnr = vr[0] * n[0] + vr[1] * n[1] + vr[2] * n[2];
     let vn = [n[0] * vnnr, n[1] * vnnr, n[2] * vnnr];

@@ -129,11 +129,9 @@ impl HalfSpace {
         }
     }
 
-    /// `(scale, in_plane, compressible)`: `-gamma (1 + nu) / (2 pi E)`,
-    /// `3 - 4 nu` and `1 - 2 nu` (0 when negligible), for kernels that
-    /// form [`Self::displacement`] themselves.
-    pub(super) fn coefficients(&self) -> (f64, f64, f64) {
-        (self.scale, self.in_plane, self.compressible)
+    /// `-gamma (1 + nu) / (2 pi E)`, the factor of every term.
+    pub(super) fn scale(&self) -> f64 {
+        self.scale
     }
 
     /// `1 - 2 nu`, or 0 when negligible.
@@ -145,27 +143,55 @@ impl HalfSpace {
     /// force on contact `k`; 0 for coincident points.
     #[inline]
     pub fn displacement(&self, k: &ContactPoint, c: &ContactPoint, radius: f64) -> f64 {
+        let (source, scaled) = ((&k.point, &k.normal), self.scale * k.force);
+        let (receiver, coincident) = ((&c.point, &c.normal), COINCIDENT_POINTS * radius);
+        if self.compressible != 0.0 {
+            self.term::<true>(source, scaled, receiver, coincident)
+        } else {
+            self.term::<false>(source, scaled, receiver, coincident)
+        }
+    }
+
+    /// `delta_kc` from a `source` (point and inward normal) whose force
+    /// times `scale` is `scaled_force` at a `receiver`, 0 for points
+    /// closer than `coincident`; `COMPRESSIBLE` says whether the `1 - 2
+    /// nu` term is on. Written without branches (selects between values
+    /// both computed), so that the closure's lanes (`closure_lanes`) form
+    /// their terms here too, vectorised.
+    #[inline(always)]
+    pub(super) fn term<const COMPRESSIBLE: bool>(
+        &self,
+        (k_point, k_normal): (&[f64; 3], &[f64; 3]),
+        scaled_force: f64,
+        (c_point, c_normal): (&[f64; 3], &[f64; 3]),
+        coincident: f64,
+    ) -> f64 {
         let w = [
-            c.point[0] - k.point[0],
-            c.point[1] - k.point[1],
-            c.point[2] - k.point[2],
+            c_point[0] - k_point[0],
+            c_point[1] - k_point[1],
+            c_point[2] - k_point[2],
         ];
         let d = (w[0] * w[0] + w[1] * w[1] + w[2] * w[2]).sqrt();
-        if d <= COINCIDENT_POINTS * radius {
-            return 0.0;
-        }
         // One division for the four quotients by `d`.
         let inv_d = 1.0 / d;
         let u = [w[0] * inv_d, w[1] * inv_d, w[2] * inv_d];
-        let nk_u = dot(&k.normal, &u);
-        let nc_u = dot(&c.normal, &u);
-        let nk_nc = dot(&k.normal, &c.normal);
+        let nk_u = dot(k_normal, &u);
+        let nc_u = dot(c_normal, &u);
+        let nk_nc = dot(k_normal, c_normal);
         let mut bracket = nk_u * nc_u + self.in_plane * nk_nc;
-        let denominator = 1.0 + nk_u;
-        if self.compressible != 0.0 && denominator > NEGLIGIBLE {
-            bracket -= self.compressible * (nk_nc + nc_u) / denominator;
+        if COMPRESSIBLE {
+            let denominator = 1.0 + nk_u;
+            let term = self.compressible * (nk_nc + nc_u) / denominator;
+            // `x - 0` is `x` bit for bit: the select leaves the bracket as
+            // a skipped subtraction would.
+            bracket -= if denominator > NEGLIGIBLE { term } else { 0.0 };
         }
-        self.scale * k.force * inv_d * bracket
+        let t = scaled_force * inv_d * bracket;
+        if d <= coincident {
+            0.0
+        } else {
+            t
+        }
     }
 }
 

@@ -196,25 +196,25 @@ fn cross(a: &[f64; 3], b: &[f64; 3]) -> [f64; 3] {
 
 /// What the contact law reads of one contact, whatever its two bodies
 /// are: two spheres, or a sphere and a flat wall.
-struct Contact {
+pub(crate) struct Contact {
     /// Unit normal, towards `i`.
-    n: [f64; 3],
+    pub(crate) n: [f64; 3],
     /// Overlap (d).
-    delta: f64,
+    pub(crate) delta: f64,
     /// Effective radius (d).
-    reff: f64,
+    pub(crate) reff: f64,
     /// Effective mass (m).
-    meff: f64,
+    pub(crate) meff: f64,
     /// Relative velocity of the centres, `v_i - v_j`.
-    vr: [f64; 3],
+    pub(crate) vr: [f64; 3],
     /// `R_i omega_i + R_j omega_j` (with each surface's moved radius):
     /// the surfaces' spin at the contact.
-    wr: [f64; 3],
+    pub(crate) wr: [f64; 3],
     /// Relative angular velocity, `omega_i - omega_j`.
-    relrot: [f64; 3],
+    pub(crate) relrot: [f64; 3],
     /// Lever arms of the tangential force about each centre.
-    arm_i: f64,
-    arm_j: f64,
+    pub(crate) arm_i: f64,
+    pub(crate) arm_j: f64,
 }
 
 /// The contact force of touching spheres `i` and `j` at separation
@@ -255,13 +255,28 @@ pub fn corrected_granular_contact(
     dt: f64,
     update: bool,
 ) -> ContactForce {
+    let contact = pair_contact(del, si, sj, corrections);
+    contact_law(c, &contact, history, dt, update)
+}
+
+/// The contact of touching spheres `si` and `sj` at separation `del`,
+/// their surfaces moved out by `corrections` (see
+/// [`corrected_granular_contact`]): what the contact law reads. The
+/// one-contact kernel and the four-at-a-time lanes both form it here.
+#[inline(always)]
+pub(crate) fn pair_contact(
+    del: &[f64; 3],
+    si: &Sphere,
+    sj: &Sphere,
+    corrections: [f64; 2],
+) -> Contact {
     let rsq = del[0] * del[0] + del[1] * del[1] + del[2] * del[2];
     let r = rsq.sqrt();
     let rinv = 1.0 / r;
     let radsum = si.radius + sj.radius;
     let (surface_i, surface_j) = (si.radius + corrections[0], sj.radius + corrections[1]);
     let delta = (surface_i + surface_j) - r;
-    let contact = Contact {
+    Contact {
         n: [del[0] * rinv, del[1] * rinv, del[2] * rinv],
         delta,
         reff: si.radius * sj.radius / radsum,
@@ -281,8 +296,7 @@ pub fn corrected_granular_contact(
         // delta/2 from either centre.
         arm_i: surface_i - 0.5 * delta,
         arm_j: surface_j - 0.5 * delta,
-    };
-    contact_law(c, &contact, history, dt, update)
+    }
 }
 
 /// A flat wall's plane at one evaluation: normal to `axis`, at
@@ -374,6 +388,17 @@ pub fn granular_wall_contact(
     dt: f64,
     update: bool,
 ) -> ContactForce {
+    let contact = wall_contact(wall, s);
+    let mut out = contact_law(c, &contact, history, dt, update);
+    out.torque_j = [0.0; 3];
+    out
+}
+
+/// The contact of sphere `s` with the flat wall touching it at `wall`
+/// (see [`granular_wall_contact`]): what the contact law reads. The
+/// one-contact kernel and the four-at-a-time lanes both form it here.
+#[inline(always)]
+pub(crate) fn wall_contact(wall: &WallTouch, s: &Sphere) -> Contact {
     let WallTouch {
         distance,
         normal,
@@ -384,7 +409,7 @@ pub fn granular_wall_contact(
     // The normal as the reference forms it from the separation vector
     // `distance * normal`, so both round alike.
     let rinv = 1.0 / distance;
-    let contact = Contact {
+    Contact {
         n: normal.map(|c| distance * c * rinv),
         delta: surface - distance,
         reff: s.radius,
@@ -398,10 +423,7 @@ pub fn granular_wall_contact(
         relrot: s.omega,
         arm_i: surface,
         arm_j: 0.0,
-    };
-    let mut out = contact_law(c, &contact, history, dt, update);
-    out.torque_j = [0.0; 3];
-    out
+    }
 }
 
 /// Hertz normal force with damping, Mindlin tangential force, rolling and
