@@ -1,13 +1,13 @@
 //! The LIGGGHTS tutorial's bed (514 hydrogel beads under the closing lid),
-//! the first `steps` steps of the lid's pass with one contact law, on
-//! `threads`: prints the stage's wall time, ns per particle-step and the
+//! the first `steps` steps of the lid's pass with one contact law (the
+//! scene `bpm bench` times against LIGGGHTS), on `threads`: prints the stage's wall time, ns per particle-step and the
 //! engine's pass timers. A target for `perf record` and callgrind.
 //!
 //!     cargo run --release --example bed_profile -- closure 30000 1
 
-use bpm::scene::protocols::lid::lid_scene;
 use bpm::scene::{build_system, run_scene, RunOptions};
-use bpm::verify::liggghts::{tutorial_options, write_tutorial_bed, LiggghtsLaw};
+use bpm::studies::bench::native_scene;
+use bpm::verify::liggghts::{write_tutorial_bed, LiggghtsLaw};
 
 fn main() -> anyhow::Result<()> {
     let args: Vec<String> = std::env::args().collect();
@@ -20,11 +20,7 @@ fn main() -> anyhow::Result<()> {
     let threads: usize = args.get(3).map_or(Ok(1), |a| a.parse())?;
     let work = std::env::temp_dir().join(format!("bpm-bed-profile-{}", std::process::id()));
     let bed = write_tutorial_bed(&work, "input.data")?;
-    let opts = tutorial_options(&bed, 1);
-    let mut scene = lid_scene(&opts, law.multicontact(), law.name())?;
-    scene.stages.truncate(1);
-    scene.stages[0].steps = steps;
-    scene.stages[0].record.every = 1000;
+    let scene = native_scene(&bed, law, steps)?;
     let mut sys = build_system(&scene, threads);
     let (stages, error) = run_scene(&mut sys, &scene, &RunOptions::quiet(threads));
     std::fs::remove_dir_all(&work).ok();

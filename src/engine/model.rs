@@ -90,6 +90,14 @@ pub struct ForceInput<'a> {
     pub elapsed: f64,
 }
 
+impl ForceInput<'_> {
+    /// What a per-contact history advances by in this evaluation: `(dt,
+    /// true)` when it completes a step of `dt`, `(0, false)` otherwise.
+    pub fn history_step(&self) -> (f64, bool) {
+        (self.step_dt.unwrap_or(0.0), self.step_dt.is_some())
+    }
+}
+
 /// Where a model adds its forces (and torques).
 #[derive(Debug)]
 pub struct ForceOutput<'a> {

@@ -180,10 +180,7 @@ impl DemModel {
         let omega = input.omega.unwrap_or(&[]);
         let (v, radius, mass) = (input.v, input.radius, input.mass);
         let corrections = self.closure.as_ref().map(|c| c.pair_corrections());
-        let (dt, update) = match input.step_dt {
-            Some(dt) => (dt, true),
-            None => (0.0, false),
-        };
+        let (dt, update) = input.history_step();
         let history = &mut self.contacts.history;
         let mut tally = Tally::default();
         let mut block = ContactBlock::default();
@@ -252,10 +249,7 @@ impl DemModel {
         let omega = input.omega.unwrap_or(&[]);
         let (v, radius, mass) = (input.v, input.radius, input.mass);
         let corrections = self.closure.as_ref().map(|c| c.pair_corrections());
-        let (dt, update) = match input.step_dt {
-            Some(dt) => (dt, true),
-            None => (0.0, false),
-        };
+        let (dt, update) = input.history_step();
         let mut tally = Tally::default();
         let sphere = |i: usize| Sphere {
             v: v[i],

@@ -138,9 +138,9 @@ pub struct ClosurePass {
     settings: MultiContact,
     closure: Closure,
     half_space: HalfSpace,
-    /// Per pair-list entry, the pair's distance, or NaN when it is out of
-    /// reach.
-    distance: Vec<f64>,
+    /// Per pair-list entry, the pair's separation `x_i - x_j` and its
+    /// length, the length NaN when the pair is out of reach.
+    separation: Vec<([f64; 3], f64)>,
     /// The granular walls' planes at this pass.
     planes: Vec<WallPlane>,
     /// Per granular wall, per sphere, its centre's distance from the
@@ -175,7 +175,7 @@ impl ClosurePass {
                 material.youngs_modulus,
                 material.poisson_ratio,
             ),
-            distance: Vec::new(),
+            separation: Vec::new(),
             planes: Vec::new(),
             wall_distance: Vec::new(),
             offsets: Vec::new(),
@@ -229,9 +229,7 @@ impl ClosurePass {
         planes.extend(walls.iter().map(|w| w.plane(input.elapsed)));
         self.count(sep, input.neighbours, x, radius, &planes, reach_factor);
         self.place(
-            sep,
             input.neighbours,
-            x,
             radius,
             pair_history,
             &planes,
@@ -295,15 +293,16 @@ impl ClosurePass {
         let n = x.len();
         self.offsets.clear();
         self.offsets.resize(n + 1, 0);
-        self.distance.clear();
-        self.distance.resize(list.neighbours.len(), f64::NAN);
+        self.separation.clear();
+        self.separation
+            .resize(list.neighbours.len(), ([0.0; 3], f64::NAN));
         for i in 0..n {
             for k in list.offsets[i]..list.offsets[i + 1] {
                 let j = list.neighbours[k] as usize;
                 let (del, _) = sep.delta_image(&x[i], &x[j]);
                 let r = (del[0] * del[0] + del[1] * del[1] + del[2] * del[2]).sqrt();
                 if r < reach_factor * (radius[i] + radius[j]) {
-                    self.distance[k] = r;
+                    self.separation[k] = (del, r);
                     self.offsets[i + 1] += 1;
                     self.offsets[j + 1] += 1;
                 }
@@ -333,31 +332,27 @@ impl ClosurePass {
     /// in list order, each as its row sphere's then its neighbour's
     /// contact, then the walls in order. Each sphere's contacts keep that
     /// order.
-    #[allow(clippy::too_many_arguments)]
     fn place(
         &mut self,
-        sep: &MinimumImage,
         list: &NeighbourList,
-        x: &[[f64; 3]],
         radius: &[f64],
         history: &[ContactHistory],
         planes: &[WallPlane],
         wall_history: &[Vec<ContactHistory>],
     ) {
-        let total = self.offsets[x.len()];
+        let total = self.offsets[radius.len()];
         self.points.resize(total, ContactPoint::default());
         self.sides.resize(total, Side::Wall(0));
         self.deltas.resize(total, 0.0);
         self.cursor.clear();
-        self.cursor.extend_from_slice(&self.offsets[..x.len()]);
-        for i in 0..x.len() {
+        self.cursor.extend_from_slice(&self.offsets[..radius.len()]);
+        for i in 0..radius.len() {
             for k in list.offsets[i]..list.offsets[i + 1] {
-                let r = self.distance[k];
+                let (del, r) = self.separation[k];
                 if r.is_nan() {
                     continue;
                 }
                 let j = list.neighbours[k] as usize;
-                let (del, _) = sep.delta_image(&x[i], &x[j]);
                 let points =
                     pair_contact_points(&del, r, radius[i], radius[j], history[k].normal_force);
                 for (side, (sphere, point)) in [i, j].into_iter().zip(points).enumerate() {
@@ -386,7 +381,7 @@ impl ClosurePass {
             }
         }
         debug_assert!(
-            (0..x.len()).all(|i| self.cursor[i] == self.offsets[i + 1]),
+            (0..radius.len()).all(|i| self.cursor[i] == self.offsets[i + 1]),
             "every sphere fills the slots it counted"
         );
     }

@@ -83,7 +83,7 @@ impl ActiveGranularWall {
         corrections: Option<&[f64]>,
     ) -> WallContact {
         let plane = self.plane(input.elapsed);
-        let (step, update) = (input.step_dt.unwrap_or(0.0), input.step_dt.is_some());
+        let (step, update) = input.history_step();
         let touch = plane.touch(1.0, 0.0);
         let mut contact = WallContact::default();
         let (x, radius) = (input.x, input.radius);
@@ -163,7 +163,7 @@ impl ActiveGranularWall {
         corrections: Option<&[f64]>,
     ) -> WallContact {
         let plane = self.plane(input.elapsed);
-        let (step, update) = (input.step_dt.unwrap_or(0.0), input.step_dt.is_some());
+        let (step, update) = input.history_step();
         let mut contact = WallContact::default();
         let (x, radius) = (input.x, input.radius);
         for i in 0..x.len() {

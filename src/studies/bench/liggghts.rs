@@ -15,8 +15,8 @@
 
 use super::REPEATS;
 use crate::file_error::FileError;
-use crate::scene::protocols::lid::lid_scene;
-use crate::scene::{build_system, run_scene, RunOptions};
+use crate::scene::protocols::lid::{lid_scene, LidError};
+use crate::scene::{build_system, run_scene, RunOptions, Scene};
 use crate::verify::liggghts::{tutorial_options, write_tutorial_bed, LiggghtsLaw};
 use serde::Serialize;
 use std::path::{Path, PathBuf};
@@ -207,14 +207,21 @@ fn run_liggghts(
     })
 }
 
-/// The native engine on the same bed, lid and law, `steps` steps of the
-/// first pass on `threads`: the stage's wall seconds.
-fn run_native(bed: &Path, law: LiggghtsLaw, steps: u64, threads: usize) -> Result<f64, String> {
-    let opts = tutorial_options(bed, 1);
-    let mut scene = lid_scene(&opts, law.multicontact(), law.name()).map_err(|e| e.to_string())?;
+/// The native side's scene: the tutorial's bed (the data file `bed`)
+/// under the lid's first pass with `law`, cut to `steps` steps, a row
+/// every [`THERMO_EVERY`].
+pub fn native_scene(bed: &Path, law: LiggghtsLaw, steps: u64) -> Result<Scene, LidError> {
+    let mut scene = lid_scene(&tutorial_options(bed, 1), law.multicontact(), law.name())?;
     scene.stages.truncate(1);
     scene.stages[0].steps = steps;
     scene.stages[0].record.every = THERMO_EVERY;
+    Ok(scene)
+}
+
+/// The native engine on the same bed, lid and law, `steps` steps of the
+/// first pass on `threads`: the stage's wall seconds.
+fn run_native(bed: &Path, law: LiggghtsLaw, steps: u64, threads: usize) -> Result<f64, String> {
+    let scene = native_scene(bed, law, steps).map_err(|e| e.to_string())?;
     let mut sys = build_system(&scene, threads);
     let (stages, error) = run_scene(&mut sys, &scene, &RunOptions::quiet(threads));
     if let Some(e) = error {

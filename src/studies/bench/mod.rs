@@ -10,8 +10,8 @@ mod liggghts;
 mod packing;
 
 pub use liggghts::{
-    bench_liggghts, loop_time, trimmed_deck, LiggghtsBench, LiggghtsInstall, LiggghtsSpeed,
-    PASS_STEPS,
+    bench_liggghts, loop_time, native_scene, trimmed_deck, LiggghtsBench, LiggghtsInstall,
+    LiggghtsSpeed, PASS_STEPS,
 };
 pub use packing::{bench_packing, workload_protocol, PackingBench, PackingWorkload};
 
