@@ -173,6 +173,8 @@ impl Team {
         }
         shared.running.store(n - 1, Ordering::Relaxed);
         shared.epoch.fetch_add(1, Ordering::SeqCst);
+        #[cfg(test)]
+        tests::hold_caller(self);
         self.wake_sleepers();
         let mine = catch_unwind(AssertUnwindSafe(|| job(0)));
         let mut patience = Patience::new();
@@ -356,9 +358,16 @@ fn wait_for_pass(shared: &Shared, w: usize, seen: u64) -> u64 {
         }
         // Announce the sleep, then look once more: the caller moves
         // `epoch` before it reads the flag, so one of the two sees the
-        // other (both sequentially consistent).
-        shared.asleep[w].store(true, Ordering::SeqCst);
-        while shared.epoch.load(Ordering::SeqCst) == seen {
+        // other (both sequentially consistent). Announce again before
+        // every park: the caller of the pass this worker has already run
+        // may clear the flag (and unpark) late, after being held up
+        // between moving `epoch` and waking; parking again without the
+        // flag would let the next pass skip the wake-up and wait forever.
+        loop {
+            shared.asleep[w].store(true, Ordering::SeqCst);
+            if shared.epoch.load(Ordering::SeqCst) != seen {
+                break;
+            }
             std::thread::park();
         }
         shared.asleep[w].store(false, Ordering::SeqCst);
@@ -415,6 +424,58 @@ impl<T> SharedSlice<T> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use std::sync::Mutex;
+
+    /// Teams whose caller is held up, once, between moving `epoch` and
+    /// waking the sleepers, for the given time: the preemption of a busy
+    /// machine, at the one place where it matters.
+    static HOLDS: Mutex<Vec<(usize, Duration)>> = Mutex::new(Vec::new());
+
+    pub(super) fn hold_caller(team: &Team) {
+        let id = team as *const Team as usize;
+        let hold = {
+            let mut holds = HOLDS.lock().unwrap();
+            let at = holds.iter().position(|&(t, _)| t == id);
+            at.map(|k| holds.swap_remove(k).1)
+        };
+        if let Some(hold) = hold {
+            std::thread::sleep(hold);
+        }
+    }
+
+    /// A worker that ran its chunk and fell asleep before the pass's caller
+    /// woke it must still be woken by the next pass. It used to park again
+    /// without announcing it (its flag cleared by that late wake-up), and
+    /// the next pass then waited for it forever.
+    #[test]
+    fn a_worker_woken_late_is_woken_by_the_next_pass() {
+        let (done, finished) = std::sync::mpsc::channel();
+        std::thread::spawn(move || {
+            let team = Team::new(2);
+            let count = AtomicUsize::new(0);
+            team.run(|_| {
+                count.fetch_add(1, Ordering::Relaxed);
+            });
+            // The worker is spinning for the next pass: it runs its chunk
+            // while the caller is held, then falls asleep.
+            HOLDS
+                .lock()
+                .unwrap()
+                .push((&team as *const Team as usize, IDLE_BEFORE_SLEEP * 4));
+            for _ in 0..3 {
+                team.run(|_| {
+                    count.fetch_add(1, Ordering::Relaxed);
+                });
+                // Time for the worker, woken late, to park again.
+                std::thread::sleep(IDLE_BEFORE_SLEEP / 2);
+            }
+            done.send(count.load(Ordering::Relaxed)).unwrap();
+        });
+        let count = finished
+            .recv_timeout(Duration::from_secs(20))
+            .expect("the team hung: a pass waited for a worker that was never woken");
+        assert_eq!(count, 8);
+    }
 
     #[test]
     fn every_chunk_runs_once_per_pass_on_its_own_thread() {
