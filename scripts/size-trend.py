@@ -10,8 +10,11 @@ For every run it prints three estimates of the jamming point:
     against phi over the jammed states within 0.1 of it;
   - the bracket's midpoint.
 Then the weighted least-squares fit phi_c = phi_inf - b d/R of each
-estimate (each R weighted by the standard error of its seeds' mean; a
-single seed takes the mean spread of the R that have several).
+estimate over the runs with the most common grain number (each R weighted
+by the standard error of its seeds' mean; a single seed takes the mean
+spread of the R that have several). Runs with other grain numbers are
+listed beside the runs of their R with the common number, which separates
+grain number from grain size.
 
     python3 scripts/size-trend.py results/compaction/native results/compaction/seeds \
         results/compaction/size-trend/R4 results/compaction/size-trend/R4-seed2 \
@@ -73,7 +76,8 @@ def main(folders):
     runs = []
     for folder in folders:
         study = json.load(open(f"{folder}/compaction.json"))
-        radius = study["options"]["source"]["build"]["radius"]
+        build = study["options"]["source"]["build"]
+        radius, grains = build["radius"], build["grains"]
         for run in study["runs"]:
             fit = run["fits"]["pressure"]
             lo, hi = bracket(run["states"])
@@ -81,6 +85,7 @@ def main(folders):
             runs.append(
                 {
                     "R": radius,
+                    "grains": grains,
                     "seed": run["seed"],
                     "particles": run["particles"],
                     "run_s": run["run_seconds"],
@@ -94,14 +99,19 @@ def main(folders):
                     "folder": folder,
                 }
             )
-    print("| R (d) | seed | particles | run s | phi_c (free fit) | P exponent | Z = 0 until | Z > 0 from | phi_c (exponent 3/2) |")
-    print("| ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |")
-    for r in sorted(runs, key=lambda r: (r["R"], r["seed"])):
+    print("| R (d) | grains | seed | particles | run s | phi_c (free fit) | P exponent | Z = 0 until | Z > 0 from | phi_c (exponent 3/2) |")
+    print("| ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |")
+    for r in sorted(runs, key=lambda r: (r["R"], r["grains"], r["seed"])):
         lo, hi = r["bracket"]
         print(
-            f"| {r['R']:g} | {r['seed']} | {r['particles']:,} | {r['run_s']:.0f} | {r['fit']:.4f} | "
+            f"| {r['R']:g} | {r['grains']} | {r['seed']} | {r['particles']:,} | {r['run_s']:.0f} | {r['fit']:.4f} | "
             f"{r['exponent']:.2f} +- {r['error']:.2f} | {lo:.4f} | {hi:.4f} | {r['fixed']:.4f} |"
         )
+    counts = [r["grains"] for r in runs]
+    common = max(set(counts), key=counts.count)
+    others = [r for r in runs if r["grains"] != common]
+    runs = [r for r in runs if r["grains"] == common]
+    print(f"\nThe fits below take the {len(runs)} runs of {common} grains.")
     radii = sorted({r["R"] for r in runs})
     estimates = [("fit", "free fit"), ("fixed", "exponent 3/2"), ("midpoint", "bracket midpoint")]
     for key, name in estimates:
@@ -121,6 +131,12 @@ def main(folders):
             f"  fit phi_c = phi_inf - b d/R: phi_inf {phi_inf:.4f} +- {e_inf:.4f}, "
             f"b {b:.3f} +- {e_b:.3f}; R = 10: {at10:.4f} (paper 0.5979)"
         )
+        for o in others:
+            mean = statistics.mean(by_r[o["R"]]) if o["R"] in by_r else float("nan")
+            print(
+                f"  {o['grains']} grains, R = {o['R']:g}, seed {o['seed']}: {o[key]:.4f} "
+                f"({common} grains at this R: mean {mean:.4f})"
+            )
 
 
 if __name__ == "__main__":
