@@ -30,9 +30,15 @@ pub struct BenchArgs {
     /// Grain radius R of the compaction workload (d)
     #[arg(long, default_value_t = 3.0)]
     packing_radius: f64,
-    /// Steps timed in each stage of the compaction workload
+    /// Steps timed in each stage of the compaction workload (fewer on its
+    /// copies: about the same particle-steps per case, at least 20 steps)
     #[arg(long, default_value_t = 2000)]
     packing_steps: u64,
+    /// Copies of the compaction workload's packing per side, for its cost
+    /// against size (1 = the packing alone; 4 gives about 280,000 particles
+    /// at the default packing)
+    #[arg(long, value_delimiter = ',', default_value = "1")]
+    packing_replicas: Vec<usize>,
     /// Steps of the LIGGGHTS case: LIGGGHTS's hydrogel tutorial (514
     /// beads) under its closing lid, plain Hertz and the closure, in
     /// LIGGGHTS and natively (at most 30000, the lid's first pass; 0 skips
@@ -55,6 +61,7 @@ impl BenchArgs {
             packing_grains,
             packing_radius,
             packing_steps,
+            packing_replicas,
             liggghts_steps,
             output,
         } = self;
@@ -67,6 +74,7 @@ impl BenchArgs {
                 grains: packing_grains,
                 radius: packing_radius,
                 steps: packing_steps,
+                replicas: packing_replicas,
                 seed,
             }),
             liggghts_steps,

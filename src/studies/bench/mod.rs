@@ -432,7 +432,7 @@ impl Bench {
             for a_b in [0.0, -0.5] {
                 goals.push(Goal::at_least(
                     format!("2-thread speed-up, {n} particles, a_B={a_b} (x)"),
-                    self.ns(n, a_b, 1) / self.ns(n, a_b, 2),
+                    case_ns(&self.cases, n, a_b, 1) / case_ns(&self.cases, n, a_b, 2),
                     1.8,
                 ));
             }
@@ -504,10 +504,11 @@ impl Bench {
                 5.0,
             )];
         };
+        // The packing itself, not its copies side by side.
         let ns = |a_b: f64, threads: usize| {
             p.cases
                 .iter()
-                .find(|c| c.a_b == a_b && c.threads == threads)
+                .find(|c| c.particles == p.particles && c.a_b == a_b && c.threads == threads)
                 .map_or(f64::NAN, |c| c.ns_per_particle_step)
         };
         let mut goals = Vec::new();
@@ -534,70 +535,163 @@ impl Bench {
         goals
     }
 
-    fn ns(&self, particles: usize, a_b: f64, threads: usize) -> f64 {
-        self.cases
-            .iter()
-            .find(|c| c.particles == particles && c.a_b == a_b && c.threads == threads)
-            .map_or(f64::NAN, |c| c.ns_per_particle_step)
-    }
-
     /// The multibody term's cost and the 2-thread speed-ups, one line per
-    /// size.
+    /// size of the bulk solid and of the packing, with the cache level the
+    /// working set fits in.
     pub fn summary(&self) -> String {
-        let mut sizes: Vec<usize> = self.cases.iter().map(|c| c.particles).collect();
-        sizes.dedup();
-        sizes
-            .iter()
-            .map(|&n| {
-                let ns = |a_b: f64, threads: usize| self.ns(n, a_b, threads);
-                let ws = self
-                    .cases
-                    .iter()
-                    .find(|c| c.particles == n)
-                    .map_or(0, |c| c.working_set_bytes);
-                format!(
-                    "{n:>8} particles (working set {:.1} MB): multibody cost (a_B=-0.5 / a_B=0, 1 thread) {:.2}x   2-thread speed-up {:.2}x (a_B=0), {:.2}x (a_B=-0.5)",
-                    ws as f64 / 1e6,
-                    ns(-0.5, 1) / ns(0.0, 1),
-                    ns(0.0, 1) / ns(0.0, 2),
-                    ns(-0.5, 1) / ns(-0.5, 2)
-                )
-            })
-            .collect::<Vec<_>>()
-            .join("\n")
+        let caches = CacheSizes::of_this_machine();
+        let mut lines = size_lines("bulk", &self.cases, &caches);
+        if let Some(p) = &self.packing {
+            lines.extend(size_lines("packing", &p.cases, &caches));
+        }
+        lines.join("\n")
     }
 
     /// ns per particle-step against the number of particles, one series
-    /// per a_B and thread count.
+    /// per a_B and thread count: the bulk solid, and the packing when it
+    /// ran at more than one size.
     pub fn panels(&self) -> Vec<Panel> {
-        let series = [(0.0, 1), (0.0, 2), (-0.5, 1), (-0.5, 2)]
-            .iter()
-            .map(|&(a_b, threads)| {
-                let points = self
-                    .cases
-                    .iter()
-                    .filter(|c| c.a_b == a_b && c.threads == threads)
-                    .map(|c| (c.particles as f64, c.ns_per_particle_step))
-                    .collect();
-                Series::new(
-                    format!("a_B = {a_b}, {threads} thread(s)"),
-                    points,
-                    Mark::LinePoints,
-                )
-            })
-            .collect();
-        vec![Panel {
-            title: format!(
+        let mut panels = vec![size_panel(
+            format!(
                 "native engine, bulk solid and copies of it side by side ({})",
                 Isa::detect().name()
             ),
-            x_label: "particles".into(),
-            y_label: "ns per particle-step".into(),
-            log_x: true,
-            log_y: false,
-            series,
-        }]
+            &self.cases,
+        )];
+        if let Some(p) = self.packing.as_ref().filter(|p| p.cases.len() > 4) {
+            panels.push(size_panel(
+                format!(
+                    "native engine, compaction stages on the packing and copies of it ({})",
+                    Isa::detect().name()
+                ),
+                &p.cases,
+            ));
+        }
+        panels
     }
+}
+
+/// ns per particle-step of `cases` at `particles`, `a_b` and `threads`.
+fn case_ns(cases: &[BenchCase], particles: usize, a_b: f64, threads: usize) -> f64 {
+    cases
+        .iter()
+        .find(|c| c.particles == particles && c.a_b == a_b && c.threads == threads)
+        .map_or(f64::NAN, |c| c.ns_per_particle_step)
+}
+
+/// One line per size of `cases`: working set and the cache it fits in,
+/// the multibody term's cost and the 2-thread speed-ups.
+fn size_lines(workload: &str, cases: &[BenchCase], caches: &CacheSizes) -> Vec<String> {
+    let mut sizes: Vec<usize> = cases.iter().map(|c| c.particles).collect();
+    sizes.dedup();
+    sizes
+        .iter()
+        .map(|&n| {
+            let ns = |a_b: f64, threads: usize| case_ns(cases, n, a_b, threads);
+            let ws = cases
+                .iter()
+                .find(|c| c.particles == n)
+                .map_or(0, |c| c.working_set_bytes);
+            format!(
+                "{workload:<8} {n:>8} particles (working set {:.1} MB, {}): multibody cost (a_B=-0.5 / a_B=0, 1 thread) {:.2}x   2-thread speed-up {:.2}x (a_B=0), {:.2}x (a_B=-0.5)",
+                ws as f64 / 1e6,
+                caches.fit(ws),
+                ns(-0.5, 1) / ns(0.0, 1),
+                ns(0.0, 1) / ns(0.0, 2),
+                ns(-0.5, 1) / ns(-0.5, 2)
+            )
+        })
+        .collect()
+}
+
+/// ns per particle-step against particles, a series per a_B and threads.
+fn size_panel(title: String, cases: &[BenchCase]) -> Panel {
+    let series = [(0.0, 1), (0.0, 2), (-0.5, 1), (-0.5, 2)]
+        .iter()
+        .map(|&(a_b, threads)| {
+            let points = cases
+                .iter()
+                .filter(|c| c.a_b == a_b && c.threads == threads)
+                .map(|c| (c.particles as f64, c.ns_per_particle_step))
+                .collect();
+            Series::new(
+                format!("a_B = {a_b}, {threads} thread(s)"),
+                points,
+                Mark::LinePoints,
+            )
+        })
+        .collect();
+    Panel {
+        title,
+        x_label: "particles".into(),
+        y_label: "ns per particle-step".into(),
+        log_x: true,
+        log_y: false,
+        series,
+    }
+}
+
+/// The data caches of one core and the shared last level, in bytes, as
+/// Linux reports them (`/sys/devices/system/cpu/cpu0/cache`); empty
+/// where it does not.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct CacheSizes {
+    /// `(level, bytes)` of the data and unified caches, by level.
+    pub levels: Vec<(u32, usize)>,
+}
+
+impl CacheSizes {
+    /// This machine's caches.
+    pub fn of_this_machine() -> Self {
+        let root = Path::new("/sys/devices/system/cpu/cpu0/cache");
+        let mut levels: Vec<(u32, usize)> = (0..8)
+            .filter_map(|index| {
+                let dir = root.join(format!("index{index}"));
+                let read = |name: &str| std::fs::read_to_string(dir.join(name)).ok();
+                let kind = read("type")?;
+                if kind.trim() == "Instruction" {
+                    return None;
+                }
+                let level = read("level")?.trim().parse().ok()?;
+                Some((level, parse_cache_size(read("size")?.trim())?))
+            })
+            .collect();
+        levels.sort_unstable();
+        Self { levels }
+    }
+
+    /// The smallest cache `bytes` fit in ("fits L2 (2.0 MiB)"), or that
+    /// it exceeds them all.
+    pub fn fit(&self, bytes: usize) -> String {
+        let size = |b: usize| match b {
+            b if b < 1 << 20 => format!("{} KiB", b >> 10),
+            b => format!("{:.1} MiB", b as f64 / (1 << 20) as f64),
+        };
+        match self.levels.iter().find(|&&(_, s)| bytes <= s) {
+            Some(&(level, s)) => format!("fits L{level} ({})", size(s)),
+            None => match self.levels.last() {
+                Some(&(level, s)) => format!("beyond L{level} ({})", size(s)),
+                None => "cache sizes unknown".into(),
+            },
+        }
+    }
+}
+
+/// Linux's cache size notation: "48K", "2048K", "480M".
+fn parse_cache_size(text: &str) -> Option<usize> {
+    let (digits, unit) = match text.char_indices().find(|(_, c)| !c.is_ascii_digit()) {
+        Some((at, _)) => text.split_at(at),
+        None => (text, ""),
+    };
+    let value: usize = digits.parse().ok()?;
+    let scale = match unit {
+        "" => 1,
+        "K" => 1 << 10,
+        "M" => 1 << 20,
+        "G" => 1 << 30,
+        _ => return None,
+    };
+    Some(value * scale)
 }
 
 /// Bytes a step touches at least: positions, velocities, forces (3 x 8
@@ -1160,6 +1254,23 @@ fn lammps_timings(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn cache_sizes_read_linux_notation_and_name_the_level_a_working_set_fits() {
+        assert_eq!(parse_cache_size("48K"), Some(48 << 10));
+        assert_eq!(parse_cache_size("2048K"), Some(2 << 20));
+        assert_eq!(parse_cache_size("480M"), Some(480 << 20));
+        assert_eq!(parse_cache_size("512"), Some(512));
+        assert_eq!(parse_cache_size("4Q"), None);
+        assert_eq!(parse_cache_size("K"), None);
+        let caches = CacheSizes {
+            levels: vec![(1, 48 << 10), (2, 2 << 20), (3, 32 << 20)],
+        };
+        assert_eq!(caches.fit(40 << 10), "fits L1 (48 KiB)");
+        assert_eq!(caches.fit(3 << 20), "fits L3 (32.0 MiB)");
+        assert_eq!(caches.fit(33 << 20), "beyond L3 (32.0 MiB)");
+        assert_eq!(CacheSizes::default().fit(1), "cache sizes unknown");
+    }
 
     fn timing(style: &str, a_b: f64, thermo: u64, bond_ns: f64) -> LammpsBondTiming {
         LammpsBondTiming {

@@ -13,6 +13,7 @@ use super::{faster, upstream_speeds, BenchCase, BenchError, UpstreamSpeed, REPEA
 use crate::engine::Stage;
 use crate::scene::builders::grain::GrainKind;
 use crate::scene::builders::packing::{build_packing, PackingParams};
+use crate::scene::builders::replicate::replicate;
 use crate::scene::protocols::CompactionProtocol;
 use crate::scene::{build_system, run_scene, ForceField, RunOptions, Scene};
 use serde::Serialize;
@@ -24,8 +25,12 @@ pub struct PackingWorkload {
     pub grains: usize,
     /// Grain radius R (d; `bpm compact`'s default: 3).
     pub radius: f64,
-    /// Steps timed in each of the two stages.
+    /// Steps timed in each of the two stages (on the packing itself; its
+    /// copies run about the same particle-steps, at least 20 steps).
     pub steps: u64,
+    /// Copies of the packing per side for the cost against size (1 = the
+    /// packing alone, which the goals and the upstream comparison use).
+    pub replicas: Vec<usize>,
     /// Seed of the packing.
     pub seed: u64,
 }
@@ -51,6 +56,15 @@ impl PackingWorkload {
         }
         if self.steps == 0 {
             return bad("--packing-steps", "must be at least 1".into());
+        }
+        if self.replicas.is_empty() || self.replicas.contains(&0) {
+            return bad(
+                "--packing-replicas",
+                format!(
+                    "needs copies per side of at least 1, got {:?}",
+                    self.replicas
+                ),
+            );
         }
         Ok(())
     }
@@ -111,17 +125,25 @@ pub fn bench_packing(
         ..PackingBench::default()
     };
     let name = format!("packing {} grains R={}", workload.grains, workload.radius);
-    for a_b in [0.0, -0.5] {
-        let mut best: [Option<BenchCase>; 2] = [None, None];
-        for _ in 0..REPEATS {
-            for (kept, threads) in best.iter_mut().zip([1, 2]) {
-                let case = protocol_case(&packing, &name, a_b, threads, workload.steps);
-                *kept = Some(faster(kept.take(), case));
+    for &k in &workload.replicas {
+        let copies = replicate(&packing, [k; 3])?;
+        let steps = (workload.steps / (k * k * k) as u64).max(20);
+        let name = match k {
+            1 => name.clone(),
+            _ => format!("{name} x{}", k * k * k),
+        };
+        for a_b in [0.0, -0.5] {
+            let mut best: [Option<BenchCase>; 2] = [None, None];
+            for _ in 0..REPEATS {
+                for (kept, threads) in best.iter_mut().zip([1, 2]) {
+                    let case = protocol_case(&copies, &name, a_b, threads, steps);
+                    *kept = Some(faster(kept.take(), case));
+                }
             }
-        }
-        for case in best.into_iter().flatten() {
-            log(&case.line());
-            bench.cases.push(case);
+            for case in best.into_iter().flatten() {
+                log(&case.line());
+                bench.cases.push(case);
+            }
         }
     }
     bench.upstream = upstream_speeds(&packing, &name, workload.steps, log);
@@ -165,6 +187,22 @@ fn protocol_case(packing: &Scene, name: &str, a_b: f64, threads: usize, steps: u
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn copies_per_side_must_be_at_least_one() {
+        let workload = |replicas: Vec<usize>| PackingWorkload {
+            grains: 32,
+            radius: 3.0,
+            steps: 100,
+            replicas,
+            seed: 1,
+        };
+        assert!(workload(vec![1, 2]).validate().is_ok());
+        for bad in [vec![], vec![1, 0]] {
+            let message = workload(bad).validate().unwrap_err().to_string();
+            assert!(message.contains("--packing-replicas"), "{message}");
+        }
+    }
 
     #[test]
     fn the_workload_is_one_jam_and_one_compression_stage_of_the_given_steps() {
