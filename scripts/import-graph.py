@@ -98,9 +98,21 @@ class Crate:
     def __init__(self, with_tests):
         self.files = {}  # module path -> file
         self.text = {}
-        for f in sorted(SRC.rglob("*.rs")):
+        raw = {f: f.read_text() for f in sorted(SRC.rglob("*.rs"))}
+        if not with_tests:
+            # A test module in its own file (`#[cfg(test)] mod tests;`) is
+            # left out as an inline one is.
+            tests = {
+                module_path(f) + (m.group(1),)
+                for f, text in raw.items()
+                for m in re.finditer(
+                    r"#\[cfg\(test\)\]\s*(?:pub(?:\([^)]*\))?\s+)?mod\s+(\w+)\s*;", strip(text, True)
+                )
+            }
+            raw = {f: t for f, t in raw.items() if not any(module_path(f)[: len(p)] == p for p in tests)}
+        for f, text in raw.items():
             self.files[module_path(f)] = f
-            self.text[f] = strip(f.read_text(), with_tests)
+            self.text[f] = strip(text, with_tests)
         self.reexports = {f: self.pub_uses(f) for f in self.text}
 
     def is_facade(self, f):

@@ -1,7 +1,7 @@
 //! The normal damping: Tsuji's polynomial (LAMMPS's `damping tsuji`) or
 //! the coefficient-of-restitution form (`damping coeff_restitution`), both
-//! `eta_n = c_e sqrt(m_eff k_n a)`; the contact law (`contact_law` in
-//! mod.rs) applies it.
+//! `eta_n = c_e sqrt(m_eff k_n a)`; Hertz's normal force (`hertz` in
+//! normal.rs) applies it.
 
 use serde::{Deserialize, Serialize};
 

@@ -33,8 +33,9 @@
 //! The sub-models live in their own files, as LAMMPS's GRANULAR package
 //! splits them: `normal.rs` (Hertz), `damping.rs` (Tsuji, coefficient of
 //! restitution), `tangential.rs` (Mindlin's history spring, sliding
-//! friction), `rolling.rs` (SDS) and `twisting.rs` (Marshall, SDS). Their
-//! forces are still formed together, in one pass, by `contact_law` here.
+//! friction), `rolling.rs` (SDS) and `twisting.rs` (Marshall, SDS), each
+//! with its part of the force. `contact_law` here calls them in one pass,
+//! inlined, so a contact's arithmetic is that of one function.
 
 // Vector components are written `for d in 0..3` over several arrays at
 // once, as the equations read.
@@ -50,10 +51,10 @@ pub use damping::{restitution_prefactor, tsuji_prefactor, NormalDamping};
 pub use rolling::SpringDashpotSlider;
 pub use twisting::Twisting;
 
-use normal::youngs_compliance;
+use normal::{hertz, youngs_compliance};
 use serde::{Deserialize, Serialize};
 pub(crate) use tangential::FRAME_EPSILON;
-use tangential::{rotate_into_plane, shear_compliance, slider};
+use tangential::{shear_compliance, Mindlin};
 
 /// Material and friction of DEM spheres of one material: the scene's
 /// `force_field.granular`.
@@ -427,7 +428,7 @@ pub(crate) fn wall_contact(wall: &WallTouch, s: &Sphere) -> Contact {
 }
 
 /// Hertz normal force with damping, Mindlin tangential force, rolling and
-/// twisting resistance for one contact.
+/// twisting resistance for one contact, each from its sub-model's file.
 #[inline(always)]
 fn contact_law(
     c: &GranularCoeffs,
@@ -449,13 +450,17 @@ fn contact_law(
     } = *contact;
     let vnnr = vr[0] * n[0] + vr[1] * n[1] + vr[2] * n[2];
     let vn = [n[0] * vnnr, n[1] * vnnr, n[2] * vnnr];
+    let step = (dt, update);
 
-    // Hertz, with damping that scales as sqrt(k_n a).
-    let a = (delta * reff).sqrt();
-    let fne = c.normal_stiffness * delta * a;
-    let knfac = c.normal_stiffness * a;
-    let damp_normal = c.normal_damping * (meff * knfac).sqrt();
-    let fntot = fne - damp_normal * vnnr;
+    let normal = hertz(
+        c.normal_stiffness,
+        c.normal_damping,
+        delta,
+        reff,
+        meff,
+        vnnr,
+    );
+    let fntot = normal.force;
     // Friction limits follow the total normal force, damping included.
     let fncrit = fntot.abs();
     history.normal_force = fncrit;
@@ -469,22 +474,15 @@ fn contact_law(
     ];
 
     // Mindlin: a spring on the tangential displacement, stiffness 8 G_eff a.
-    let damp_tangential = c.tangential_damping * damp_normal;
-    let k_tangential = c.tangential_stiffness * a;
-    let fscrit = c.sliding_friction * fncrit;
-    if update {
-        rotate_into_plane(&mut history.tangential, &n, k_tangential, fscrit);
-        for d in 0..3 {
-            history.tangential[d] += vtr[d] * dt;
-        }
-    }
-    let fs = slider(
-        &mut history.tangential,
-        &vtr,
-        k_tangential,
-        damp_tangential,
-        fscrit,
+    let mindlin = Mindlin::at(
+        c.tangential_stiffness,
+        c.tangential_damping,
+        c.sliding_friction,
+        normal.a,
+        normal.damping,
+        fncrit,
     );
+    let fs = mindlin.force(&mut history.tangential, &n, &vtr, step);
 
     let mut out = ContactForce {
         force: [
@@ -505,52 +503,11 @@ fn contact_law(
 
     let mut roll_torque = None;
     if let Some(roll) = &c.rolling {
-        // Rolling velocity R (relrot x n) (Wang et al. 2015, eq. 31).
-        let vrl = [
-            reff * (relrot[1] * n[2] - relrot[2] * n[1]),
-            reff * (relrot[2] * n[0] - relrot[0] * n[2]),
-            reff * (relrot[0] * n[1] - relrot[1] * n[0]),
-        ];
-        let frcrit = roll.friction * fncrit;
-        if update {
-            rotate_into_plane(&mut history.rolling, &n, roll.stiffness, frcrit);
-            for d in 0..3 {
-                history.rolling[d] += vrl[d] * dt;
-            }
-        }
-        let fr = slider(
-            &mut history.rolling,
-            &vrl,
-            roll.stiffness,
-            roll.damping,
-            frcrit,
-        );
+        let fr = roll.rolling_force(&mut history.rolling, &n, &relrot, reff, fncrit, step);
         roll_torque = Some(cross(&n, &fr).map(|t| reff * t));
     }
-    // Marshall's twisting stiffness is k_t a^2 / 2 with the contact's
-    // tangential stiffness k_t = 8 G_eff a, so it grows as a^3 (the
-    // torsional stiffness of a circular contact), as LAMMPS 2021 has it.
-    let twist = match c.twisting {
-        Twisting::None => None,
-        Twisting::Marshall => Some((
-            0.5 * k_tangential * a * a,
-            0.5 * damp_tangential * a * a,
-            2.0 / 3.0 * a * c.sliding_friction,
-        )),
-        Twisting::Sds(t) => Some((t.stiffness, t.damping, t.friction)),
-    };
-    if let Some((k_twist, damp_twist, mu_twist)) = twist {
-        let magtwist = relrot[0] * n[0] + relrot[1] * n[1] + relrot[2] * n[2];
-        if update {
-            history.twist += magtwist * dt;
-        }
-        let mut moment = -k_twist * history.twist - damp_twist * magtwist;
-        let mtcrit = mu_twist * fncrit;
-        if moment.abs() > mtcrit {
-            let sign = f64::from(i8::from(magtwist > 0.0) - i8::from(magtwist < 0.0));
-            history.twist = 1.0 / k_twist * (mtcrit * sign - damp_twist * magtwist);
-            moment = -mtcrit * sign;
-        }
+    if let Some(twist) = c.twisting.at(&mindlin, normal.a, c.sliding_friction) {
+        let moment = twist.twisting_moment(&mut history.twist, &n, &relrot, fncrit, step);
         for d in 0..3 {
             out.torque_i[d] += moment * n[d];
             out.torque_j[d] -= moment * n[d];

@@ -1,13 +1,42 @@
 //! The normal force: Hertz (LAMMPS's `hertz/material`), `F_ne = k_n a
-//! delta` with `k_n = 4/3 E_eff`. The force itself, on the overlap the
-//! sphere-sphere or wall contact hands it (the multi-contact closure's
-//! corrected one included), is formed in the contact law (`contact_law` in
-//! mod.rs); here, how two materials' moduli mix into `E_eff`.
+//! delta` with `k_n = 4/3 E_eff`, on the overlap the sphere-sphere or wall
+//! contact hands it (the multi-contact closure's corrected one included),
+//! with the normal damping; and how two materials' moduli mix into
+//! `E_eff`.
 
 /// One body's share `(1 - nu^2) / E` of the Hertz contact compliance:
 /// `E_eff = 1 / (sum of both shares)`.
 pub(super) fn youngs_compliance(e: f64, nu: f64) -> f64 {
     (1.0 - nu * nu) / e
+}
+
+/// Hertz's normal force at one contact, and what the other sub-models
+/// derive from it.
+pub(super) struct Hertz {
+    /// Contact radius `a = sqrt(R delta)`.
+    pub(super) a: f64,
+    /// Normal dashpot `eta_n = c_e sqrt(m_eff k_n a)`.
+    pub(super) damping: f64,
+    /// Total normal force along `n`, `F_ne - eta_n (n . dv)`.
+    pub(super) force: f64,
+}
+
+/// The normal force of a contact with stiffness `k_n` and damping
+/// prefactor `c_e` at overlap `delta`, effective radius `reff` and mass
+/// `meff`, its centres moving apart at `vnnr = n . dv`.
+#[inline(always)]
+pub(super) fn hertz(k_n: f64, c_e: f64, delta: f64, reff: f64, meff: f64, vnnr: f64) -> Hertz {
+    // Damping that scales as sqrt(k_n a).
+    let a = (delta * reff).sqrt();
+    let fne = k_n * delta * a;
+    let knfac = k_n * a;
+    let damp_normal = c_e * (meff * knfac).sqrt();
+    let fntot = fne - damp_normal * vnnr;
+    Hertz {
+        a,
+        damping: damp_normal,
+        force: fntot,
+    }
 }
 
 #[cfg(test)]

@@ -2,7 +2,7 @@
 //! displacement (LAMMPS's `tangential mindlin NULL x_gt mu_s`), capped by
 //! sliding friction. The spring-dashpot-slider on a history vector and the
 //! history's turn into the tangent plane serve rolling too; the contact law
-//! (`contact_law` in mod.rs) calls them.
+//! (`contact_law` in mod.rs) calls [`Mindlin`].
 
 // Vector components are written `for d in 0..3` over several arrays at
 // once, as the equations read.
@@ -66,6 +66,66 @@ pub(super) fn slider(h: &mut [f64; 3], w: &[f64; 3], k: f64, eta: f64, limit: f6
         }
     }
     f
+}
+
+/// [`slider`] on a history vector `h` that turns with the contact normal
+/// `n`: in a step (`update`), `h` is first turned into the tangent plane
+/// and advanced by `w dt`.
+#[inline(always)]
+pub(super) fn history_slider(
+    h: &mut [f64; 3],
+    n: &[f64; 3],
+    w: &[f64; 3],
+    k: f64,
+    eta: f64,
+    limit: f64,
+    (dt, update): (f64, bool),
+) -> [f64; 3] {
+    if update {
+        rotate_into_plane(h, n, k, limit);
+        for d in 0..3 {
+            h[d] += w[d] * dt;
+        }
+    }
+    slider(h, w, k, eta, limit)
+}
+
+/// Mindlin's tangential spring and dashpot at one contact, and the
+/// sliding cap.
+pub(super) struct Mindlin {
+    /// Spring `k_t a`.
+    pub(super) stiffness: f64,
+    /// Dashpot `eta_t = x_gt eta_n`.
+    pub(super) damping: f64,
+    /// Cap `mu_s |F_n|`.
+    pub(super) limit: f64,
+}
+
+impl Mindlin {
+    /// With coefficients `k_t = 8 G_eff`, `x_gt` and `mu_s`, at a contact
+    /// of radius `a`, normal dashpot `eta_n` and total normal force
+    /// `fncrit` in magnitude.
+    #[inline(always)]
+    pub(super) fn at(k_t: f64, x_gt: f64, mu_s: f64, a: f64, eta_n: f64, fncrit: f64) -> Self {
+        Self {
+            damping: x_gt * eta_n,
+            stiffness: k_t * a,
+            limit: mu_s * fncrit,
+        }
+    }
+
+    /// The tangential force on the tangential displacement `xi`, the
+    /// surfaces moving at `vtr` against each other at the contact.
+    #[inline(always)]
+    pub(super) fn force(
+        &self,
+        xi: &mut [f64; 3],
+        n: &[f64; 3],
+        vtr: &[f64; 3],
+        step: (f64, bool),
+    ) -> [f64; 3] {
+        history_slider(xi, n, vtr, self.stiffness, self.damping, self.limit, step)
+    }
 }
 
 #[cfg(test)]
