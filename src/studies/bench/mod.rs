@@ -505,12 +505,7 @@ impl Bench {
             )];
         };
         // The packing itself, not its copies side by side.
-        let ns = |a_b: f64, threads: usize| {
-            p.cases
-                .iter()
-                .find(|c| c.particles == p.particles && c.a_b == a_b && c.threads == threads)
-                .map_or(f64::NAN, |c| c.ns_per_particle_step)
-        };
+        let ns = |a_b: f64, threads: usize| case_ns(&p.cases, p.particles, a_b, threads);
         let mut goals = Vec::new();
         for a_b in [0.0, -0.5] {
             goals.push(Goal::at_least(
@@ -558,7 +553,8 @@ impl Bench {
             ),
             &self.cases,
         )];
-        if let Some(p) = self.packing.as_ref().filter(|p| p.cases.len() > 4) {
+        let copies_timed = |p: &&PackingBench| p.cases.iter().any(|c| c.particles != p.particles);
+        if let Some(p) = self.packing.as_ref().filter(copies_timed) {
             panels.push(size_panel(
                 format!(
                     "native engine, compaction stages on the packing and copies of it ({})",
@@ -720,12 +716,7 @@ pub fn run_bench(
     output: Option<&Path>,
     log: &mut dyn FnMut(&str),
 ) -> Result<Bench, BenchError> {
-    if opts.replicas.is_empty() || opts.replicas.contains(&0) {
-        return Err(BenchError::Options(format!(
-            "--replicas needs copies per side of at least 1, got {:?}",
-            opts.replicas
-        )));
-    }
+    check_copies("--replicas", &opts.replicas)?;
     if let Some(workload) = &opts.packing {
         workload.validate()?;
     }
@@ -745,19 +736,11 @@ pub fn run_bench(
     let mut cases = Vec::new();
     for &k in &opts.replicas {
         let scene = replicate(&solid, [k; 3])?;
-        let steps = (opts.steps / (k * k * k) as u64).max(20);
+        let steps = steps_on_copies(opts.steps, k);
         for a_b in [0.0, -0.5] {
-            // 1 and 2 threads alternately, each count's faster run kept.
-            let mut best: [Option<BenchCase>; 2] = [None, None];
-            for _ in 0..REPEATS {
-                for (kept, threads) in best.iter_mut().zip([1, 2]) {
-                    *kept = Some(faster(kept.take(), bench_case(&scene, a_b, threads, steps)));
-                }
-            }
-            for case in best.into_iter().flatten() {
-                log(&case.line());
-                cases.push(case);
-            }
+            cases.extend(faster_on_1_and_2(log, |threads| {
+                bench_case(&scene, a_b, threads, steps)
+            }));
         }
     }
     let specialisations = specialisation_ratios(&solid, opts.steps, log);
@@ -968,6 +951,41 @@ impl UpstreamSpeed {
 /// machine is shared, and one run can be slowed by its neighbours by tens
 /// of percent.
 pub(super) const REPEATS: usize = 2;
+
+/// `case(threads)` on 1 and 2 threads alternately, [`REPEATS`] times:
+/// each count's faster run, logged, in thread order.
+pub(super) fn faster_on_1_and_2(
+    log: &mut dyn FnMut(&str),
+    mut case: impl FnMut(usize) -> BenchCase,
+) -> Vec<BenchCase> {
+    let mut best: [Option<BenchCase>; 2] = [None, None];
+    for _ in 0..REPEATS {
+        for (kept, threads) in best.iter_mut().zip([1, 2]) {
+            *kept = Some(faster(kept.take(), case(threads)));
+        }
+    }
+    let best: Vec<BenchCase> = best.into_iter().flatten().collect();
+    for case in &best {
+        log(&case.line());
+    }
+    best
+}
+
+/// Steps per case on `k` copies per side of a system timed for `steps`:
+/// about the same particle-steps, and at least 20 steps.
+pub(super) fn steps_on_copies(steps: u64, k: usize) -> u64 {
+    (steps / (k * k * k) as u64).max(20)
+}
+
+/// Refuses, naming `option`, copies per side below 1 or none at all.
+pub(super) fn check_copies(option: &str, copies: &[usize]) -> Result<(), BenchError> {
+    if copies.is_empty() || copies.contains(&0) {
+        return Err(BenchError::Options(format!(
+            "{option} needs copies per side of at least 1, got {copies:?}"
+        )));
+    }
+    Ok(())
+}
 
 /// The faster of `kept` (if any) and `case`.
 pub(super) fn faster(kept: Option<BenchCase>, case: BenchCase) -> BenchCase {

@@ -9,7 +9,10 @@
 //! neighbour rebuilds, a box that changes every step and fewer bonds per
 //! particle (grain surfaces): this is what the studies spend their time on.
 
-use super::{faster, upstream_speeds, BenchCase, BenchError, UpstreamSpeed, REPEATS};
+use super::{
+    check_copies, faster_on_1_and_2, steps_on_copies, upstream_speeds, BenchCase, BenchError,
+    UpstreamSpeed,
+};
 use crate::engine::Stage;
 use crate::scene::builders::grain::GrainKind;
 use crate::scene::builders::packing::{build_packing, PackingParams};
@@ -57,16 +60,7 @@ impl PackingWorkload {
         if self.steps == 0 {
             return bad("--packing-steps", "must be at least 1".into());
         }
-        if self.replicas.is_empty() || self.replicas.contains(&0) {
-            return bad(
-                "--packing-replicas",
-                format!(
-                    "needs copies per side of at least 1, got {:?}",
-                    self.replicas
-                ),
-            );
-        }
-        Ok(())
+        check_copies("--packing-replicas", &self.replicas)
     }
 }
 
@@ -127,23 +121,15 @@ pub fn bench_packing(
     let name = format!("packing {} grains R={}", workload.grains, workload.radius);
     for &k in &workload.replicas {
         let copies = replicate(&packing, [k; 3])?;
-        let steps = (workload.steps / (k * k * k) as u64).max(20);
+        let steps = steps_on_copies(workload.steps, k);
         let name = match k {
             1 => name.clone(),
             _ => format!("{name} x{}", k * k * k),
         };
         for a_b in [0.0, -0.5] {
-            let mut best: [Option<BenchCase>; 2] = [None, None];
-            for _ in 0..REPEATS {
-                for (kept, threads) in best.iter_mut().zip([1, 2]) {
-                    let case = protocol_case(&copies, &name, a_b, threads, steps);
-                    *kept = Some(faster(kept.take(), case));
-                }
-            }
-            for case in best.into_iter().flatten() {
-                log(&case.line());
-                bench.cases.push(case);
-            }
+            bench.cases.extend(faster_on_1_and_2(log, |threads| {
+                protocol_case(&copies, &name, a_b, threads, steps)
+            }));
         }
     }
     bench.upstream = upstream_speeds(&packing, &name, workload.steps, log);
