@@ -522,3 +522,55 @@ fn imported_atom_ids_survive_a_run_on_either_engine() {
         }
     }
 }
+
+#[test]
+fn stability_and_large_strain_replot_their_committed_reports_and_refuse_another() {
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+    for (command, folder, json, svg) in [
+        ("stability", "stability", "stability.json", "stability.svg"),
+        (
+            "large-strain",
+            "large-strain",
+            "large_strain.json",
+            "large_strain.svg",
+        ),
+    ] {
+        let out = tmp(&format!("replot-{command}"));
+        let committed = root.join("results").join(folder).join(json);
+        let st = bpm()
+            .args([command, "--from"])
+            .arg(&committed)
+            .arg("-o")
+            .arg(&out)
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&st.stderr);
+        assert!(st.status.success(), "{command}: {err}");
+        assert!(out.join(svg).exists(), "{command}: no {svg}");
+        // The report is written again from what was read; only options
+        // added since (at their defaults) may be new.
+        let before: serde_json::Value =
+            serde_json::from_slice(&std::fs::read(&committed).unwrap()).unwrap();
+        let after: serde_json::Value =
+            serde_json::from_slice(&std::fs::read(out.join(json)).unwrap()).unwrap();
+        assert_eq!(before["command"], after["command"], "{command}");
+        assert_eq!(before["program"], after["program"], "{command}");
+
+        // Another study's report is refused, naming the file.
+        let other = root.join("results/accuracy/accuracy.json");
+        let st = bpm()
+            .args([command, "--from"])
+            .arg(&other)
+            .arg("-o")
+            .arg(&out)
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&st.stderr);
+        assert_eq!(st.status.code(), Some(1), "{command}: {err}");
+        assert!(
+            err.contains("accuracy.json") && err.contains(&format!("not a {json}")),
+            "{command}: {err}"
+        );
+        assert!(!err.contains("panicked"), "{command}: {err}");
+    }
+}

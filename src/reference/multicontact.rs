@@ -15,7 +15,7 @@ pub const ADVANCED_GAMMA: f64 = 0.81;
 pub const ADVANCED_MPR: f64 = 0.11;
 
 /// The tables' law at one friction and Poisson's ratio.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, serde::Deserialize)]
 pub struct PaperLaw {
     /// Table D.1.
     pub alpha: f64,

@@ -17,7 +17,7 @@ pub mod cli;
 
 use crate::analysis::fit::interpolate;
 use crate::analysis::hertz::{effective_modulus, hertz_deviation, squeeze_curve};
-use crate::analysis::plot::{write_svg, Mark, Panel, PlotError, Series};
+use crate::analysis::plot::{Mark, Panel, PlotError, Series};
 use crate::file_error::FileError;
 use crate::options::{require_positive_up_to, require_within, validate_a_b_values, InvalidOption};
 use crate::scene::builders::grain::{GrainKind, GrainParams};
@@ -25,6 +25,7 @@ use crate::scene::protocols::{hertz_squeeze, SqueezeParams};
 use crate::scene::{ForceField, Scene};
 use crate::studies::calibration::{measure_moduli, paper_solid, CalibrationEngine, Loading};
 use crate::studies::hertz::{built_grain, gap_and_force, squeeze_native, HertzError, Moduli};
+use crate::studies::output::{self, OutputError, Provenance, StudyOutput, StudyReport};
 use crate::verify::engines::HarnessError;
 use serde::{Deserialize, Deserializer, Serialize};
 use std::path::Path;
@@ -47,9 +48,9 @@ pub enum AccuracyError {
     /// The report could not be written or read.
     #[error(transparent)]
     File(#[from] FileError),
-    /// An earlier report could not be parsed.
-    #[error("{0}")]
-    Json(String),
+    /// The report or its drawings could not be written or read back.
+    #[error(transparent)]
+    Output(#[from] OutputError),
 }
 
 /// What `bpm accuracy` runs. Every sweep holds the other parameters at
@@ -224,10 +225,9 @@ fn moduli_nan_if_null<'de, D: Deserializer<'de>>(d: D) -> Result<Option<[f64; 3]
 /// The study's record (`accuracy.json`).
 #[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct AccuracyReport {
-    /// Program and version.
-    pub program: String,
-    /// The command that wrote it.
-    pub command: String,
+    /// Program, version and the command that wrote it.
+    #[serde(flatten)]
+    pub provenance: Provenance,
     /// The options.
     pub options: AccuracyOptions,
     /// The calibration runs.
@@ -245,8 +245,7 @@ pub fn run_accuracy(
 ) -> Result<AccuracyReport, AccuracyError> {
     opts.validate()?;
     let mut report = AccuracyReport {
-        program: format!("bpm {}", env!("CARGO_PKG_VERSION")),
-        command: command.into(),
+        provenance: Provenance::new(command),
         options: opts.clone(),
         calibration: Vec::new(),
         hertz: Vec::new(),
@@ -696,124 +695,129 @@ fn max(values: &[f64]) -> f64 {
 /// Writes `DIR/accuracy.json` and `DIR/accuracy.svg` (error against
 /// seconds, one panel per sweep, the defaults ringed).
 pub fn write_report(report: &AccuracyReport, dir: &Path) -> Result<(), AccuracyError> {
-    std::fs::create_dir_all(dir).map_err(FileError::on("creating", dir))?;
-    let json = dir.join("accuracy.json");
-    let text = serde_json::to_string_pretty(report).expect("report serialises");
-    std::fs::write(&json, text).map_err(FileError::on("writing", &json))?;
-    let mut panels = Vec::new();
-    for (hertz, cases) in [(false, &report.calibration), (true, &report.hertz)] {
-        for knob in [Knob::Timestep, Knob::Loading, Knob::Skin, Knob::Resolution] {
-            let sweep: Vec<&Case> = cases.iter().filter(|c| c.knob == knob).collect();
-            if sweep.is_empty() {
-                continue;
-            }
-            // A sweep that changes no result (the skin: it only changes
-            // which pairs are listed) has nothing to draw on a log scale of
-            // error; its cost against the value says what it does.
-            let exact = sweep
-                .iter()
-                .all(|c| c.error == 0.0 && c.error_g.unwrap_or(0.0) == 0.0);
-            if exact {
-                panels.push(Panel {
+    output::write_report(report, dir)?;
+    Ok(())
+}
+
+impl StudyReport for AccuracyReport {
+    const JSON: &'static str = "accuracy.json";
+
+    /// `accuracy.svg`: error against seconds, one panel per sweep, the
+    /// defaults ringed.
+    fn draw(&self, out: &StudyOutput) -> Result<(), OutputError> {
+        let report = self;
+        let mut panels = Vec::new();
+        for (hertz, cases) in [(false, &report.calibration), (true, &report.hertz)] {
+            for knob in [Knob::Timestep, Knob::Loading, Knob::Skin, Knob::Resolution] {
+                let sweep: Vec<&Case> = cases.iter().filter(|c| c.knob == knob).collect();
+                if sweep.is_empty() {
+                    continue;
+                }
+                // A sweep that changes no result (the skin: it only changes
+                // which pairs are listed) has nothing to draw on a log scale of
+                // error; its cost against the value says what it does.
+                let exact = sweep
+                    .iter()
+                    .all(|c| c.error == 0.0 && c.error_g.unwrap_or(0.0) == 0.0);
+                if exact {
+                    panels.push(Panel {
+                        title: format!(
+                            "{}: {} changes no result (every error 0): cost only",
+                            if hertz {
+                                "Hertz squeeze"
+                            } else {
+                                "calibration"
+                            },
+                            knob.name(hertz)
+                        ),
+                        x_label: knob.name(hertz).into(),
+                        y_label: "wall-clock seconds".into(),
+                        series: vec![Series::new(
+                            "seconds",
+                            sweep
+                                .iter()
+                                .map(|c| (c.value, c.seconds))
+                                .filter(|(_, y)| y.is_finite())
+                                .collect(),
+                            Mark::LinePoints,
+                        )],
+                        ..Panel::default()
+                    });
+                    continue;
+                }
+                let mut panel = Panel {
                     title: format!(
-                        "{}: {} changes no result (every error 0): cost only",
+                        "{}: {} (against {}; the reference, error 0, not drawn)",
                         if hertz {
-                            "Hertz squeeze"
+                            "Hertz squeeze force"
                         } else {
                             "calibration"
                         },
-                        knob.name(hertz)
+                        knob.name(hertz),
+                        sweep[0].reference
                     ),
-                    x_label: knob.name(hertz).into(),
-                    y_label: "wall-clock seconds".into(),
-                    series: vec![Series::new(
-                        "seconds",
-                        sweep
-                            .iter()
-                            .map(|c| (c.value, c.seconds))
-                            .filter(|(_, y)| y.is_finite())
-                            .collect(),
-                        Mark::LinePoints,
-                    )],
+                    x_label: "wall-clock seconds".into(),
+                    y_label: "relative error".into(),
+                    log_x: true,
+                    log_y: true,
                     ..Panel::default()
-                });
-                continue;
-            }
-            let mut panel = Panel {
-                title: format!(
-                    "{}: {} (against {}; the reference, error 0, not drawn)",
-                    if hertz {
-                        "Hertz squeeze force"
-                    } else {
-                        "calibration"
-                    },
-                    knob.name(hertz),
-                    sweep[0].reference
-                ),
-                x_label: "wall-clock seconds".into(),
-                y_label: "relative error".into(),
-                log_x: true,
-                log_y: true,
-                ..Panel::default()
-            };
-            let points = |f: &dyn Fn(&Case) -> Option<f64>| -> Vec<(f64, f64)> {
-                sweep
+                };
+                let points = |f: &dyn Fn(&Case) -> Option<f64>| -> Vec<(f64, f64)> {
+                    sweep
+                        .iter()
+                        .filter_map(|c| f(c).map(|e| (c.seconds, e)))
+                        .filter(|(x, y)| x.is_finite() && y.is_finite())
+                        .collect()
+                };
+                let label = |what: &str| {
+                    let values: Vec<String> =
+                        sweep.iter().map(|c| format!("{}", c.value)).collect();
+                    format!("{what}, {} = {}", knob.name(hertz), values.join(", "))
+                };
+                if hertz {
+                    panel.series.push(Series::new(
+                        label("force"),
+                        points(&|c| Some(c.error)),
+                        Mark::LinePoints,
+                    ));
+                } else {
+                    panel.series.push(Series::new(
+                        label("K"),
+                        points(&|c| Some(c.error)),
+                        Mark::LinePoints,
+                    ));
+                    panel.series.push(Series::new(
+                        label("G"),
+                        points(&|c| c.error_g),
+                        Mark::LinePoints,
+                    ));
+                }
+                let defaults: Vec<(f64, f64)> = sweep
                     .iter()
-                    .filter_map(|c| f(c).map(|e| (c.seconds, e)))
+                    .filter(|c| c.default)
+                    .flat_map(|c| {
+                        [Some(c.error), c.error_g]
+                            .into_iter()
+                            .flatten()
+                            .map(|e| (c.seconds, e))
+                    })
                     .filter(|(x, y)| x.is_finite() && y.is_finite())
-                    .collect()
-            };
-            let label = |what: &str| {
-                let values: Vec<String> = sweep.iter().map(|c| format!("{}", c.value)).collect();
-                format!("{what}, {} = {}", knob.name(hertz), values.join(", "))
-            };
-            if hertz {
-                panel.series.push(Series::new(
-                    label("force"),
-                    points(&|c| Some(c.error)),
-                    Mark::LinePoints,
-                ));
-            } else {
-                panel.series.push(Series::new(
-                    label("K"),
-                    points(&|c| Some(c.error)),
-                    Mark::LinePoints,
-                ));
-                panel.series.push(Series::new(
-                    label("G"),
-                    points(&|c| c.error_g),
-                    Mark::LinePoints,
-                ));
+                    .collect();
+                panel
+                    .series
+                    .push(Series::new("default", defaults, Mark::Rings));
+                panels.push(panel);
             }
-            let defaults: Vec<(f64, f64)> = sweep
-                .iter()
-                .filter(|c| c.default)
-                .flat_map(|c| {
-                    [Some(c.error), c.error_g]
-                        .into_iter()
-                        .flatten()
-                        .map(|e| (c.seconds, e))
-                })
-                .filter(|(x, y)| x.is_finite() && y.is_finite())
-                .collect();
-            panel
-                .series
-                .push(Series::new("default", defaults, Mark::Rings));
-            panels.push(panel);
         }
+        out.svg("accuracy.svg", &panels)?;
+        Ok(())
     }
-    write_svg(&dir.join("accuracy.svg"), &panels)?;
-    Ok(())
 }
 
 /// Rewrites `DIR/accuracy.svg` (and the JSON) from an earlier
 /// `accuracy.json` without running anything.
 pub fn replot(json: &Path, dir: &Path) -> Result<AccuracyReport, AccuracyError> {
-    let text = std::fs::read_to_string(json).map_err(FileError::on("reading", json))?;
-    let report: AccuracyReport = serde_json::from_str(&text)
-        .map_err(|e| AccuracyError::Json(format!("reading {}: {e}", json.display())))?;
-    write_report(&report, dir)?;
-    Ok(report)
+    Ok(output::replot(json, dir)?)
 }
 
 /// The report as a table, one line per run.

@@ -10,7 +10,7 @@ use crate::analysis::hertz::{
     effective_modulus, hertz_deviation, hertz_normalised_force, squeeze_curve, HertzDeviation,
     SqueezeCurve, CONTACT_THRESHOLD,
 };
-use crate::analysis::plot::{write_svg, Mark, Panel, PlotError, Series};
+use crate::analysis::plot::{Mark, Panel, PlotError, Series};
 use crate::file_error::FileError;
 use crate::reference::paper;
 use crate::scene::builders::grain::{build_grain, GrainKind, GrainParams, GrainSummary};
@@ -18,6 +18,7 @@ use crate::scene::protocols::{hertz_squeeze, SqueezeParams};
 use crate::scene::rotation::{rotated, uniform_rotation};
 use crate::scene::StageOutput;
 use crate::scene::{ForceField, Scene};
+use crate::studies::output::{self, OutputError, StudyOutput, StudyReport};
 use crate::studies::StudyRuntime;
 use crate::verify::single_point::nan_max;
 use crate::verify::{HarnessError, LammpsLauncher};
@@ -126,6 +127,9 @@ pub enum HertzError {
     /// A file or folder could not be written.
     #[error(transparent)]
     File(#[from] FileError),
+    /// The report or its drawings could not be written or read back.
+    #[error(transparent)]
+    Output(#[from] OutputError),
     /// The study stopped before its end (its checkpoint continues it).
     #[error(transparent)]
     Stopped(#[from] crate::studies::StudyStop),
@@ -593,12 +597,24 @@ fn ensemble(squeezes: &[Squeeze], max_overlap: f64) -> Ensemble {
 
 /// Writes `hertz.json` and `hertz.svg` into `out`.
 pub fn write_report(report: &HertzReport, out: &Path) -> Result<(), HertzError> {
-    std::fs::create_dir_all(out).map_err(FileError::on("creating", out))?;
-    let json = out.join("hertz.json");
-    crate::verify::write_json(&json, report).map_err(FileError::on("writing", &json))?;
-    let svg = out.join("hertz.svg");
-    write_svg(&svg, &panels(report))?;
+    output::write_report(report, out)?;
     Ok(())
+}
+
+/// Rewrites `hertz.svg` (and the JSON) in `out` from an earlier
+/// `hertz.json` without running anything.
+pub fn replot(json: &Path, out: &Path) -> Result<HertzReport, HertzError> {
+    Ok(output::replot(json, out)?)
+}
+
+impl StudyReport for HertzReport {
+    const JSON: &'static str = "hertz.json";
+
+    /// `hertz.svg`: [`panels`].
+    fn draw(&self, out: &StudyOutput) -> Result<(), OutputError> {
+        out.svg("hertz.svg", &panels(self))?;
+        Ok(())
+    }
 }
 
 /// Fig. 4-like panels: normalised force against delta / R, linear and

@@ -6,7 +6,7 @@
 pub mod cli;
 
 use crate::analysis::hertz::HertzDeviation;
-use crate::analysis::plot::{write_svg, Mark, Panel, Series};
+use crate::analysis::plot::{Mark, Panel, Series};
 use crate::file_error::FileError;
 use crate::scene::builders::grain::{build_grain, GrainKind, GrainParams, GrainSummary};
 use crate::scene::write_scene;
@@ -14,6 +14,7 @@ use crate::studies::hertz::{
     squeeze_grains, write_report, Grain, GrainSource, HertzError, HertzOptions, Moduli,
     SqueezeEngine, MIN_GRAIN_RADIUS,
 };
+use crate::studies::output::{self, OutputError, StudyOutput, StudyReport};
 use crate::studies::StudyRuntime;
 use crate::verify::LammpsLauncher;
 use serde::{Deserialize, Serialize};
@@ -192,10 +193,24 @@ pub fn run_hertz_sweep(
         cases,
         wall_seconds: start.elapsed().as_secs_f64(),
     };
-    let json = out.join("sweep.json");
-    crate::verify::write_json(&json, &report).map_err(FileError::on("writing", &json))?;
-    write_svg(&out.join("sweep.svg"), &sweep_panels(&report))?;
+    output::write_report(&report, out)?;
     Ok(report)
+}
+
+impl StudyReport for SweepReport {
+    const JSON: &'static str = "sweep.json";
+
+    /// `sweep.svg`: [`sweep_panels`].
+    fn draw(&self, out: &StudyOutput) -> Result<(), OutputError> {
+        out.svg("sweep.svg", &sweep_panels(self))?;
+        Ok(())
+    }
+}
+
+/// Rewrites `sweep.svg` (and the JSON) in `out` from an earlier
+/// `sweep.json` without running anything.
+pub fn replot(json: &Path, out: &Path) -> Result<SweepReport, HertzError> {
+    Ok(output::replot(json, out)?)
 }
 
 /// Relative rms deviation from Hertz against R, and against the squeeze

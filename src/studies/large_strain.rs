@@ -17,7 +17,7 @@
 
 pub mod cli;
 
-use crate::analysis::plot::{write_svg, Mark, Panel, PlotError, Series};
+use crate::analysis::plot::{Mark, Panel, PlotError, Series};
 use crate::engine::SphereWall;
 use crate::file_error::FileError;
 use crate::kernels::Separation;
@@ -26,8 +26,9 @@ use crate::scene::builders::grain::{GrainKind, GrainParams};
 use crate::scene::{build_system, protocols, run_scene, ForceField, RunOptions, Scene, StageSpec};
 use crate::studies::calibration::paper_solid;
 use crate::studies::hertz::{built_grain, HertzError};
+use crate::studies::output::{self, OutputError, Provenance, StudyOutput, StudyReport};
 use crate::verify::engines::HarnessError;
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 use std::path::Path;
 
 /// Why the study could not finish (a run that blows up is a result, not an
@@ -49,10 +50,13 @@ pub enum LargeStrainError {
     /// The report could not be written.
     #[error(transparent)]
     File(#[from] FileError),
+    /// The report or its drawings could not be written or read back.
+    #[error(transparent)]
+    Output(#[from] OutputError),
 }
 
 /// What `bpm large-strain` runs.
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct LargeStrainOptions {
     /// Multibody strengths (k d).
     pub a_b: Vec<f64>,
@@ -124,7 +128,7 @@ impl LargeStrainOptions {
 }
 
 /// One measured state (the first: the stress-free start, pressure 0).
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct State {
     /// Simulated time since the compression began (tau).
     pub time: f64,
@@ -141,7 +145,7 @@ pub struct State {
 }
 
 /// One compression.
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct Compression {
     /// "bulk" or "grain".
     pub body: String,
@@ -161,12 +165,11 @@ pub struct Compression {
 }
 
 /// The study's record (`large_strain.json`).
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct LargeStrainReport {
-    /// Program and version.
-    pub program: String,
-    /// The command that wrote it.
-    pub command: String,
+    /// Program, version and the command that wrote it.
+    #[serde(flatten)]
+    pub provenance: Provenance,
     /// The options.
     pub options: LargeStrainOptions,
     /// Every compression.
@@ -203,8 +206,7 @@ pub fn run_large_strain(
 ) -> Result<LargeStrainReport, LargeStrainError> {
     opts.validate()?;
     let mut report = LargeStrainReport {
-        program: format!("bpm {}", env!("CARGO_PKG_VERSION")),
-        command: command.into(),
+        provenance: Provenance::new(command),
         options: opts.clone(),
         compressions: Vec::new(),
     };
@@ -415,83 +417,97 @@ fn compress_grain(
 /// Writes `DIR/large_strain.json` and `DIR/large_strain.svg` (pressure
 /// against the bonds' volumetric strain, and bond extremes, per body).
 pub fn write_report(report: &LargeStrainReport, dir: &Path) -> Result<(), LargeStrainError> {
-    std::fs::create_dir_all(dir).map_err(FileError::on("creating", dir))?;
-    let json = dir.join("large_strain.json");
-    let text = serde_json::to_string_pretty(report).expect("report serialises");
-    std::fs::write(&json, text).map_err(FileError::on("writing", &json))?;
-    let variant = if report.options.zero_net {
-        ", zero-net variant"
-    } else {
-        ""
-    };
-    let mut panels = Vec::new();
-    for body in ["bulk", "grain"] {
-        let runs: Vec<&Compression> = report
-            .compressions
-            .iter()
-            .filter(|c| c.body == body)
-            .collect();
-        if runs.is_empty() {
-            continue;
-        }
-        let imposed = if body == "bulk" {
-            "imposed volumetric strain (box)"
-        } else {
-            "imposed volumetric strain (wall)"
-        };
-        let mut pressure = Panel {
-            title: format!("{body}: pressure against volumetric strain{variant}"),
-            x_label: imposed.into(),
-            y_label: "P (k/d^2)".into(),
-            ..Panel::default()
-        };
-        let mut material = Panel {
-            title: format!("{body}: the bonds' volumetric strain{variant}"),
-            x_label: imposed.into(),
-            y_label: "1 - sum r^3 / sum r0^3".into(),
-            ..Panel::default()
-        };
-        let mut bonds = Panel {
-            title: format!("{body}: shortest and longest bond{variant}"),
-            x_label: imposed.into(),
-            y_label: "r / r0".into(),
-            ..Panel::default()
-        };
-        for c in runs {
-            let tag = format!(
-                "a_B = {}{}",
-                c.a_b,
-                if c.complete { "" } else { " (failed)" }
-            );
-            let against_strain = |label: String, y: fn(&State) -> f64, mark: Mark| {
-                let points = c.states.iter().map(|s| (s.imposed_strain, y(s))).collect();
-                Series::new(label, points, mark)
-            };
-            pressure.series.push(against_strain(
-                tag.clone(),
-                |s| s.pressure,
-                Mark::LinePoints,
-            ));
-            material.series.push(against_strain(
-                tag.clone(),
-                |s| s.bond_strain,
-                Mark::LinePoints,
-            ));
-            bonds.series.push(against_strain(
-                format!("{tag}, shortest"),
-                |s| s.shortest_bond,
-                Mark::Line,
-            ));
-            bonds.series.push(against_strain(
-                format!("{tag}, longest"),
-                |s| s.longest_bond,
-                Mark::Line,
-            ));
-        }
-        panels.push(pressure);
-        panels.push(material);
-        panels.push(bonds);
-    }
-    write_svg(&dir.join("large_strain.svg"), &panels)?;
+    output::write_report(report, dir)?;
     Ok(())
+}
+
+/// Rewrites `DIR/large_strain.svg` (and the JSON) from an earlier
+/// `large_strain.json` without running anything.
+pub fn replot(json: &Path, dir: &Path) -> Result<LargeStrainReport, LargeStrainError> {
+    Ok(output::replot(json, dir)?)
+}
+
+impl StudyReport for LargeStrainReport {
+    const JSON: &'static str = "large_strain.json";
+
+    /// `large_strain.svg`: pressure against the bonds' volumetric strain,
+    /// and the bond extremes, per body.
+    fn draw(&self, out: &StudyOutput) -> Result<(), OutputError> {
+        let report = self;
+        let variant = if report.options.zero_net {
+            ", zero-net variant"
+        } else {
+            ""
+        };
+        let mut panels = Vec::new();
+        for body in ["bulk", "grain"] {
+            let runs: Vec<&Compression> = report
+                .compressions
+                .iter()
+                .filter(|c| c.body == body)
+                .collect();
+            if runs.is_empty() {
+                continue;
+            }
+            let imposed = if body == "bulk" {
+                "imposed volumetric strain (box)"
+            } else {
+                "imposed volumetric strain (wall)"
+            };
+            let mut pressure = Panel {
+                title: format!("{body}: pressure against volumetric strain{variant}"),
+                x_label: imposed.into(),
+                y_label: "P (k/d^2)".into(),
+                ..Panel::default()
+            };
+            let mut material = Panel {
+                title: format!("{body}: the bonds' volumetric strain{variant}"),
+                x_label: imposed.into(),
+                y_label: "1 - sum r^3 / sum r0^3".into(),
+                ..Panel::default()
+            };
+            let mut bonds = Panel {
+                title: format!("{body}: shortest and longest bond{variant}"),
+                x_label: imposed.into(),
+                y_label: "r / r0".into(),
+                ..Panel::default()
+            };
+            for c in runs {
+                let tag = format!(
+                    "a_B = {}{}",
+                    c.a_b,
+                    if c.complete { "" } else { " (failed)" }
+                );
+                let against_strain = |label: String, y: fn(&State) -> f64, mark: Mark| {
+                    let points = c.states.iter().map(|s| (s.imposed_strain, y(s))).collect();
+                    Series::new(label, points, mark)
+                };
+                pressure.series.push(against_strain(
+                    tag.clone(),
+                    |s| s.pressure,
+                    Mark::LinePoints,
+                ));
+                material.series.push(against_strain(
+                    tag.clone(),
+                    |s| s.bond_strain,
+                    Mark::LinePoints,
+                ));
+                bonds.series.push(against_strain(
+                    format!("{tag}, shortest"),
+                    |s| s.shortest_bond,
+                    Mark::Line,
+                ));
+                bonds.series.push(against_strain(
+                    format!("{tag}, longest"),
+                    |s| s.longest_bond,
+                    Mark::Line,
+                ));
+            }
+            panels.push(pressure);
+            panels.push(material);
+            panels.push(bonds);
+        }
+        out.svg("large_strain.svg", &panels)?;
+        Ok(())
+    }
 }

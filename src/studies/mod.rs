@@ -17,6 +17,10 @@
 //! - [`stability`] (`bpm stability`): the largest stable timestep against
 //!   a_B and damping, by bisection, beside the stiffest-mode prediction and
 //!   the moduli near the incompressible limit.
+//!
+//! What every study shares lives beside them: [`runtime`] (threads,
+//! progress, checkpoint) and [`output`] (the output folder, the JSON
+//! report and its drawings, the replot from the JSON).
 
 pub mod accuracy;
 pub mod bench;
@@ -26,10 +30,12 @@ pub mod hertz;
 pub mod hertz_sweep;
 pub mod large_strain;
 pub mod mcdem;
+pub mod output;
 pub mod runtime;
 pub mod stability;
 pub mod upstream;
 
+pub use output::{OutputError, Provenance, StudyOutput, StudyReport};
 pub use runtime::{RuntimeArgs, StudyRuntime, StudyStop};
 
 /// The command line, as recorded in the studies' reports.

@@ -26,7 +26,7 @@
 
 pub mod cli;
 
-use crate::analysis::plot::{write_svg, Mark, Panel, PlotError, Series};
+use crate::analysis::plot::{Mark, Panel, PlotError, Series};
 use crate::engine::StageDrivers;
 use crate::file_error::FileError;
 use crate::kernels::verlet_limit;
@@ -35,6 +35,7 @@ use crate::options::InvalidOption;
 use crate::scene::{build_system, protocols, ForceField, Scene, VelocityInit};
 use crate::scene::{run_native_report, RunOptions};
 use crate::studies::calibration::{measure_moduli, paper_solid, CalibrationEngine, Loading};
+use crate::studies::output::{self, OutputError, Provenance, StudyOutput, StudyReport};
 use crate::verify::engines::HarnessError;
 use rand::{Rng, SeedableRng};
 use serde::Serialize;
@@ -55,13 +56,16 @@ pub enum StabilityError {
     /// The report could not be written.
     #[error(transparent)]
     File(#[from] FileError),
+    /// The report or its drawings could not be written or read back.
+    #[error(transparent)]
+    Output(#[from] OutputError),
     /// The study stopped before its end (its checkpoint continues it).
     #[error(transparent)]
     Stopped(#[from] crate::studies::StudyStop),
 }
 
 /// What `bpm stability` runs.
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, Serialize, serde::Deserialize)]
 pub struct StabilityOptions {
     /// Box side L of the bulk solid (d).
     pub size: f64,
@@ -90,7 +94,9 @@ pub struct StabilityOptions {
     /// Also measure K, G and nu at every a_B (dt 0.1, the calibration
     /// protocol on the same solid).
     pub moduli: bool,
-    /// Map the zero-net-multibody variant instead of the paper's model.
+    /// Map the zero-net-multibody variant instead of the paper's model
+    /// (absent from reports written before the variant existed).
+    #[serde(default)]
     pub zero_net: bool,
 }
 
@@ -198,9 +204,11 @@ pub struct Trial {
     /// The verdict.
     pub stable: bool,
     /// Largest energy over the reference (NaN when it stopped).
+    #[serde(deserialize_with = "output::nan_if_null")]
     pub growth: f64,
     /// Largest bond strain at the end beyond the imposed strain (NaN when
     /// it stopped).
+    #[serde(deserialize_with = "output::nan_if_null")]
     pub residual_strain: f64,
     /// Why it counts as unstable (empty when stable).
     pub reason: String,
@@ -218,8 +226,10 @@ pub struct Limit {
     /// Seed of the solid.
     pub seed: u64,
     /// Largest timestep found stable (NaN: none in the bracket).
+    #[serde(deserialize_with = "output::nan_if_null")]
     pub dt_stable: f64,
     /// Smallest timestep found unstable (NaN: none in the bracket).
+    #[serde(deserialize_with = "output::nan_if_null")]
     pub dt_unstable: f64,
     /// Every trial, in the order run.
     pub trials: Vec<Trial>,
@@ -262,10 +272,13 @@ pub struct ModuliRow {
     /// Multibody strength (k d).
     pub a_b: f64,
     /// Bulk modulus (k / d): the fitted slope, NaN when a run failed.
+    #[serde(deserialize_with = "output::nan_if_null")]
     pub k: f64,
     /// Shear modulus (k / d), as `k`.
+    #[serde(deserialize_with = "output::nan_if_null")]
     pub g: f64,
     /// Poisson ratio.
+    #[serde(deserialize_with = "output::nan_if_null")]
     pub nu: f64,
     /// Why the slopes are not moduli: the engine error of a failed run, or
     /// a solid that is not stable (a negative slope, or no stable timestep
@@ -274,12 +287,11 @@ pub struct ModuliRow {
 }
 
 /// Everything `bpm stability` measured.
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, Serialize, serde::Deserialize)]
 pub struct StabilityReport {
-    /// Program and version.
-    pub program: String,
-    /// The command that ran the study.
-    pub command: String,
+    /// Program, version and command.
+    #[serde(flatten)]
+    pub provenance: Provenance,
     /// The options (seeds included: every run can be repeated).
     pub options: StabilityOptions,
     /// The criterion, in words.
@@ -569,8 +581,7 @@ pub fn run_stability(
     let threads = runtime.threads;
     opts.validate()?;
     let mut report = StabilityReport {
-        program: format!("bpm {}", env!("CARGO_PKG_VERSION")),
-        command: command.into(),
+        provenance: Provenance::new(command),
         options: opts.clone(),
         criterion: criterion(opts),
         particles: Vec::new(),
@@ -696,74 +707,88 @@ pub fn run_stability(
 
 /// Writes `DIR/stability.json` and `DIR/stability.svg`.
 pub fn write_report(report: &StabilityReport, dir: &Path) -> Result<(), StabilityError> {
-    std::fs::create_dir_all(dir).map_err(FileError::on("creating", dir))?;
-    let json = dir.join("stability.json");
-    let text = serde_json::to_string_pretty(report).expect("report serialises");
-    std::fs::write(&json, text).map_err(FileError::on("writing", &json))?;
-    let mut limits = Panel {
-        title: format!(
-            "Largest stable timestep, bulk solid L = {}{}",
-            report.options.size,
-            if report.options.zero_net {
-                ", zero-net variant"
-            } else {
-                ""
+    output::write_report(report, dir)?;
+    Ok(())
+}
+
+/// Rewrites `DIR/stability.svg` (and the JSON) from an earlier
+/// `stability.json` without running anything.
+pub fn replot(json: &Path, dir: &Path) -> Result<StabilityReport, StabilityError> {
+    Ok(output::replot(json, dir)?)
+}
+
+impl StudyReport for StabilityReport {
+    const JSON: &'static str = "stability.json";
+
+    /// `stability.svg`: the limits against a_B beside the stiffest mode's
+    /// prediction, and the moduli.
+    fn draw(&self, out: &StudyOutput) -> Result<(), OutputError> {
+        let report = self;
+        let mut limits = Panel {
+            title: format!(
+                "Largest stable timestep, bulk solid L = {}{}",
+                report.options.size,
+                if report.options.zero_net {
+                    ", zero-net variant"
+                } else {
+                    ""
+                }
+            ),
+            x_label: "a_B (k d)".into(),
+            y_label: "dt (tau)".into(),
+            log_y: true,
+            ..Panel::default()
+        };
+        for &gamma in &report.options.gammas {
+            for &seed in &report.options.seeds {
+                let points = report
+                    .limits
+                    .iter()
+                    .filter(|l| l.gamma == gamma && l.seed == seed && l.dt_stable.is_finite())
+                    .map(|l| (l.a_b, l.dt_stable))
+                    .collect();
+                limits.series.push(Series::new(
+                    format!("measured, Gamma = {gamma}, seed {seed}"),
+                    points,
+                    Mark::LinePoints,
+                ));
             }
-        ),
-        x_label: "a_B (k d)".into(),
-        y_label: "dt (tau)".into(),
-        log_y: true,
-        ..Panel::default()
-    };
-    for &gamma in &report.options.gammas {
-        for &seed in &report.options.seeds {
-            let points = report
-                .limits
-                .iter()
-                .filter(|l| l.gamma == gamma && l.seed == seed && l.dt_stable.is_finite())
-                .map(|l| (l.a_b, l.dt_stable))
-                .collect();
-            limits.series.push(Series::new(
-                format!("measured, Gamma = {gamma}, seed {seed}"),
-                points,
-                Mark::LinePoints,
-            ));
         }
-    }
-    let first = report.options.seeds[0];
-    let modes: Vec<&Mode> = report.modes.iter().filter(|m| m.seed == first).collect();
-    limits.series.push(Series::new(
-        "2 / sqrt(lambda_max), undamped",
-        modes.iter().map(|m| (m.a_b, m.dt_undamped)).collect(),
-        Mark::Rings,
-    ));
-    for &gamma in report.options.gammas.iter().filter(|g| **g > 0.0) {
+        let first = report.options.seeds[0];
+        let modes: Vec<&Mode> = report.modes.iter().filter(|m| m.seed == first).collect();
         limits.series.push(Series::new(
-            format!("Verlet limit of that mode, Gamma = {gamma}"),
-            modes
-                .iter()
-                .map(|m| (m.a_b, verlet_limit(m.lambda, gamma * m.damping)))
-                .collect(),
+            "2 / sqrt(lambda_max), undamped",
+            modes.iter().map(|m| (m.a_b, m.dt_undamped)).collect(),
             Mark::Rings,
         ));
+        for &gamma in report.options.gammas.iter().filter(|g| **g > 0.0) {
+            limits.series.push(Series::new(
+                format!("Verlet limit of that mode, Gamma = {gamma}"),
+                modes
+                    .iter()
+                    .map(|m| (m.a_b, verlet_limit(m.lambda, gamma * m.damping)))
+                    .collect(),
+                Mark::Rings,
+            ));
+        }
+        let mut moduli = Panel {
+            title: "Moduli at dt = 0.1 (calibration protocol)".into(),
+            x_label: "a_B (k d)".into(),
+            y_label: "nu, G/K".into(),
+            ..Panel::default()
+        };
+        let ok: Vec<&ModuliRow> = report.moduli.iter().filter(|m| m.error.is_none()).collect();
+        moduli.series.push(Series::new(
+            "Poisson ratio nu",
+            ok.iter().map(|m| (m.a_b, m.nu)).collect(),
+            Mark::LinePoints,
+        ));
+        moduli.series.push(Series::new(
+            "G / K",
+            ok.iter().map(|m| (m.a_b, m.g / m.k)).collect(),
+            Mark::LinePoints,
+        ));
+        out.svg("stability.svg", &[limits, moduli])?;
+        Ok(())
     }
-    let mut moduli = Panel {
-        title: "Moduli at dt = 0.1 (calibration protocol)".into(),
-        x_label: "a_B (k d)".into(),
-        y_label: "nu, G/K".into(),
-        ..Panel::default()
-    };
-    let ok: Vec<&ModuliRow> = report.moduli.iter().filter(|m| m.error.is_none()).collect();
-    moduli.series.push(Series::new(
-        "Poisson ratio nu",
-        ok.iter().map(|m| (m.a_b, m.nu)).collect(),
-        Mark::LinePoints,
-    ));
-    moduli.series.push(Series::new(
-        "G / K",
-        ok.iter().map(|m| (m.a_b, m.g / m.k)).collect(),
-        Mark::LinePoints,
-    ));
-    write_svg(&dir.join("stability.svg"), &[limits, moduli])?;
-    Ok(())
 }

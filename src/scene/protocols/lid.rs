@@ -75,7 +75,7 @@ pub fn liggghts_hertz_material(
 }
 
 /// The lid protocol's options, in the data file's units.
-#[derive(Clone, Debug, PartialEq, Serialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, serde::Deserialize)]
 pub struct LidOptions {
     /// The bed: a data file of spheres (`id type diameter density x y z`).
     pub packing: PathBuf,

@@ -142,6 +142,9 @@ pub enum CompactionError {
     /// The study stopped before its end (its checkpoint continues it).
     #[error(transparent)]
     Stopped(#[from] crate::studies::StudyStop),
+    /// The report or its drawings could not be written or read back.
+    #[error(transparent)]
+    Output(#[from] crate::studies::output::OutputError),
 }
 
 impl CompactionError {

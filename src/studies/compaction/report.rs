@@ -7,152 +7,161 @@ use super::{
 };
 use crate::analysis::distribution::{density_histogram, shape, z_scores};
 use crate::analysis::jamming::PowerLaw;
-use crate::analysis::plot::{write_svg, Mark, Panel, Series};
+use crate::analysis::plot::{Mark, Panel, Series};
 use crate::file_error::FileError;
+use crate::studies::output::{self, OutputError, StudyOutput, StudyReport};
 use std::path::Path;
 
 /// Writes `compaction.json`, `compaction.svg`, `jamming.svg`,
 /// `distributions.svg` (grains only), `moduli.svg` (when moduli were
 /// measured) and `compaction.txt` into `dir`.
 pub fn write_report(report: &CompactionReport, dir: &Path) -> Result<(), CompactionError> {
-    let json = dir.join("compaction.json");
-    let text = serde_json::to_string_pretty(report).expect("report serialises");
-    std::fs::write(&json, text).map_err(FileError::on("writing", &json))?;
-    let per_run = |f: &dyn Fn(&StateRow) -> Option<(f64, f64)>, mark| -> Vec<Series> {
-        report
-            .runs
-            .iter()
-            .map(|r| {
-                Series::new(
-                    format!("seed {}", r.seed),
-                    r.states.iter().filter_map(f).collect(),
-                    mark,
-                )
-            })
-            .collect()
-    };
-    let compressed = |s: &StateRow| s.stage != "start";
-    let mut z = per_run(
-        &|s| compressed(s).then_some((s.packing.phi_mc, s.packing.z_force)),
-        Mark::LinePoints,
-    );
-    for (series, run) in z.iter_mut().zip(&report.runs) {
-        series.label = format!("Z_force, seed {}", run.seed);
-    }
-    let mut zg = per_run(
-        &|s| compressed(s).then_some((s.packing.phi_mc, s.packing.z_geometry)),
-        Mark::Rings,
-    );
-    for (series, run) in zg.iter_mut().zip(&report.runs) {
-        series.label = format!("Z_geometry, seed {}", run.seed);
-    }
-    z.extend(zg);
-    let spheres = report.options.dem.is_some();
-    let mut panels = vec![
-        Panel {
-            title: "pressure against volume fraction".into(),
-            x_label: "phi_MC".into(),
-            y_label: "P / E_eff".into(),
-            log_y: true,
-            series: per_run(
-                &|s| compressed(s).then_some((s.packing.phi_mc, s.p_over_e_eff)),
-                Mark::LinePoints,
-            ),
-            ..Panel::default()
-        },
-        Panel {
-            title: "coordination (rattlers removed)".into(),
-            x_label: "phi_MC".into(),
-            y_label: "Z".into(),
-            series: z,
-            ..Panel::default()
-        },
-    ];
-    if spheres {
-        panels.push(Panel {
-            title: "pressure against the spheres' volume over the box's (paper Fig. 6a)".into(),
-            x_label: "phi_sphere".into(),
-            y_label: "P / E_eff".into(),
-            log_y: true,
-            series: per_run(
-                &|s| compressed(s).then_some((s.packing.phi_sphere, s.p_over_e_eff)),
-                Mark::LinePoints,
-            ),
-            ..Panel::default()
-        });
-    } else {
-        panels.extend([
+    output::write_report(report, dir)?;
+    Ok(())
+}
+
+impl StudyReport for CompactionReport {
+    const JSON: &'static str = "compaction.json";
+
+    /// `compaction.svg`, `jamming.svg`, `distributions.svg` (grains only),
+    /// `moduli.svg` (when moduli were measured) and `compaction.txt`.
+    fn draw(&self, out: &StudyOutput) -> Result<(), OutputError> {
+        let report = self;
+        let per_run = |f: &dyn Fn(&StateRow) -> Option<(f64, f64)>, mark| -> Vec<Series> {
+            report
+                .runs
+                .iter()
+                .map(|r| {
+                    Series::new(
+                        format!("seed {}", r.seed),
+                        r.states.iter().filter_map(f).collect(),
+                        mark,
+                    )
+                })
+                .collect()
+        };
+        let compressed = |s: &StateRow| s.stage != "start";
+        let mut z = per_run(
+            &|s| compressed(s).then_some((s.packing.phi_mc, s.packing.z_force)),
+            Mark::LinePoints,
+        );
+        for (series, run) in z.iter_mut().zip(&report.runs) {
+            series.label = format!("Z_force, seed {}", run.seed);
+        }
+        let mut zg = per_run(
+            &|s| compressed(s).then_some((s.packing.phi_mc, s.packing.z_geometry)),
+            Mark::Rings,
+        );
+        for (series, run) in zg.iter_mut().zip(&report.runs) {
+            series.label = format!("Z_geometry, seed {}", run.seed);
+        }
+        z.extend(zg);
+        let spheres = report.options.dem.is_some();
+        let mut panels = vec![
             Panel {
-                title: "grain volumetric strain".into(),
+                title: "pressure against volume fraction".into(),
                 x_label: "phi_MC".into(),
-                y_label: "mean eps_V".into(),
-                series: per_run(
-                    &|s| compressed(s).then_some((s.packing.phi_mc, s.packing.eps_v_mean)),
-                    Mark::LinePoints,
-                ),
-                ..Panel::default()
-            },
-            Panel {
-                title: "grain asphericity".into(),
-                x_label: "phi_MC".into(),
-                y_label: "mean alpha - alpha0".into(),
+                y_label: "P / E_eff".into(),
                 log_y: true,
                 series: per_run(
-                    &|s| {
-                        compressed(s)
-                            .then_some((s.packing.phi_mc, s.packing.asphericity_excess_mean))
-                    },
+                    &|s| compressed(s).then_some((s.packing.phi_mc, s.p_over_e_eff)),
                     Mark::LinePoints,
                 ),
                 ..Panel::default()
             },
-        ]);
-    }
-    panels.push(Panel {
-        title: "pressure and kinetic energy against time".into(),
-        x_label: "time (tau)".into(),
-        y_label: "P (k/d), KE per particle (k d^2)".into(),
-        log_x: true,
-        log_y: true,
-        series: report
-            .runs
-            .iter()
-            .flat_map(|r| {
-                let pts = |y: &[f64]| {
-                    r.series
-                        .time
-                        .iter()
-                        .zip(y)
-                        .map(|(&t, &y)| (t, y))
-                        .collect::<Vec<_>>()
-                };
-                [
-                    Series::new(
-                        format!("P, seed {}", r.seed),
-                        pts(&r.series.pressure),
-                        Mark::Line,
+            Panel {
+                title: "coordination (rattlers removed)".into(),
+                x_label: "phi_MC".into(),
+                y_label: "Z".into(),
+                series: z,
+                ..Panel::default()
+            },
+        ];
+        if spheres {
+            panels.push(Panel {
+                title: "pressure against the spheres' volume over the box's (paper Fig. 6a)".into(),
+                x_label: "phi_sphere".into(),
+                y_label: "P / E_eff".into(),
+                log_y: true,
+                series: per_run(
+                    &|s| compressed(s).then_some((s.packing.phi_sphere, s.p_over_e_eff)),
+                    Mark::LinePoints,
+                ),
+                ..Panel::default()
+            });
+        } else {
+            panels.extend([
+                Panel {
+                    title: "grain volumetric strain".into(),
+                    x_label: "phi_MC".into(),
+                    y_label: "mean eps_V".into(),
+                    series: per_run(
+                        &|s| compressed(s).then_some((s.packing.phi_mc, s.packing.eps_v_mean)),
+                        Mark::LinePoints,
                     ),
-                    Series::new(
-                        format!("KE/particle, seed {}", r.seed),
-                        pts(&r.series.ke_per_particle),
-                        Mark::Line,
+                    ..Panel::default()
+                },
+                Panel {
+                    title: "grain asphericity".into(),
+                    x_label: "phi_MC".into(),
+                    y_label: "mean alpha - alpha0".into(),
+                    log_y: true,
+                    series: per_run(
+                        &|s| {
+                            compressed(s)
+                                .then_some((s.packing.phi_mc, s.packing.asphericity_excess_mean))
+                        },
+                        Mark::LinePoints,
                     ),
-                ]
-            })
-            .collect(),
-    });
-    write_svg(&dir.join("compaction.svg"), &panels)?;
-    write_svg(&dir.join("jamming.svg"), &jamming_panels(report, spheres))?;
-    if !spheres {
-        let bands = band_z_scores(report);
-        write_svg(&dir.join("distributions.svg"), &distribution_panels(&bands))?;
+                    ..Panel::default()
+                },
+            ]);
+        }
+        panels.push(Panel {
+            title: "pressure and kinetic energy against time".into(),
+            x_label: "time (tau)".into(),
+            y_label: "P (k/d), KE per particle (k d^2)".into(),
+            log_x: true,
+            log_y: true,
+            series: report
+                .runs
+                .iter()
+                .flat_map(|r| {
+                    let pts = |y: &[f64]| {
+                        r.series
+                            .time
+                            .iter()
+                            .zip(y)
+                            .map(|(&t, &y)| (t, y))
+                            .collect::<Vec<_>>()
+                    };
+                    [
+                        Series::new(
+                            format!("P, seed {}", r.seed),
+                            pts(&r.series.pressure),
+                            Mark::Line,
+                        ),
+                        Series::new(
+                            format!("KE/particle, seed {}", r.seed),
+                            pts(&r.series.ke_per_particle),
+                            Mark::Line,
+                        ),
+                    ]
+                })
+                .collect(),
+        });
+        out.svg("compaction.svg", &panels)?;
+        out.svg("jamming.svg", &jamming_panels(report, spheres))?;
+        if !spheres {
+            let bands = band_z_scores(report);
+            out.svg("distributions.svg", &distribution_panels(&bands))?;
+        }
+        if report.runs.iter().any(|r| !r.moduli.is_empty()) {
+            out.svg("moduli.svg", &moduli_panels(report))?;
+        }
+        out.text("compaction.txt", &table(report))?;
+        Ok(())
     }
-    if report.runs.iter().any(|r| !r.moduli.is_empty()) {
-        write_svg(&dir.join("moduli.svg"), &moduli_panels(report))?;
-    }
-    std::fs::write(dir.join("compaction.txt"), table(report))
-        .map_err(FileError::on("writing", &dir.join("compaction.txt")))?;
-    Ok(())
 }
 
 /// Bands of `P / E_eff` in which the per-grain distributions are compared

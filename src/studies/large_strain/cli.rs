@@ -43,6 +43,10 @@ pub struct LargeStrainArgs {
     /// Timestep (tau).
     #[arg(long, default_value_t = 0.1)]
     dt: f64,
+    /// Rewrite the plot from an earlier large_strain.json without running
+    /// anything (other options are ignored).
+    #[arg(long)]
+    from: Option<PathBuf>,
 }
 
 impl LargeStrainArgs {
@@ -59,7 +63,17 @@ impl LargeStrainArgs {
             radius,
             wall_speed,
             dt,
+            from,
         } = self;
+        if let Some(path) = from {
+            let report = large_strain::replot(&path, &output)?;
+            println!(
+                "{} compressions replotted; wrote {}/large_strain.json and large_strain.svg",
+                report.compressions.len(),
+                output.display()
+            );
+            return Ok(());
+        }
         let opts = large_strain::LargeStrainOptions {
             a_b,
             zero_net,

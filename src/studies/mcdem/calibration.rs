@@ -18,7 +18,7 @@
 //! folder whose `compaction.json` already holds the same options is reused,
 //! so an interrupted calibration resumes where it stopped.
 
-use crate::analysis::plot::{write_svg_rows, Mark, Panel, Series};
+use crate::analysis::plot::{Mark, Panel, Series};
 use crate::engine::dem::MultiContact;
 use crate::file_error::FileError;
 use crate::options::InvalidOption;
@@ -27,6 +27,7 @@ use crate::studies::compaction::{
     read_report, run_compaction, CompactOptions, CompactionEngine, CompactionError,
     CompactionReport, DemContact, ModuliOptions, PackingSource,
 };
+use crate::studies::output::{self, OutputError, StudyOutput, StudyReport};
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 
@@ -661,15 +662,20 @@ pub fn run_calibration(
 
 /// Writes `calibration.json`, `calibration.svg` and `calibration.txt`.
 pub fn write_report(report: &CalibrationReport, dir: &Path) -> Result<(), CompactionError> {
-    let path = dir.join("calibration.json");
-    let json = serde_json::to_string_pretty(report)
-        .map_err(|e| CompactionError::Packing(format!("serialising the calibration: {e}")))?;
-    std::fs::write(&path, json).map_err(FileError::on("writing", &path))?;
-    // One row per grain study: standard, advanced, pressures.
-    write_svg_rows(&dir.join("calibration.svg"), &panels(report), 3)?;
-    let path = dir.join("calibration.txt");
-    std::fs::write(&path, table(report)).map_err(FileError::on("writing", &path))?;
+    output::write_report(report, dir)?;
     Ok(())
+}
+
+impl StudyReport for CalibrationReport {
+    const JSON: &'static str = "calibration.json";
+
+    /// `calibration.svg` (one row per grain study: standard, advanced,
+    /// pressures) and `calibration.txt` ([`table`]).
+    fn draw(&self, out: &StudyOutput) -> Result<(), OutputError> {
+        out.svg_rows("calibration.svg", &panels(self), 3)?;
+        out.text("calibration.txt", &table(self))?;
+        Ok(())
+    }
 }
 
 /// A law's legend.

@@ -18,16 +18,17 @@
 //! volume fraction 0.65 and 1.4% at 0.85 (docs/protocols.md).
 
 use super::{BoxWalls, Closures, Hydrogel, Variant, WalledBox};
-use crate::analysis::plot::{write_svg, Mark, Panel, PlotError, Series};
+use crate::analysis::plot::{Mark, Panel, PlotError, Series};
 use crate::file_error::FileError;
 use crate::scene::{validate, Mass, Scene, StageOutput, StageSpec};
+use crate::studies::output::{self, OutputError, StudyOutput, StudyReport};
 use rand::{Rng, SeedableRng};
 use rand_distr::{Distribution, Normal};
 use serde::Serialize;
 use std::path::Path;
 
 /// Options of `bpm mc-compress`.
-#[derive(Clone, Debug, PartialEq, Serialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, serde::Deserialize)]
 pub struct CompressionOptions {
     /// Number of spheres.
     pub spheres: usize,
@@ -100,6 +101,9 @@ pub enum CompressionError {
     /// The study stopped before its end (its checkpoint continues it).
     #[error(transparent)]
     Stopped(#[from] crate::studies::StudyStop),
+    /// The report or its drawings could not be written or read back.
+    #[error(transparent)]
+    Output(#[from] crate::studies::output::OutputError),
 }
 
 impl CompressionOptions {
@@ -354,7 +358,7 @@ pub struct Run {
 }
 
 /// The study's result.
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, Serialize, serde::Deserialize)]
 pub struct CompressionReport {
     /// The command that wrote it.
     pub command: String,
@@ -630,46 +634,54 @@ pub fn write_report(
     scene: &Scene,
     dir: &Path,
 ) -> Result<(), CompressionError> {
-    std::fs::create_dir_all(dir).map_err(FileError::on("creating", dir))?;
-    let json = dir.join("compression.json");
-    crate::verify::write_json(&json, report).map_err(FileError::on("writing", &json))?;
-    let scene_path = dir.join("scene.json");
-    crate::verify::write_json(&scene_path, scene).map_err(FileError::on("writing", &scene_path))?;
-    let cycle_panel = |cycle: usize, log_y: bool| {
-        let series = report
-            .runs
-            .iter()
-            .flat_map(|run| {
-                run.passes
-                    .iter()
-                    .filter(move |p| p.name.ends_with(&format!(" {cycle}")))
-                    .map(move |p| {
-                        let points = p
-                            .fraction
-                            .iter()
-                            .copied()
-                            .zip(p.walls.lid_stress.iter().copied())
-                            .collect();
-                        let mark = if p.name.starts_with("compress") {
-                            Mark::Line
-                        } else {
-                            Mark::Points
-                        };
-                        Series::new(format!("{}, {}", run.variant, p.name), points, mark)
-                    })
-            })
-            .collect();
-        Panel {
-            title: format!("cycle {cycle}: lid stress"),
-            x_label: "volume fraction".into(),
-            y_label: "lid stress (Pa)".into(),
-            log_y,
-            series,
-            ..Panel::default()
-        }
-    };
-    let cycles = report.options.cycles;
-    let panels = vec![cycle_panel(cycles, false), cycle_panel(cycles, true)];
-    write_svg(&dir.join("compression.svg"), &panels)?;
+    let out = output::write_report(report, dir)?;
+    out.json("scene.json", scene)?;
     Ok(())
+}
+
+impl StudyReport for CompressionReport {
+    const JSON: &'static str = "compression.json";
+
+    /// `compression.svg`: the lid stress against the volume fraction in
+    /// the last cycle, linear and logarithmic.
+    fn draw(&self, out: &StudyOutput) -> Result<(), OutputError> {
+        let report = self;
+        let cycle_panel = |cycle: usize, log_y: bool| {
+            let series = report
+                .runs
+                .iter()
+                .flat_map(|run| {
+                    run.passes
+                        .iter()
+                        .filter(move |p| p.name.ends_with(&format!(" {cycle}")))
+                        .map(move |p| {
+                            let points = p
+                                .fraction
+                                .iter()
+                                .copied()
+                                .zip(p.walls.lid_stress.iter().copied())
+                                .collect();
+                            let mark = if p.name.starts_with("compress") {
+                                Mark::Line
+                            } else {
+                                Mark::Points
+                            };
+                            Series::new(format!("{}, {}", run.variant, p.name), points, mark)
+                        })
+                })
+                .collect();
+            Panel {
+                title: format!("cycle {cycle}: lid stress"),
+                x_label: "volume fraction".into(),
+                y_label: "lid stress (Pa)".into(),
+                log_y,
+                series,
+                ..Panel::default()
+            }
+        };
+        let cycles = report.options.cycles;
+        let panels = vec![cycle_panel(cycles, false), cycle_panel(cycles, true)];
+        out.svg("compression.svg", &panels)?;
+        Ok(())
+    }
 }

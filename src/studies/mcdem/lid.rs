@@ -4,11 +4,12 @@
 //! and a plot.
 
 use super::Variant;
-use crate::analysis::plot::{write_svg, Mark, Panel, PlotError, Series};
+use crate::analysis::plot::{Mark, Panel, PlotError, Series};
 use crate::engine::MultiContact;
 use crate::file_error::FileError;
 use crate::scene::protocols::lid::{lid_scene, LidError, LidOptions, LidRows};
 use crate::scene::Scene;
+use crate::studies::output::{self, OutputError, StudyOutput, StudyReport};
 use serde::Serialize;
 use std::path::Path;
 
@@ -35,6 +36,9 @@ pub enum LidStudyError {
     /// The study stopped before its end (its checkpoint continues it).
     #[error(transparent)]
     Stopped(#[from] crate::studies::StudyStop),
+    /// The report or its drawings could not be written or read back.
+    #[error(transparent)]
+    Output(#[from] crate::studies::output::OutputError),
 }
 
 /// The contact laws compared: plain Hertz and the standard closure at the
@@ -67,7 +71,7 @@ pub struct LidRun {
 }
 
 /// What `bpm mc-compress --packing` writes (`lid.json`).
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, Serialize, serde::Deserialize)]
 pub struct LidReport {
     /// The command line.
     pub command: String,
@@ -132,39 +136,45 @@ pub fn write_lid_report(
     scenes: &[Scene],
     dir: &Path,
 ) -> Result<(), LidStudyError> {
-    std::fs::create_dir_all(dir).map_err(FileError::on("creating", dir))?;
-    let json = dir.join("lid.json");
-    let text = serde_json::to_string_pretty(report).expect("report serialises");
-    std::fs::write(&json, text).map_err(FileError::on("writing", &json))?;
+    let out = output::write_report(report, dir)?;
     for (k, scene) in scenes.iter().enumerate() {
-        let path = dir.join(format!("scene-{k}.json"));
         let text = serde_json::to_string(scene).expect("a scene serialises");
-        std::fs::write(&path, text).map_err(FileError::on("writing", &path))?;
+        out.text(&format!("scene-{k}.json"), &text)?;
     }
-    let panel = Panel {
-        title: format!(
-            "lid on {} spheres, {} steps per pass",
-            report.spheres, report.steps_per_pass
-        ),
-        x_label: "time".into(),
-        y_label: "force on the lid".into(),
-        series: report
-            .runs
-            .iter()
-            .map(|r| {
-                let points = r
-                    .rows
-                    .time
-                    .iter()
-                    .copied()
-                    .zip(r.rows.lid_force.iter().copied());
-                Series::new(r.variant.clone(), points.collect(), Mark::Line)
-            })
-            .collect(),
-        ..Panel::default()
-    };
-    write_svg(&dir.join("lid.svg"), &[panel])?;
     Ok(())
+}
+
+impl StudyReport for LidReport {
+    const JSON: &'static str = "lid.json";
+
+    /// `lid.svg`: the lid force against time.
+    fn draw(&self, out: &StudyOutput) -> Result<(), OutputError> {
+        let report = self;
+        let panel = Panel {
+            title: format!(
+                "lid on {} spheres, {} steps per pass",
+                report.spheres, report.steps_per_pass
+            ),
+            x_label: "time".into(),
+            y_label: "force on the lid".into(),
+            series: report
+                .runs
+                .iter()
+                .map(|r| {
+                    let points = r
+                        .rows
+                        .time
+                        .iter()
+                        .copied()
+                        .zip(r.rows.lid_force.iter().copied());
+                    Series::new(r.variant.clone(), points.collect(), Mark::Line)
+                })
+                .collect(),
+            ..Panel::default()
+        };
+        out.svg("lid.svg", &[panel])?;
+        Ok(())
+    }
 }
 
 /// A table: per contact law, the peak lid force, the rows, the run time.

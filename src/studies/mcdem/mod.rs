@@ -34,7 +34,7 @@ use serde::Serialize;
 
 /// A contact closure compared in a study: plain Hertz (`None`) or a
 /// multi-contact closure.
-#[derive(Clone, Debug, PartialEq, Serialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, serde::Deserialize)]
 pub struct Variant {
     /// Name in tables and legends.
     pub name: String,
@@ -47,7 +47,7 @@ pub struct Variant {
 /// `gamma_advanced` and `mpr`. The defaults are the values the
 /// multi-contact study calibrated on its single-particle tests (its
 /// Appendix B).
-#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, serde::Deserialize)]
 pub struct Closures {
     /// Standard closure's prefactor.
     pub gamma: f64,
@@ -244,7 +244,7 @@ impl BoxWalls {
 /// reduced units the studies run in: lengths in sphere diameters `d`,
 /// stresses in the spheres' Young's modulus `E`, masses in sphere masses
 /// `m`, so times are in `tau = sqrt(m / (E d))`.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, serde::Deserialize)]
 pub struct Hydrogel {
     /// Sphere diameter (m).
     pub diameter: f64,

@@ -13,14 +13,15 @@
 //! ratio, restitution and friction.
 
 use super::{BoxWalls, Closures, Hydrogel, Variant, WalledBox};
-use crate::analysis::plot::{write_svg, Mark, Panel, PlotError, Series};
+use crate::analysis::plot::{Mark, Panel, PlotError, Series};
 use crate::file_error::FileError;
 use crate::scene::{validate, Mass, Scene, StageSpec};
+use crate::studies::output::{self, OutputError, StudyOutput, StudyReport};
 use serde::Serialize;
 use std::path::Path;
 
 /// Options of `bpm mc-box`.
-#[derive(Clone, Debug, PartialEq, Serialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, serde::Deserialize)]
 pub struct BoxOptions {
     /// Sphere diameter (m); 2 mm in the study.
     pub diameter: f64,
@@ -80,6 +81,9 @@ pub enum BoxError {
     /// The study stopped before its end (its checkpoint continues it).
     #[error(transparent)]
     Stopped(#[from] crate::studies::StudyStop),
+    /// The report or its drawings could not be written or read back.
+    #[error(transparent)]
+    Output(#[from] crate::studies::output::OutputError),
 }
 
 impl BoxOptions {
@@ -172,7 +176,7 @@ pub struct Curve {
 }
 
 /// The study's result.
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, Serialize, serde::Deserialize)]
 pub struct BoxReport {
     /// The command that wrote it.
     pub command: String,
@@ -338,45 +342,60 @@ pub fn table(report: &BoxReport) -> String {
 /// Writes `rigid_box.json`, `rigid_box.svg` and each run's scene
 /// (`scenes/<arrangement>-<law>.json`) into `dir`.
 pub fn write_report(report: &BoxReport, dir: &Path) -> Result<(), BoxError> {
-    std::fs::create_dir_all(dir).map_err(FileError::on("creating", dir))?;
-    let json = dir.join("rigid_box.json");
-    crate::verify::write_json(&json, report).map_err(FileError::on("writing", &json))?;
-    let mut panels = Vec::new();
-    for arrangement in [Arrangement::Single, Arrangement::Bcc] {
-        let curves = || {
-            report
-                .curves
-                .iter()
-                .filter(move |c| c.arrangement == arrangement)
-        };
-        let pts = |c: &Curve, y: &[f64]| {
-            c.displacement
-                .iter()
-                .copied()
-                .zip(y.iter().copied())
-                .collect()
-        };
-        for (what, lid) in [("lid", true), ("side walls", false)] {
-            panels.push(Panel {
-                title: format!("{}: {what}", arrangement.name()),
-                x_label: "lid displacement / R".into(),
-                y_label: format!("{what} stress (Pa)"),
-                series: curves()
-                    .map(|c| {
-                        let y = if lid {
-                            &c.walls.lid_stress
-                        } else {
-                            &c.walls.side_stress
-                        };
-                        Series::new(c.variant.clone(), pts(c, y), Mark::Line)
-                    })
-                    .collect(),
-                ..Panel::default()
-            });
+    let out = output::write_report(report, dir)?;
+    write_scenes(report, &out)
+}
+
+impl StudyReport for BoxReport {
+    const JSON: &'static str = "rigid_box.json";
+
+    /// `rigid_box.svg`: lid and side-wall stress against the lid's
+    /// displacement, per arrangement.
+    fn draw(&self, out: &StudyOutput) -> Result<(), OutputError> {
+        let report = self;
+        let mut panels = Vec::new();
+        for arrangement in [Arrangement::Single, Arrangement::Bcc] {
+            let curves = || {
+                report
+                    .curves
+                    .iter()
+                    .filter(move |c| c.arrangement == arrangement)
+            };
+            let pts = |c: &Curve, y: &[f64]| {
+                c.displacement
+                    .iter()
+                    .copied()
+                    .zip(y.iter().copied())
+                    .collect()
+            };
+            for (what, lid) in [("lid", true), ("side walls", false)] {
+                panels.push(Panel {
+                    title: format!("{}: {what}", arrangement.name()),
+                    x_label: "lid displacement / R".into(),
+                    y_label: format!("{what} stress (Pa)"),
+                    series: curves()
+                        .map(|c| {
+                            let y = if lid {
+                                &c.walls.lid_stress
+                            } else {
+                                &c.walls.side_stress
+                            };
+                            Series::new(c.variant.clone(), pts(c, y), Mark::Line)
+                        })
+                        .collect(),
+                    ..Panel::default()
+                });
+            }
         }
+        out.svg("rigid_box.svg", &panels)?;
+        Ok(())
     }
-    write_svg(&dir.join("rigid_box.svg"), &panels)?;
-    // Each run's scene, for `bpm cross-check` (a few kB each).
+}
+
+/// Each run's scene, for `bpm cross-check` (a few kB each), as
+/// `scenes/<arrangement>-<law>.json`.
+fn write_scenes(report: &BoxReport, out: &StudyOutput) -> Result<(), BoxError> {
+    let dir = out.dir();
     let hydrogel = Hydrogel::table_1(report.options.diameter);
     let scenes = dir.join("scenes");
     std::fs::create_dir_all(&scenes).map_err(FileError::on("creating", &scenes))?;

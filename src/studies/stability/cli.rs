@@ -56,6 +56,10 @@ pub struct StabilityArgs {
     /// (docs/model.md) instead of the paper's model.
     #[arg(long)]
     zero_net: bool,
+    /// Rewrite the plot from an earlier stability.json without running
+    /// anything (other options are ignored).
+    #[arg(long)]
+    from: Option<PathBuf>,
     #[command(flatten)]
     runtime: RuntimeArgs,
 }
@@ -77,8 +81,18 @@ impl StabilityArgs {
             precision,
             no_moduli,
             zero_net,
+            from,
             runtime,
         } = self;
+        if let Some(path) = from {
+            let report = stability::replot(&path, &output)?;
+            print_limits(&report);
+            println!(
+                "wrote {}/stability.json and stability.svg",
+                output.display()
+            );
+            return Ok(());
+        }
         let opts = stability::StabilityOptions {
             size,
             seeds,
@@ -99,17 +113,22 @@ impl StabilityArgs {
         let runtime = runtime.runtime("stability", &opts, threads)?;
         let report = stability::run_stability(&opts, &runtime, &command_line(), &mut print_line)?;
         stability::write_report(&report, &output)?;
-        println!(
-            "\n{:>6} {:>6} {:>5} {:>10} {:>11} {:>7}",
-            "a_B", "Gamma", "seed", "dt stable", "dt unstable", "trials"
-        );
-        for limit in &report.limits {
-            println!("{}", limit.row());
-        }
+        print_limits(&report);
         println!(
             "wrote {}/stability.json and stability.svg",
             output.display()
         );
         Ok(())
+    }
+}
+
+/// The table of limits, one line per seed, a_B and Gamma.
+fn print_limits(report: &stability::StabilityReport) {
+    println!(
+        "\n{:>6} {:>6} {:>5} {:>10} {:>11} {:>7}",
+        "a_B", "Gamma", "seed", "dt stable", "dt unstable", "trials"
+    );
+    for limit in &report.limits {
+        println!("{}", limit.row());
     }
 }

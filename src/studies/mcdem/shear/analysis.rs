@@ -83,7 +83,7 @@ pub enum Regime {
 }
 
 /// One volume fraction of a curve, analysed.
-#[derive(Clone, Debug, PartialEq, Serialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, serde::Deserialize)]
 pub struct ShearPoint {
     /// Volume fraction.
     pub fraction: f64,
@@ -214,7 +214,7 @@ impl ShearPoint {
 }
 
 /// One curve, analysed and fitted.
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, Serialize, serde::Deserialize)]
 pub struct SeriesResult {
     /// The curve.
     pub spec: SeriesSpec,
@@ -248,7 +248,7 @@ pub struct SeriesResult {
 }
 
 /// Our pressure over the tables' law at one volume fraction.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, serde::Deserialize)]
 pub struct PaperRatio {
     /// Volume fraction.
     pub fraction: f64,
@@ -259,7 +259,7 @@ pub struct PaperRatio {
 }
 
 /// A yes-or-no check of a trend the study reports.
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, Serialize, serde::Deserialize)]
 pub struct TrendCheck {
     /// What is checked.
     pub claim: String,
@@ -287,7 +287,7 @@ pub fn fit_at(points: &[ShearPoint], phi_c: f64, use_extrapolated: bool) -> Opti
 pub(super) const MIN_DISTANCE: f64 = 0.005;
 
 /// The analysed study.
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, Serialize, serde::Deserialize)]
 pub struct Analysis {
     /// Jamming point fitted to the Hertz curves at each friction, every
     /// Poisson's ratio together (`None` when too few points).

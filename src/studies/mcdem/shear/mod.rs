@@ -155,7 +155,7 @@ impl Grid {
 }
 
 /// Options of `bpm mc-shear`.
-#[derive(Clone, Debug, PartialEq, Serialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, serde::Deserialize)]
 pub struct ShearOptions {
     /// Spheres in the periodic cube.
     pub spheres: usize,
@@ -256,6 +256,9 @@ pub enum ShearError {
     /// A file could not be written.
     #[error(transparent)]
     File(#[from] FileError),
+    /// The report or its drawings could not be written or read back.
+    #[error(transparent)]
+    Output(#[from] crate::studies::output::OutputError),
 }
 
 /// Volume fraction the packing starts from before it is compressed.
@@ -441,7 +444,7 @@ pub fn sorted_distinct(values: impl IntoIterator<Item = f64>) -> Vec<f64> {
 }
 
 /// The study's result.
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, Serialize, serde::Deserialize)]
 pub struct ShearReport {
     /// The command that wrote it.
     pub command: String,

@@ -3,10 +3,10 @@
 use super::analysis::MIN_DISTANCE;
 use super::{ContactLaw, Regime, ShearError, ShearReport};
 use crate::analysis::jamming::PowerLaw;
-use crate::analysis::plot::{write_svg_rows, Mark, Panel, Series};
-use crate::file_error::FileError;
+use crate::analysis::plot::{Mark, Panel, Series};
 use crate::reference::multicontact::PaperLaw;
 use crate::scene::Scene;
+use crate::studies::output::{self, OutputError, StudyOutput, StudyReport};
 use std::path::Path;
 
 fn fmt_opt(v: Option<f64>, digits: usize) -> String {
@@ -163,15 +163,20 @@ pub fn table(report: &ShearReport) -> String {
 /// Writes `shear.json`, `table.txt`, `shear.svg` and the first run's scene
 /// (`scene.json`) into `dir` (the runs are already under `dir/runs`).
 pub fn write_report(report: &ShearReport, scene: &Scene, dir: &Path) -> Result<(), ShearError> {
-    std::fs::create_dir_all(dir).map_err(FileError::on("creating", dir))?;
-    let json = dir.join("shear.json");
-    crate::verify::write_json(&json, report).map_err(FileError::on("writing", &json))?;
-    let scene_path = dir.join("scene.json");
-    crate::verify::write_json(&scene_path, scene).map_err(FileError::on("writing", &scene_path))?;
-    let text = dir.join("table.txt");
-    std::fs::write(&text, table(report)).map_err(FileError::on("writing", &text))?;
-    write_svg_rows(&dir.join("shear.svg"), &panels(report), 3)?;
+    let out = output::write_report(report, dir)?;
+    out.json("scene.json", scene)?;
     Ok(())
+}
+
+impl StudyReport for ShearReport {
+    const JSON: &'static str = "shear.json";
+
+    /// `table.txt` ([`table`]) and `shear.svg` ([`panels`], three to a row).
+    fn draw(&self, out: &StudyOutput) -> Result<(), OutputError> {
+        out.text("table.txt", &table(self))?;
+        out.svg_rows("shear.svg", &panels(self), 3)?;
+        Ok(())
+    }
 }
 
 /// One panel per friction coefficient and Poisson's ratio: `p / k`
