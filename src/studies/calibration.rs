@@ -613,7 +613,7 @@ pub fn calibrate(
         "cases": cases,
     });
     let json = output.join("calibration.json");
-    crate::verify::write_json(&json, &doc).map_err(FileError::on("writing", &json))?;
+    crate::studies::output::write_json(&json, &doc)?;
     let report = write_report(output, opts, &cases, command)?;
     Ok(Calibration {
         cases,
@@ -652,7 +652,7 @@ pub fn write_report(
         crate::VERSION
     );
     let table = output.join("calibration.md");
-    std::fs::write(&table, header + &markdown).map_err(FileError::on("writing", &table))?;
+    crate::studies::output::write_whole(&table, (header + &markdown).as_bytes())?;
     let moduli = output.join("moduli_vs_a_b.svg");
     crate::analysis::plot::write_svg(&moduli, &moduli_panels)?;
     let convergence = output.join("size_convergence.svg");

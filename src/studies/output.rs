@@ -103,6 +103,13 @@ impl StudyOutput {
     }
 }
 
+/// Writes `value` as pretty JSON to `path`, whole: for a study whose
+/// JSON is not a [`StudyReport`] (one assembled as a `serde_json::Value`).
+pub fn write_json(path: &Path, value: &impl Serialize) -> Result<(), FileError> {
+    let text = serde_json::to_string_pretty(value).expect("a report serialises");
+    write_whole(path, text.as_bytes())
+}
+
 /// Writes `bytes` to `path` through a temporary file beside it, renamed
 /// into place.
 pub fn write_whole(path: &Path, bytes: &[u8]) -> Result<(), FileError> {

@@ -742,7 +742,7 @@ pub fn run_upstream_check(
         "speed": speeds,
     });
     let json = output.join("upstream.json");
-    crate::verify::write_json(&json, &report).map_err(FileError::on("writing", &json))?;
+    crate::studies::output::write_json(&json, &report)?;
     Ok(UpstreamReport {
         lammps,
         rows,

@@ -795,7 +795,7 @@ impl Bench {
             "liggghts_steps": opts.liggghts_steps, "liggghts": self.liggghts,
             "goals": self.goals(),
         });
-        crate::verify::write_json(path, &report).map_err(FileError::on("writing", path))?;
+        crate::studies::output::write_json(path, &report)?;
         write_svg(&path.with_extension("svg"), &self.panels())?;
         Ok(())
     }

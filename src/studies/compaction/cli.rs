@@ -448,8 +448,7 @@ impl AnalysePackingArgs {
             ..Default::default()
         };
         let report = compaction::analyse_dump(&data, &dump, &analysis, &command_line())?;
-        let text = serde_json::to_string_pretty(&report).expect("report serialises");
-        std::fs::write(&output, text).with_context(|| format!("writing {}", output.display()))?;
+        crate::studies::output::write_json(&output, &report)?;
         for f in &report.frames {
             println!(
                 "step {:>10}: phi_MC = {:.4} +- {:.4}, Z_force = {:.2}, Z_geometry = {:.2}, eps_V = {:.4}, alpha - alpha0 = {:.2e}",

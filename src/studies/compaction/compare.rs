@@ -8,8 +8,8 @@
 //! of every study at common pressures.
 
 use super::{is_jammed, read_report, CompactionError, CompactionReport, CompactionRun, StateRow};
-use crate::analysis::plot::{write_svg, Mark, Panel, Series};
-use crate::file_error::FileError;
+use crate::analysis::plot::{Mark, Panel, Series};
+use crate::studies::output::StudyOutput;
 use std::path::Path;
 
 /// One study to compare: its report and its label.
@@ -236,7 +236,7 @@ pub fn write_comparison(
     dir: &Path,
     command: &str,
 ) -> Result<String, CompactionError> {
-    std::fs::create_dir_all(dir).map_err(FileError::on("creating", dir))?;
+    let out = StudyOutput::create(dir)?;
     let mut panels = vec![
         Panel {
             title: "pressure (paper Fig. 6, 11)".into(),
@@ -310,10 +310,9 @@ pub fn write_comparison(
             },
         ]);
     }
-    write_svg(&dir.join("comparison.svg"), &panels)?;
+    out.svg("comparison.svg", &panels)?;
     let text = comparison_table(studies, command);
-    let path = dir.join("comparison.txt");
-    std::fs::write(&path, &text).map_err(FileError::on("writing", &path))?;
+    out.text("comparison.txt", &text)?;
     Ok(text)
 }
 
