@@ -100,7 +100,7 @@ pub fn hertz_mindlin_block(
     update: bool,
 ) -> BlockForces {
     assert!(
-        !coeffs.has_rolling_or_twisting(),
+        coeffs.lanes_cover(),
         "the contact lanes have no rolling or twisting resistance"
     );
     #[cfg(target_arch = "x86_64")]
@@ -220,7 +220,7 @@ pub fn hertz_mindlin_wall_block(
     update: bool,
 ) -> WallForces {
     assert!(
-        !coeffs.has_rolling_or_twisting(),
+        coeffs.lanes_cover(),
         "the contact lanes have no rolling or twisting resistance"
     );
     let wall = (normal, velocity);

@@ -159,7 +159,7 @@ impl DemModel {
         f: &mut [[f64; 3]],
         torque: Option<&mut [[f64; 3]]>,
     ) -> Tally {
-        if self.coeffs.has_rolling_or_twisting() || !self.contact_blocks {
+        if !self.coeffs.lanes_cover() || !self.contact_blocks {
             self.forces_one_by_one(sep, input, f, torque)
         } else {
             self.forces_in_blocks(sep, input, f, torque)

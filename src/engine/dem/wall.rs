@@ -63,7 +63,7 @@ impl ActiveGranularWall {
         blocks: Option<Isa>,
     ) -> WallContact {
         match blocks {
-            Some(isa) if !self.coeffs.has_rolling_or_twisting() => {
+            Some(isa) if self.coeffs.lanes_cover() => {
                 self.apply_in_blocks(isa, input, f, torque, history, corrections)
             }
             _ => self.apply_one_by_one(input, f, torque, history, corrections),

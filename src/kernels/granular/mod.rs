@@ -145,6 +145,26 @@ impl GranularCoeffs {
     pub fn has_rolling_or_twisting(&self) -> bool {
         self.rolling.is_some() || self.twisting != Twisting::None
     }
+
+    /// Whether the four-at-a-time lanes (`granular_lanes`) implement
+    /// every sub-model of these coefficients, so the native engine may
+    /// take them; otherwise it takes the one-at-a-time law. The
+    /// destructuring names every field, so a sub-model added to the
+    /// coefficients does not compile until it is decided here: a new
+    /// contact law needs its own file and a scene variant, and the lanes
+    /// are never silently wrong for it.
+    pub fn lanes_cover(&self) -> bool {
+        let Self {
+            normal_stiffness: _,
+            normal_damping: _,
+            tangential_stiffness: _,
+            tangential_damping: _,
+            sliding_friction: _,
+            rolling,
+            twisting,
+        } = self;
+        rolling.is_none() && *twisting == Twisting::None
+    }
 }
 
 /// What a contact remembers between steps.
@@ -537,6 +557,26 @@ mod tests {
             sliding_friction: 0.3,
             rolling: None,
             twisting: Twisting::None,
+        }
+    }
+
+    #[test]
+    fn the_lanes_cover_plain_hertz_mindlin_only() {
+        let plain = GranularCoeffs::of(&material());
+        assert!(plain.lanes_cover());
+        let slider = SpringDashpotSlider {
+            stiffness: 1.0,
+            damping: 0.1,
+            friction: 0.2,
+        };
+        let rolling = GranularCoeffs {
+            rolling: Some(slider),
+            ..plain
+        };
+        assert!(!rolling.lanes_cover());
+        for twisting in [Twisting::Marshall, Twisting::Sds(slider)] {
+            let twisted = GranularCoeffs { twisting, ..plain };
+            assert!(!twisted.lanes_cover(), "{:?}", twisted.twisting);
         }
     }
 
