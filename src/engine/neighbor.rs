@@ -6,7 +6,7 @@
 //! boxes of one or two bins per dimension correct under the minimum image.
 
 use super::simbox::SimBox;
-use super::team::Team;
+use super::team::{chunk_range, Team};
 use crate::kernels::Separation;
 use nalgebra::{Matrix3, Vector3};
 
@@ -83,6 +83,19 @@ pub struct NeighbourList {
     bin_start: Vec<usize>,
     #[serde(skip)]
     bin_atoms: Vec<usize>,
+    /// Each thread's rows of the last build, kept so a build allocates
+    /// only when the list grows.
+    #[serde(skip)]
+    parts: Vec<RowPart>,
+}
+
+/// One thread's share of a build: the rows of a contiguous range of atoms.
+#[derive(Clone, Debug, Default)]
+struct RowPart {
+    /// The rows' neighbours, row after row.
+    neighbours: Vec<i32>,
+    /// Each row's length.
+    lengths: Vec<usize>,
 }
 
 impl Default for NeighbourList {
@@ -99,6 +112,7 @@ impl Default for NeighbourList {
             bin_of: Vec::new(),
             bin_start: Vec::new(),
             bin_atoms: Vec::new(),
+            parts: Vec::new(),
         }
     }
 }
@@ -165,9 +179,23 @@ impl NeighbourList {
     }
 
     /// Rebuilds the list for `cutoff + skin`, leaving out the pairs of
-    /// `exclude`. Positions must already be wrapped.
+    /// `exclude`, on one thread. Positions must already be wrapped.
     pub fn build(
         &mut self,
+        simbox: &SimBox,
+        x: &[[f64; 3]],
+        cutoff: f64,
+        skin: f64,
+        exclude: Option<&Exclusions>,
+    ) {
+        self.build_on(&Team::new(1), simbox, x, cutoff, skin, exclude);
+    }
+
+    /// [`NeighbourList::build`] with the rows searched by `team`'s threads;
+    /// the list is the same for any number of threads.
+    pub fn build_on(
+        &mut self,
+        team: &Team,
         simbox: &SimBox,
         x: &[[f64; 3]],
         cutoff: f64,
@@ -229,54 +257,71 @@ impl NeighbourList {
             cursor[b] += 1;
         }
 
+        // The rows, each thread searching a contiguous range of atoms;
+        // every row is found and sorted on its own, so the list is the same
+        // for any number of threads.
+        let chunks = team.threads();
+        self.parts.resize_with(chunks, RowPart::default);
+        let (bin_start, bin_atoms) = (&self.bin_start, &self.bin_atoms);
+        team.run_on(&mut self.parts, |c, part| {
+            part.neighbours.clear();
+            part.lengths.clear();
+            let mut stencil: Vec<usize> = Vec::with_capacity(27);
+            for i in chunk_range(n, chunks, c) {
+                let b = bin_index(&frac[i]);
+                stencil.clear();
+                for dz in -1i64..=1 {
+                    for dy in -1i64..=1 {
+                        for dx in -1i64..=1 {
+                            let mut nb = [0usize; 3];
+                            let mut inside = true;
+                            for (d, off) in [dx, dy, dz].into_iter().enumerate() {
+                                let t = b[d] as i64 + off;
+                                let m = nbins[d] as i64;
+                                if simbox.periodic[d] {
+                                    nb[d] = t.rem_euclid(m) as usize;
+                                } else if (0..m).contains(&t) {
+                                    nb[d] = t as usize;
+                                } else {
+                                    inside = false;
+                                }
+                            }
+                            if inside {
+                                stencil.push(flat(nb));
+                            }
+                        }
+                    }
+                }
+                stencil.sort_unstable();
+                stencil.dedup();
+                let row_start = part.neighbours.len();
+                for &bin in &stencil {
+                    for &j in &bin_atoms[bin_start[bin]..bin_start[bin + 1]] {
+                        if j <= i {
+                            continue;
+                        }
+                        let d = simbox.delta(&x[i], &x[j]);
+                        if d[0] * d[0] + d[1] * d[1] + d[2] * d[2] < cut_sq
+                            && !exclude.is_some_and(|e| e.excludes(i, j))
+                        {
+                            part.neighbours.push(j as i32);
+                        }
+                    }
+                }
+                part.neighbours[row_start..].sort_unstable();
+                part.lengths.push(part.neighbours.len() - row_start);
+            }
+        });
         self.offsets.clear();
         self.offsets.reserve(n + 1);
         self.offsets.push(0);
         self.neighbours.clear();
-        let mut stencil: Vec<usize> = Vec::with_capacity(27);
-        for i in 0..n {
-            let b = bin_index(&frac[i]);
-            stencil.clear();
-            for dz in -1i64..=1 {
-                for dy in -1i64..=1 {
-                    for dx in -1i64..=1 {
-                        let mut nb = [0usize; 3];
-                        let mut inside = true;
-                        for (d, off) in [dx, dy, dz].into_iter().enumerate() {
-                            let t = b[d] as i64 + off;
-                            let m = nbins[d] as i64;
-                            if simbox.periodic[d] {
-                                nb[d] = t.rem_euclid(m) as usize;
-                            } else if (0..m).contains(&t) {
-                                nb[d] = t as usize;
-                            } else {
-                                inside = false;
-                            }
-                        }
-                        if inside {
-                            stencil.push(flat(nb));
-                        }
-                    }
-                }
+        for part in &self.parts {
+            self.neighbours.extend_from_slice(&part.neighbours);
+            for &length in &part.lengths {
+                let last = self.offsets[self.offsets.len() - 1];
+                self.offsets.push(last + length);
             }
-            stencil.sort_unstable();
-            stencil.dedup();
-            let row_start = self.neighbours.len();
-            for &bin in &stencil {
-                for &j in &self.bin_atoms[self.bin_start[bin]..self.bin_start[bin + 1]] {
-                    if j <= i {
-                        continue;
-                    }
-                    let d = simbox.delta(&x[i], &x[j]);
-                    if d[0] * d[0] + d[1] * d[1] + d[2] * d[2] < cut_sq
-                        && !exclude.is_some_and(|e| e.excludes(i, j))
-                    {
-                        self.neighbours.push(j as i32);
-                    }
-                }
-            }
-            self.neighbours[row_start..].sort_unstable();
-            self.offsets.push(self.neighbours.len());
         }
         self.list_cutoff = list_cut;
         self.x_at_build.clear();
@@ -399,6 +444,37 @@ mod tests {
                 expected,
                 "box {lengths:?} tilt {tilt:?}"
             );
+        }
+    }
+
+    #[test]
+    fn the_list_is_the_same_on_any_number_of_threads() {
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(11);
+        let simbox = SimBox {
+            lo: [0.0; 3],
+            lengths: [9.0, 8.0, 7.0],
+            tilt: [0.7, -0.4, 0.3],
+            periodic: [true, true, false],
+        };
+        let x: Vec<[f64; 3]> = (0..1001)
+            .map(|_| simbox.to_cartesian(&[rng.gen(), rng.gen(), rng.gen()]))
+            .collect();
+        let bonds = Exclusions::from_pairs(x.len(), (0..500).map(|k| (2 * k, 2 * k + 1)));
+        let mut one = NeighbourList::default();
+        one.build(&simbox, &x, 1.0, 0.3, Some(&bonds));
+        assert!(
+            one.neighbours.len() > 3000,
+            "{} pairs",
+            one.neighbours.len()
+        );
+        for threads in [2, 3, 4] {
+            let mut many = NeighbourList::default();
+            many.build_on(&Team::new(threads), &simbox, &x, 1.0, 0.3, Some(&bonds));
+            assert_eq!(many.offsets, one.offsets, "{threads} threads");
+            assert_eq!(many.neighbours, one.neighbours, "{threads} threads");
+            // A second build into the same list reuses its parts.
+            many.build_on(&Team::new(threads), &simbox, &x, 1.0, 0.3, Some(&bonds));
+            assert_eq!(many.neighbours, one.neighbours, "{threads} threads, again");
         }
     }
 

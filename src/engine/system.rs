@@ -211,7 +211,8 @@ impl System {
             self.particles
                 .wrap(&self.simbox, self.lees_edwards.as_ref());
             self.wraps += 1;
-            self.neighbours.build(
+            self.neighbours.build_on(
+                &self.team,
                 &self.simbox,
                 &self.particles.x,
                 cutoff,
