@@ -5,8 +5,9 @@
 #   ./regenerate.sh hertz_gravity   # only the named variant(s)
 #   ./regenerate.sh --decks-only    # only rebuild the in.* decks from the shipped deck
 #   ./regenerate.sh first-step      # only the first-step forces on the compressed bed:
-#                                   # compressed_step30000.data, in.first_step_{hertz,multicontact},
-#                                   # first_step_{forces,lid}_{hertz,multicontact}.txt (see README)
+#                                   # compressed_step30000.data, in.first_step_NAME,
+#                                   # first_step_{forces,lid}_NAME.txt for NAME = hertz,
+#                                   # multicontact and multicontact_skin0.0015 (see README)
 #
 # Steps:
 #   1. copy the shipped Debian example (liggghts-doc) to a scratch folder, gunzip;
@@ -203,10 +204,18 @@ make_compressed_data() {
         }'
 }
 
-# make_first_step_deck LAW (hertz | multicontact): print the deck that evaluates
-# the forces on the compressed bed, the spheres held still.
+# make_first_step_deck LAW (hertz | multicontact) SKIN NAME: print the deck that
+# evaluates the forces on the compressed bed, the spheres held still, with the
+# neighbour skin SKIN (m), dumping first_step_forces_NAME.dump.
 make_first_step_deck() {
-    local law=$1 surface="" mc="# (no multi-contact closure: plain Hertz)"
+    local law=$1 skin=$2 name=$3 surface="" mc="# (no multi-contact closure: plain Hertz)"
+    local skin_note=""
+    if [[ $skin != 0.004 ]]; then
+        skin_note="
+# Skin ${skin} m instead of the shipped 0.004: no wall gap of this bed lies between half
+# the skin and the skin, so no sphere meets LIGGGHTS's per-atom wall-slot aliasing
+# (README, 'The wall-slot aliasing'); the skin enters no force otherwise."
+    fi
     if [[ $law == multicontact ]]; then
         surface=" surface multicontact"
         mc="fix mc all multicontact/halfspace geometric_prefactor 1.125"
@@ -228,7 +237,7 @@ make_first_step_deck() {
 #     pair effective radius and contact point depend on which sphere of a pair comes first).
 # Why not 'run 0': the set-up force evaluation of a run stores no contact history
 # (shearupdate = 0), so the closure sees the normal forces only from step 1 on:
-# steps 0 and 1 are plain Hertz also with the closure, step k has k - 1 closure iterations.
+# steps 0 and 1 are plain Hertz also with the closure, step k has k - 1 closure iterations.${skin_note}
 # ---------------------------------------------------------------------------
 atom_style	sphere
 atom_modify	map array
@@ -242,7 +251,7 @@ units		si
 
 read_data compressed_step30000.data
 
-neighbor	0.004 bin
+neighbor	${skin} bin
 neigh_modify	delay 0
 
 fix 		m1 all property/global youngsModulus peratomtype 23.3e3 5e7
@@ -276,7 +285,7 @@ thermo_style	custom step f_piston_m[1] f_piston_m[2] f_piston_m[3]
 thermo_modify	format float %.17g
 thermo		1
 
-dump forces all custom 1 first_step_forces_${law}.dump id fx fy fz
+dump forces all custom 1 first_step_forces_${name}.dump id fx fy fz
 dump_modify forces sort id format "%d %.17g %.17g %.17g"
 
 run		${FIRST_STEP_STEPS}
@@ -314,25 +323,28 @@ run_first_step() {
     cp -r "$WORK/shipped/meshes" "$d/"
     make_compressed_data "$WORK/shipped/data/input.data" "$HERE/positions_multicontact_gravity_step30000.txt" > "$HERE/compressed_step30000.data"
     cp "$HERE/compressed_step30000.data" "$d/"
-    for law in hertz multicontact; do
-        make_first_step_deck "$law" > "$HERE/in.first_step_$law"
-        cp "$HERE/in.first_step_$law" "$d/"
-        echo "[$(date -Is)] running first_step_$law in $d"
-        local cmd="$exe -in in.first_step_$law -log log.first_step_$law"
-        (cd "$d" && /usr/bin/time -v $cmd > "stdout_$law.txt" 2> "time_$law.txt")
-        split_first_step "$d/first_step_forces_$law.dump" "$d/log.first_step_$law" "$law"
-        cp "$d/log.first_step_$law" "$HERE/log_first_step_$law.txt"
+    local spec skin name
+    for spec in "hertz 0.004 hertz" "multicontact 0.004 multicontact" \
+        "multicontact 0.0015 multicontact_skin0.0015"; do
+        read -r law skin name <<< "$spec"
+        make_first_step_deck "$law" "$skin" "$name" > "$HERE/in.first_step_$name"
+        cp "$HERE/in.first_step_$name" "$d/"
+        echo "[$(date -Is)] running first_step_$name in $d"
+        local cmd="$exe -in in.first_step_$name -log log.first_step_$name"
+        (cd "$d" && /usr/bin/time -v $cmd > "stdout_$name.txt" 2> "time_$name.txt")
+        split_first_step "$d/first_step_forces_$name.dump" "$d/log.first_step_$name" "$name"
+        cp "$d/log.first_step_$name" "$HERE/log_first_step_$name.txt"
         local wall user
-        wall=$(grep 'Elapsed (wall clock)' "$d/time_$law.txt" | sed 's/.*: //')
-        user=$(grep 'User time' "$d/time_$law.txt" | sed 's/.*: //')
-        local line="first_step_${law}: wall ${wall} (m:ss), user ${user} s, ${FIRST_STEP_STEPS} steps, finished $(date -Is) on $(uname -n) ($(nproc) cores), command: cd $d && /usr/bin/time -v $cmd"
+        wall=$(grep 'Elapsed (wall clock)' "$d/time_$name.txt" | sed 's/.*: //')
+        user=$(grep 'User time' "$d/time_$name.txt" | sed 's/.*: //')
+        local line="first_step_${name}: wall ${wall} (m:ss), user ${user} s, ${FIRST_STEP_STEPS} steps, finished $(date -Is) on $(uname -n) ($(nproc) cores), command: cd $d && /usr/bin/time -v $cmd"
         {
             echo "# wall times of the runs, one run at a time (serial); the Elapsed (wall clock) of /usr/bin/time -v"
-            grep -v -e '^#' -e "^first_step_${law}:" "$HERE/walltimes.txt" || true
+            grep -v -e '^#' -e "^first_step_${name}:" "$HERE/walltimes.txt" || true
             echo "$line"
         } > "$HERE/walltimes.txt.new"
         mv "$HERE/walltimes.txt.new" "$HERE/walltimes.txt"
-        echo "[$(date -Is)] done first_step_$law, wall $wall"
+        echo "[$(date -Is)] done first_step_$name, wall $wall"
     done
 }
 
