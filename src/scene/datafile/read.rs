@@ -97,6 +97,16 @@ impl Source<'_> {
         w.parse::<i64>()
             .map_err(|_| self.bad(line, format!("`{w}` is not an integer")))
     }
+
+    /// Three finite numbers from `w[first..first + 3]` (a position, a
+    /// velocity), the first bad one named.
+    fn vector(&self, line: usize, w: &[&str], first: usize) -> Result<[f64; 3], DataFileError> {
+        Ok([
+            self.number(line, w[first])?,
+            self.number(line, w[first + 1])?,
+            self.number(line, w[first + 2])?,
+        ])
+    }
 }
 
 /// The header: counts and the box.
@@ -384,21 +394,13 @@ impl Sections {
                 return Err(src.bad(k, "a velocity line needs `id vx vy vz`".into()));
             }
             let id = src.integer(k, w[0])?;
-            let v = [
-                src.number(k, w[1])?,
-                src.number(k, w[2])?,
-                src.number(k, w[3])?,
-            ];
+            let v = src.vector(k, &w, 1)?;
             if self.velocities.insert(id, v).is_some() {
                 return Err(src.bad(k, format!("atom {id} has two velocities")));
             }
             // Spheres carry their angular velocity too.
             if self.sphere && w.len() >= 7 {
-                let omega = [
-                    src.number(k, w[4])?,
-                    src.number(k, w[5])?,
-                    src.number(k, w[6])?,
-                ];
+                let omega = src.vector(k, &w, 4)?;
                 self.angular.insert(id, omega);
             }
         }
@@ -457,11 +459,7 @@ fn atom(
     if kind < 1 {
         return Err(src.bad(k, format!("atom type {kind}: types count from 1")));
     }
-    let x = [
-        src.number(k, w[2])?,
-        src.number(k, w[3])?,
-        src.number(k, w[4])?,
-    ];
+    let x = src.vector(k, &w, 2)?;
     let image = if w.len() == 8 {
         [
             src.integer(k, w[5])?,
