@@ -556,6 +556,49 @@ fn stability_and_large_strain_replot_their_committed_reports_and_refuse_another(
         assert_eq!(before["command"], after["command"], "{command}");
         assert_eq!(before["program"], after["program"], "{command}");
 
+        // Without -o the replot writes beside the JSON it read, not into
+        // the study's default folder (which may hold another report).
+        let beside = tmp(&format!("replot-{command}-beside"));
+        std::fs::create_dir_all(&beside).unwrap();
+        std::fs::copy(&committed, beside.join(json)).unwrap();
+        let st = bpm()
+            .args([command, "--from"])
+            .arg(beside.join(json))
+            .current_dir(&beside)
+            .output()
+            .unwrap();
+        assert!(
+            st.status.success(),
+            "{command}: {}",
+            String::from_utf8_lossy(&st.stderr)
+        );
+        assert!(
+            beside.join(svg).exists(),
+            "{command}: no {svg} beside the JSON"
+        );
+        assert!(
+            !beside.join("results").exists(),
+            "{command}: wrote a default folder"
+        );
+
+        // A report whose options are out of range (edited by hand) is
+        // refused with the option named, not drawn.
+        let mut edited: serde_json::Value =
+            serde_json::from_slice(&std::fs::read(&committed).unwrap()).unwrap();
+        edited["options"]["a_b"] = serde_json::json!([]);
+        std::fs::write(beside.join(json), edited.to_string()).unwrap();
+        let st = bpm()
+            .args([command, "--from"])
+            .arg(beside.join(json))
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&st.stderr);
+        assert_eq!(st.status.code(), Some(1), "{command}: {err}");
+        assert!(
+            err.contains("--a-b") && !err.contains("panicked"),
+            "{command}: {err}"
+        );
+
         // Another study's report is refused, naming the file.
         let other = root.join("results/accuracy/accuracy.json");
         let st = bpm()
@@ -568,7 +611,7 @@ fn stability_and_large_strain_replot_their_committed_reports_and_refuse_another(
         let err = String::from_utf8_lossy(&st.stderr);
         assert_eq!(st.status.code(), Some(1), "{command}: {err}");
         assert!(
-            err.contains("accuracy.json") && err.contains(&format!("not a {json}")),
+            err.contains("accuracy.json") && err.contains(&format!("not a valid {json}")),
             "{command}: {err}"
         );
         assert!(!err.contains("panicked"), "{command}: {err}");

@@ -4,10 +4,14 @@
 //! change to a report's fields that would orphan the committed results
 //! fails here. Unchanged means byte for byte, or, for a report written
 //! before an option existed, every committed value kept and only that
-//! option added at its default (`false` or `null`).
+//! option added at its default (the additions listed in [`ADDED`]).
 
 use bpm::studies::output::{replot, StudyReport};
 use std::path::{Path, PathBuf};
+
+/// The keys a committed report lacks because it was written before they
+/// existed, each added at its default on a replot: (report, key path).
+const ADDED: &[(&str, &str)] = &[("results/stability/stability.json", "/options/zero_net")];
 
 fn repository() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
@@ -43,6 +47,12 @@ fn round_trip<R: StudyReport>(json: &str) {
                 "{json}: the replotted report differs from the committed one"
             );
             assert!(!added.is_empty(), "{json}: same values, different text");
+            for key in &added {
+                assert!(
+                    ADDED.contains(&(json, key.as_str())),
+                    "{json}: {key} added, not listed in ADDED"
+                );
+            }
         }
         Err(e) => panic!("{json}: {e}"),
     }
@@ -167,4 +177,43 @@ fn multi_contact_reports() {
     round_trip::<mcdem::calibration::CalibrationReport>(
         "results/mcdem/calibration/calibration.json",
     );
+}
+
+/// A report that records a blow-up (NaN and infinite measurements, written
+/// as `null`) reads back, its undefined values as NaN.
+#[test]
+fn a_report_of_a_blown_up_run_replots() {
+    use bpm::studies::large_strain::{Compression, LargeStrainOptions, LargeStrainReport, State};
+    let state = |pressure: f64| State {
+        time: 10.0,
+        imposed_strain: 0.2,
+        bond_strain: f64::NAN,
+        pressure,
+        shortest_bond: f64::INFINITY,
+        longest_bond: 1.1,
+    };
+    let report = LargeStrainReport {
+        provenance: bpm::studies::Provenance::new("bpm large-strain"),
+        options: LargeStrainOptions::default(),
+        compressions: vec![Compression {
+            body: "bulk".into(),
+            a_b: 0.0,
+            particles: 8,
+            states: vec![state(0.5), state(f64::NAN)],
+            complete: false,
+            failure: Some("particles lost".into()),
+            seconds: 1.0,
+        }],
+    };
+    let scratch = std::env::temp_dir().join(format!("bpm-replot-nan-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&scratch);
+    bpm::studies::output::write_report(&report, &scratch).unwrap();
+    let read: LargeStrainReport =
+        replot(&scratch.join("large_strain.json"), &scratch.join("again")).unwrap();
+    let states = &read.compressions[0].states;
+    assert_eq!(states[0].pressure, 0.5);
+    assert!(states[1].pressure.is_nan() && states[0].bond_strain.is_nan());
+    // An infinity is written as null too, and comes back undefined.
+    assert!(states[0].shortest_bond.is_nan());
+    let _ = std::fs::remove_dir_all(&scratch);
 }

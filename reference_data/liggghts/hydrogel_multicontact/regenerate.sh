@@ -292,14 +292,14 @@ run		${FIRST_STEP_STEPS}
 DECK
 }
 
-# split_first_step DUMP LOG LAW: keep the per-atom forces of the steps in
+# split_first_step DUMP LOG NAME: keep the per-atom forces of the steps in
 # FIRST_STEP_KEEP (blocks '# step S', then 'id fx fy fz' sorted by id) in
-# first_step_forces_LAW.txt, and the lid force of every step (the thermo lines
-# of the log) in first_step_lid_LAW.txt.
+# first_step_forces_NAME.txt, and the lid force of every step (the thermo lines
+# of the log) in first_step_lid_NAME.txt.
 split_first_step() {
-    local dump=$1 log=$2 law=$3
+    local dump=$1 log=$2 name=$3
     {
-        echo "# LIGGGHTS 3.8.0 (Debian) first-step forces on compressed_step30000.data, law ${law} (deck in.first_step_${law}); SI units (N)"
+        echo "# LIGGGHTS 3.8.0 (Debian) first-step forces on compressed_step30000.data, run ${name} (deck in.first_step_${name}); SI units (N)"
         echo "# blocks '# step S', then one row 'id fx fy fz' per sphere, sorted by id, %.17g: the total force on the sphere"
         echo "# (pairs, box walls and lid). Steps 0 and 1 are plain Hertz also with the closure; step k has k - 1 closure iterations."
         awk -v keep=" ${FIRST_STEP_KEEP} " '
@@ -307,14 +307,14 @@ split_first_step() {
             /^ITEM:/ { next }
             NF == 4 && want { print }
             ' "$dump"
-    } > "$HERE/first_step_forces_${law}.txt"
+    } > "$HERE/first_step_forces_${name}.txt"
     {
-        echo "# LIGGGHTS 3.8.0 (Debian) first-step lid force on compressed_step30000.data, law ${law} (deck in.first_step_${law})"
+        echo "# LIGGGHTS 3.8.0 (Debian) first-step lid force on compressed_step30000.data, run ${name} (deck in.first_step_${name})"
         echo "# the spheres' total force on the lid mesh [N] (f_piston_m[1..3]; fz > 0: the spheres push the lid up), %.17g;"
         echo "# step 0 is the set-up evaluation of the run"
         echo "# step fx fy fz"
         awk '/^ *Step/ { on = 1; next } /^Loop time/ { on = 0 } on && NF == 4 { print }' "$log"
-    } > "$HERE/first_step_lid_${law}.txt"
+    } > "$HERE/first_step_lid_${name}.txt"
 }
 
 run_first_step() {
