@@ -19,6 +19,7 @@ pub mod analysis;
 pub mod engine;
 pub mod ffi;
 pub mod file_error;
+pub mod json_nan;
 pub mod kernels;
 #[cfg(feature = "lammps")]
 pub mod lammps;
@@ -30,6 +31,7 @@ pub mod scene;
 pub mod studies;
 #[cfg(feature = "lammps")]
 pub mod verify;
+pub mod whole_file;
 
 /// The crate version, recorded in every output file.
 pub const VERSION: &str = env!("CARGO_PKG_VERSION");

@@ -249,12 +249,17 @@ pub fn write_svg_rows(path: &Path, panels: &[Panel], columns: usize) -> Result<(
     };
     let columns = columns.clamp(1, panels.len().max(1));
     let rows = panels.len().div_ceil(columns).max(1);
-    let root = SVGBackend::new(path, (560 * columns as u32, 420 * rows as u32)).into_drawing_area();
-    root.fill(&WHITE).map_err(|e| err(e.to_string()))?;
-    let areas = root.split_evenly((rows, columns));
-    for (area, panel) in areas.iter().zip(panels) {
-        draw_panel(area, panel).map_err(err)?;
+    // Drawn in memory, then written whole: a failure leaves no half plot.
+    let mut svg = String::new();
+    {
+        let size = (560 * columns as u32, 420 * rows as u32);
+        let root = SVGBackend::with_string(&mut svg, size).into_drawing_area();
+        root.fill(&WHITE).map_err(|e| err(e.to_string()))?;
+        let areas = root.split_evenly((rows, columns));
+        for (area, panel) in areas.iter().zip(panels) {
+            draw_panel(area, panel).map_err(err)?;
+        }
+        root.present().map_err(|e| err(e.to_string()))?;
     }
-    root.present().map_err(|e| err(e.to_string()))?;
-    Ok(())
+    crate::whole_file::write_whole(path, svg.as_bytes()).map_err(|e| err(e.cause.to_string()))
 }

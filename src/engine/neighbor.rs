@@ -83,8 +83,9 @@ pub struct NeighbourList {
     bin_start: Vec<usize>,
     #[serde(skip)]
     bin_atoms: Vec<usize>,
-    /// Each thread's rows of the last build, kept so a build allocates
-    /// only when the list grows.
+    /// Each thread's rows of the last build (one thread: its row lengths
+    /// only, the rows going straight into `neighbours`), kept so that their
+    /// buffers are reused.
     #[serde(skip)]
     parts: Vec<RowPart>,
 }
@@ -263,11 +264,11 @@ impl NeighbourList {
         let chunks = team.threads();
         self.parts.resize_with(chunks, RowPart::default);
         let (bin_start, bin_atoms) = (&self.bin_start, &self.bin_atoms);
-        team.run_on(&mut self.parts, |c, part| {
+        let search = |atoms: std::ops::Range<usize>, part: &mut RowPart| {
             part.neighbours.clear();
             part.lengths.clear();
             let mut stencil: Vec<usize> = Vec::with_capacity(27);
-            for i in chunk_range(n, chunks, c) {
+            for i in atoms {
                 let b = bin_index(&frac[i]);
                 stencil.clear();
                 for dz in -1i64..=1 {
@@ -311,13 +312,26 @@ impl NeighbourList {
                 part.neighbours[row_start..].sort_unstable();
                 part.lengths.push(part.neighbours.len() - row_start);
             }
-        });
+        };
+        if chunks == 1 {
+            // One thread searches straight into the list's own buffer.
+            let part = &mut self.parts[0];
+            std::mem::swap(&mut part.neighbours, &mut self.neighbours);
+            search(0..n, part);
+            std::mem::swap(&mut part.neighbours, &mut self.neighbours);
+        } else {
+            team.run_on(&mut self.parts, |c, part| {
+                search(chunk_range(n, chunks, c), part)
+            });
+            self.neighbours.clear();
+            for part in &self.parts {
+                self.neighbours.extend_from_slice(&part.neighbours);
+            }
+        }
         self.offsets.clear();
         self.offsets.reserve(n + 1);
         self.offsets.push(0);
-        self.neighbours.clear();
         for part in &self.parts {
-            self.neighbours.extend_from_slice(&part.neighbours);
             for &length in &part.lengths {
                 let last = self.offsets[self.offsets.len() - 1];
                 self.offsets.push(last + length);

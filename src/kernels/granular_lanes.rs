@@ -101,7 +101,7 @@ pub fn hertz_mindlin_block(
 ) -> BlockForces {
     assert!(
         coeffs.lanes_cover(),
-        "the contact lanes have no rolling or twisting resistance"
+        "the lanes do not cover these coefficients (GranularCoeffs::lanes_cover)"
     );
     #[cfg(target_arch = "x86_64")]
     if isa == Isa::Avx2 && Isa::Avx2.available() {
@@ -221,7 +221,7 @@ pub fn hertz_mindlin_wall_block(
 ) -> WallForces {
     assert!(
         coeffs.lanes_cover(),
-        "the contact lanes have no rolling or twisting resistance"
+        "the lanes do not cover these coefficients (GranularCoeffs::lanes_cover)"
     );
     let wall = (normal, velocity);
     #[cfg(target_arch = "x86_64")]

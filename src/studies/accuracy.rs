@@ -17,7 +17,7 @@ pub mod cli;
 
 use crate::analysis::fit::interpolate;
 use crate::analysis::hertz::{effective_modulus, hertz_deviation, squeeze_curve};
-use crate::analysis::plot::{Mark, Panel, PlotError, Series};
+use crate::analysis::plot::{Mark, Panel, Series};
 use crate::file_error::FileError;
 use crate::options::{require_positive_up_to, require_within, validate_a_b_values, InvalidOption};
 use crate::scene::builders::grain::{GrainKind, GrainParams};
@@ -42,9 +42,6 @@ pub enum AccuracyError {
     /// A grain or a squeeze failed.
     #[error(transparent)]
     Hertz(#[from] HertzError),
-    /// A plot could not be written.
-    #[error(transparent)]
-    Plot(#[from] PlotError),
     /// The report could not be written or read.
     #[error(transparent)]
     File(#[from] FileError),
@@ -192,7 +189,7 @@ pub struct Case {
     /// Steps of the run(s).
     pub steps: u64,
     /// Wall-clock seconds of the run(s) (not the build).
-    #[serde(deserialize_with = "nan_if_null")]
+    #[serde(deserialize_with = "crate::json_nan::nan_if_null")]
     pub seconds: f64,
     /// Calibration: K, G and nu. Squeeze: none.
     #[serde(deserialize_with = "moduli_nan_if_null")]
@@ -202,7 +199,7 @@ pub struct Case {
     pub hertz_deviation: Option<f64>,
     /// Relative error of K (calibration) or of the force (squeeze, rms
     /// over the window) against the sweep's reference.
-    #[serde(deserialize_with = "nan_if_null")]
+    #[serde(deserialize_with = "crate::json_nan::nan_if_null")]
     pub error: f64,
     /// Calibration: relative error of G.
     pub error_g: Option<f64>,
@@ -211,10 +208,6 @@ pub struct Case {
     /// Why the run did not finish (a blow-up at a large timestep); its
     /// figures are then NaN.
     pub failed: Option<String>,
-}
-
-fn nan_if_null<'de, D: Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
-    Ok(Option::<f64>::deserialize(d)?.unwrap_or(f64::NAN))
 }
 
 fn moduli_nan_if_null<'de, D: Deserializer<'de>>(d: D) -> Result<Option<[f64; 3]>, D::Error> {
@@ -701,6 +694,10 @@ pub fn write_report(report: &AccuracyReport, dir: &Path) -> Result<(), AccuracyE
 
 impl StudyReport for AccuracyReport {
     const JSON: &'static str = "accuracy.json";
+
+    fn check(&self) -> Result<(), String> {
+        self.options.validate().map_err(|e| e.to_string())
+    }
 
     /// `accuracy.svg`: error against seconds, one panel per sweep, the
     /// defaults ringed.

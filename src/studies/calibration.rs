@@ -47,6 +47,9 @@ pub enum CalibrationError {
         /// The cause.
         cause: serde_json::Error,
     },
+    /// The report could not be written.
+    #[error(transparent)]
+    Output(#[from] crate::studies::output::OutputError),
 }
 
 /// The bulk solid of the paper's protocol (the calibration's, and every
@@ -566,12 +569,12 @@ pub struct Calibration {
     /// `calibration.json`: options, bulk protocol and every case.
     pub json: PathBuf,
     /// The tables and plots.
-    pub report: StudyReport,
+    pub report: CalibrationFiles,
 }
 
 /// The study's tables and plots ([`write_report`]).
 #[derive(Clone, Debug)]
-pub struct StudyReport {
+pub struct CalibrationFiles {
     /// The tables (Markdown), as written below the header of calibration.md.
     pub markdown: String,
     /// calibration.md, moduli_vs_a_b.svg and size_convergence.svg.
@@ -624,7 +627,7 @@ pub fn calibrate(
 
 /// `bpm calibrate --from FILE`: the tables and plots of an earlier study
 /// (its calibration.json) into `output`, without running anything.
-pub fn replot(json: &Path, output: &Path) -> Result<StudyReport, CalibrationError> {
+pub fn replot(json: &Path, output: &Path) -> Result<CalibrationFiles, CalibrationError> {
     let text = std::fs::read_to_string(json).map_err(FileError::on("reading", json))?;
     let parse_error = |what: String| move |cause| CalibrationError::Json { what, cause };
     let doc: serde_json::Value =
@@ -645,7 +648,7 @@ pub fn write_report(
     opts: &StudyOptions,
     cases: &[Case],
     command: &str,
-) -> Result<StudyReport, CalibrationError> {
+) -> Result<CalibrationFiles, CalibrationError> {
     let (markdown, moduli_panels, convergence_panels) = study_report(opts, cases);
     let header = format!(
         "# Calibration of K and G against a_B\n\nMade by `{command}` (bpm {}); every case is in `calibration.json`.\n\n",
@@ -657,7 +660,7 @@ pub fn write_report(
     crate::analysis::plot::write_svg(&moduli, &moduli_panels)?;
     let convergence = output.join("size_convergence.svg");
     crate::analysis::plot::write_svg(&convergence, &convergence_panels)?;
-    Ok(StudyReport {
+    Ok(CalibrationFiles {
         markdown,
         files: vec![table, moduli, convergence],
     })

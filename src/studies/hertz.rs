@@ -10,7 +10,7 @@ use crate::analysis::hertz::{
     effective_modulus, hertz_deviation, hertz_normalised_force, squeeze_curve, HertzDeviation,
     SqueezeCurve, CONTACT_THRESHOLD,
 };
-use crate::analysis::plot::{Mark, Panel, PlotError, Series};
+use crate::analysis::plot::{Mark, Panel, Series};
 use crate::file_error::FileError;
 use crate::reference::paper;
 use crate::scene::builders::grain::{build_grain, GrainKind, GrainParams, GrainSummary};
@@ -118,9 +118,6 @@ pub enum HertzError {
     /// A grain could not be built or read.
     #[error("grain: {0}")]
     Grain(String),
-    /// A plot could not be written.
-    #[error(transparent)]
-    Plot(#[from] PlotError),
     /// A squeeze failed in an engine.
     #[error(transparent)]
     Run(#[from] HarnessError),
@@ -599,12 +596,6 @@ fn ensemble(squeezes: &[Squeeze], max_overlap: f64) -> Ensemble {
 pub fn write_report(report: &HertzReport, out: &Path) -> Result<(), HertzError> {
     output::write_report(report, out)?;
     Ok(())
-}
-
-/// Rewrites `hertz.svg` (and the JSON) in `out` from an earlier
-/// `hertz.json` without running anything.
-pub fn replot(json: &Path, out: &Path) -> Result<HertzReport, HertzError> {
-    Ok(output::replot(json, out)?)
 }
 
 impl StudyReport for HertzReport {

@@ -207,12 +207,6 @@ impl StudyReport for SweepReport {
     }
 }
 
-/// Rewrites `sweep.svg` (and the JSON) in `out` from an earlier
-/// `sweep.json` without running anything.
-pub fn replot(json: &Path, out: &Path) -> Result<SweepReport, HertzError> {
-    Ok(output::replot(json, out)?)
-}
-
 /// Relative rms deviation from Hertz against R, and against the squeeze
 /// time, one series per a_B.
 pub fn sweep_panels(report: &SweepReport) -> Vec<Panel> {

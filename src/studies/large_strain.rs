@@ -17,7 +17,7 @@
 
 pub mod cli;
 
-use crate::analysis::plot::{Mark, Panel, PlotError, Series};
+use crate::analysis::plot::{Mark, Panel, Series};
 use crate::engine::SphereWall;
 use crate::file_error::FileError;
 use crate::kernels::Separation;
@@ -44,9 +44,6 @@ pub enum LargeStrainError {
     /// The grain could not be built.
     #[error(transparent)]
     Grain(#[from] HertzError),
-    /// A plot could not be written.
-    #[error(transparent)]
-    Plot(#[from] PlotError),
     /// The report could not be written.
     #[error(transparent)]
     File(#[from] FileError),
@@ -131,16 +128,22 @@ impl LargeStrainOptions {
 #[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct State {
     /// Simulated time since the compression began (tau).
+    #[serde(deserialize_with = "crate::json_nan::nan_if_null")]
     pub time: f64,
     /// Imposed volumetric strain: from the box (bulk) or the wall (grain).
+    #[serde(deserialize_with = "crate::json_nan::nan_if_null")]
     pub imposed_strain: f64,
     /// The material's volumetric strain, `1 - sum r^3 / sum r0^3` over bonds.
+    #[serde(deserialize_with = "crate::json_nan::nan_if_null")]
     pub bond_strain: f64,
     /// Pressure (k / d^2): virial (bulk) or wall force over area (grain).
+    #[serde(deserialize_with = "crate::json_nan::nan_if_null")]
     pub pressure: f64,
     /// Shortest bond over its reference length.
+    #[serde(deserialize_with = "crate::json_nan::nan_if_null")]
     pub shortest_bond: f64,
     /// Longest bond over its reference length.
+    #[serde(deserialize_with = "crate::json_nan::nan_if_null")]
     pub longest_bond: f64,
 }
 
@@ -429,6 +432,10 @@ pub fn replot(json: &Path, dir: &Path) -> Result<LargeStrainReport, LargeStrainE
 
 impl StudyReport for LargeStrainReport {
     const JSON: &'static str = "large_strain.json";
+
+    fn check(&self) -> Result<(), String> {
+        self.options.validate().map_err(|e| e.to_string())
+    }
 
     /// `large_strain.svg`: pressure against the bonds' volumetric strain,
     /// and the bond extremes, per body.

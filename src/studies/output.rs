@@ -5,13 +5,13 @@
 //!
 //! A study's report type implements [`StudyReport`]: the name of its JSON
 //! file and how it is drawn. [`write_report`] then writes the JSON and
-//! the drawings, and [`replot`] redraws them from the JSON. Every file is
-//! written whole: into a temporary file beside it, then renamed into
-//! place, so a failure (a full disk, a kill) leaves the earlier complete
-//! file, never half of one.
+//! the drawings, and [`replot`] redraws them from the JSON. Every file,
+//! plots included, is written whole ([`write_whole`]): a failure leaves
+//! the earlier complete file, never half of one.
 
 use crate::analysis::plot::{write_svg, write_svg_rows, Panel, PlotError};
 use crate::file_error::FileError;
+pub use crate::whole_file::write_whole;
 use serde::{de::DeserializeOwned, Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 
@@ -42,6 +42,12 @@ pub trait StudyReport: Serialize + DeserializeOwned {
 
     /// Writes the plots and tables drawn from the report into `out`.
     fn draw(&self, out: &StudyOutput) -> Result<(), OutputError>;
+
+    /// Why a report read back cannot be drawn (its options out of range,
+    /// as a hand-edited file may have them), if it cannot.
+    fn check(&self) -> Result<(), String> {
+        Ok(())
+    }
 }
 
 /// A study's output folder, created when opened. Every write goes
@@ -71,9 +77,10 @@ impl StudyOutput {
     }
 
     /// Writes `value` as pretty JSON to file `name`.
-    pub fn json(&self, name: &str, value: &impl Serialize) -> Result<PathBuf, FileError> {
-        let text = serde_json::to_string_pretty(value).expect("a report serialises");
-        self.text(name, &text)
+    pub fn json(&self, name: &str, value: &impl Serialize) -> Result<PathBuf, OutputError> {
+        let path = self.path(name);
+        write_json(&path, value)?;
+        Ok(path)
     }
 
     /// Writes `text` to file `name`.
@@ -105,23 +112,12 @@ impl StudyOutput {
 
 /// Writes `value` as pretty JSON to `path`, whole: for a study whose
 /// JSON is not a [`StudyReport`] (one assembled as a `serde_json::Value`).
-pub fn write_json(path: &Path, value: &impl Serialize) -> Result<(), FileError> {
-    let text = serde_json::to_string_pretty(value).expect("a report serialises");
-    write_whole(path, text.as_bytes())
-}
-
-/// Writes `bytes` to `path` through a temporary file beside it, renamed
-/// into place.
-pub fn write_whole(path: &Path, bytes: &[u8]) -> Result<(), FileError> {
-    let name = path
-        .file_name()
-        .map_or_else(|| "output".into(), |n| n.to_string_lossy().into_owned());
-    let temporary = path.with_file_name(format!(".{name}.{}.tmp", std::process::id()));
-    std::fs::write(&temporary, bytes).map_err(FileError::on("writing", &temporary))?;
-    std::fs::rename(&temporary, path).map_err(|cause| {
-        let _ = std::fs::remove_file(&temporary);
-        FileError::on("writing", path)(cause)
-    })
+pub fn write_json(path: &Path, value: &impl Serialize) -> Result<(), OutputError> {
+    let text = serde_json::to_string_pretty(value).map_err(|e| OutputError::Json {
+        path: path.display().to_string(),
+        message: format!("cannot be written as JSON: {e}"),
+    })?;
+    Ok(write_whole(path, text.as_bytes())?)
 }
 
 /// Writes `report` into the folder `dir`: its JSON, then its drawings.
@@ -135,10 +131,14 @@ pub fn write_report<R: StudyReport>(report: &R, dir: &Path) -> Result<StudyOutpu
 /// Reads an earlier report from `json`.
 pub fn read_report<R: StudyReport>(json: &Path) -> Result<R, OutputError> {
     let text = std::fs::read_to_string(json).map_err(FileError::on("reading", json))?;
-    serde_json::from_str(&text).map_err(|e| OutputError::Json {
+    let bad = |message: String| OutputError::Json {
         path: json.display().to_string(),
-        message: format!("not a {} of this version: {e}", R::JSON),
-    })
+        message,
+    };
+    let report: R = serde_json::from_str(&text)
+        .map_err(|e| bad(format!("not a valid {} of this version: {e}", R::JSON)))?;
+    report.check().map_err(bad)?;
+    Ok(report)
 }
 
 /// Reads an earlier report from `json` and writes it, with its drawings
@@ -149,8 +149,20 @@ pub fn replot<R: StudyReport>(json: &Path, dir: &Path) -> Result<R, OutputError>
     Ok(report)
 }
 
+/// Where a replot of `json` writes when no folder is given: the JSON's own
+/// folder (its report rewritten unchanged, its drawings redrawn), never a
+/// study's default folder, which may hold another report.
+pub fn replot_folder(json: &Path) -> PathBuf {
+    json.parent()
+        .filter(|p| !p.as_os_str().is_empty())
+        .map_or_else(|| PathBuf::from("."), Path::to_path_buf)
+}
+
 /// Who wrote a report, so it can be repeated: the program with its
-/// version, and the command line.
+/// version, and the command line. Flattened into a report's head
+/// (`#[serde(flatten)]`), it writes `program` and `command` there; the
+/// reports of Hertz, compaction and the multi-contact studies keep the
+/// fields they had (their committed JSON stays readable as it is).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Provenance {
     /// `bpm` and its version.
@@ -167,14 +179,6 @@ impl Provenance {
             command: command.into(),
         }
     }
-}
-
-/// Reads a number that JSON could not hold as one: serde_json writes a
-/// NaN or an infinity as `null`, which reads back as NaN (for
-/// `#[serde(deserialize_with = "...")]` on measured values that may be
-/// undefined).
-pub fn nan_if_null<'de, D: serde::Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
-    Ok(Option::<f64>::deserialize(d)?.unwrap_or(f64::NAN))
 }
 
 #[cfg(test)]
@@ -262,40 +266,9 @@ mod tests {
         let err = replot::<Squares>(&other, &dir).unwrap_err();
         let message = err.to_string();
         assert!(
-            message.contains("other.json") && message.contains("not a squares.json"),
+            message.contains("other.json") && message.contains("not a valid squares.json"),
             "{message}"
         );
         assert!(!dir.join("squares.svg").exists());
-    }
-
-    #[test]
-    fn an_undefined_number_reads_back_as_nan() {
-        #[derive(Deserialize, Serialize)]
-        struct Measured {
-            #[serde(deserialize_with = "nan_if_null")]
-            value: f64,
-        }
-        let json = serde_json::to_string(&Measured { value: f64::NAN }).unwrap();
-        assert_eq!(json, r#"{"value":null}"#);
-        let read: Measured = serde_json::from_str(&json).unwrap();
-        assert!(read.value.is_nan());
-        let read: Measured = serde_json::from_str(r#"{"value":2.5}"#).unwrap();
-        assert_eq!(read.value, 2.5);
-    }
-
-    #[test]
-    fn a_failed_write_keeps_the_earlier_file() {
-        let dir = scratch("whole");
-        let out = StudyOutput::create(&dir).unwrap();
-        out.text("table.txt", "complete\n").unwrap();
-        // A folder where the temporary file would go makes the write fail
-        // before the rename.
-        let blocker = dir.join(format!(".table.txt.{}.tmp", std::process::id()));
-        std::fs::create_dir(&blocker).unwrap();
-        assert!(out.text("table.txt", "half").is_err());
-        assert_eq!(
-            std::fs::read_to_string(dir.join("table.txt")).unwrap(),
-            "complete\n"
-        );
     }
 }

@@ -26,7 +26,7 @@
 
 pub mod cli;
 
-use crate::analysis::plot::{Mark, Panel, PlotError, Series};
+use crate::analysis::plot::{Mark, Panel, Series};
 use crate::engine::StageDrivers;
 use crate::file_error::FileError;
 use crate::kernels::verlet_limit;
@@ -50,9 +50,6 @@ pub enum StabilityError {
     /// The solid could not be built.
     #[error(transparent)]
     Harness(#[from] HarnessError),
-    /// A plot could not be written.
-    #[error(transparent)]
-    Plot(#[from] PlotError),
     /// The report could not be written.
     #[error(transparent)]
     File(#[from] FileError),
@@ -204,11 +201,11 @@ pub struct Trial {
     /// The verdict.
     pub stable: bool,
     /// Largest energy over the reference (NaN when it stopped).
-    #[serde(deserialize_with = "output::nan_if_null")]
+    #[serde(deserialize_with = "crate::json_nan::nan_if_null")]
     pub growth: f64,
     /// Largest bond strain at the end beyond the imposed strain (NaN when
     /// it stopped).
-    #[serde(deserialize_with = "output::nan_if_null")]
+    #[serde(deserialize_with = "crate::json_nan::nan_if_null")]
     pub residual_strain: f64,
     /// Why it counts as unstable (empty when stable).
     pub reason: String,
@@ -226,10 +223,10 @@ pub struct Limit {
     /// Seed of the solid.
     pub seed: u64,
     /// Largest timestep found stable (NaN: none in the bracket).
-    #[serde(deserialize_with = "output::nan_if_null")]
+    #[serde(deserialize_with = "crate::json_nan::nan_if_null")]
     pub dt_stable: f64,
     /// Smallest timestep found unstable (NaN: none in the bracket).
-    #[serde(deserialize_with = "output::nan_if_null")]
+    #[serde(deserialize_with = "crate::json_nan::nan_if_null")]
     pub dt_unstable: f64,
     /// Every trial, in the order run.
     pub trials: Vec<Trial>,
@@ -259,10 +256,13 @@ pub struct Mode {
     pub seed: u64,
     /// Largest eigenvalue (modulus) of the mass-weighted force Jacobian
     /// (k / m), by power iteration.
+    #[serde(deserialize_with = "crate::json_nan::nan_if_null")]
     pub lambda: f64,
     /// Damping rate of that mode per unit Gamma (1 / tau).
+    #[serde(deserialize_with = "crate::json_nan::nan_if_null")]
     pub damping: f64,
     /// The undamped velocity-Verlet limit `2 / sqrt(lambda)` (tau).
+    #[serde(deserialize_with = "crate::json_nan::nan_if_null")]
     pub dt_undamped: f64,
 }
 
@@ -272,13 +272,13 @@ pub struct ModuliRow {
     /// Multibody strength (k d).
     pub a_b: f64,
     /// Bulk modulus (k / d): the fitted slope, NaN when a run failed.
-    #[serde(deserialize_with = "output::nan_if_null")]
+    #[serde(deserialize_with = "crate::json_nan::nan_if_null")]
     pub k: f64,
     /// Shear modulus (k / d), as `k`.
-    #[serde(deserialize_with = "output::nan_if_null")]
+    #[serde(deserialize_with = "crate::json_nan::nan_if_null")]
     pub g: f64,
     /// Poisson ratio.
-    #[serde(deserialize_with = "output::nan_if_null")]
+    #[serde(deserialize_with = "crate::json_nan::nan_if_null")]
     pub nu: f64,
     /// Why the slopes are not moduli: the engine error of a failed run, or
     /// a solid that is not stable (a negative slope, or no stable timestep
@@ -720,6 +720,10 @@ pub fn replot(json: &Path, dir: &Path) -> Result<StabilityReport, StabilityError
 impl StudyReport for StabilityReport {
     const JSON: &'static str = "stability.json";
 
+    fn check(&self) -> Result<(), String> {
+        self.options.validate().map_err(|e| e.to_string())
+    }
+
     /// `stability.svg`: the limits against a_B beside the stiffest mode's
     /// prediction, and the moduli.
     fn draw(&self, out: &StudyOutput) -> Result<(), OutputError> {
@@ -754,8 +758,13 @@ impl StudyReport for StabilityReport {
                 ));
             }
         }
-        let first = report.options.seeds[0];
-        let modes: Vec<&Mode> = report.modes.iter().filter(|m| m.seed == first).collect();
+        // The modes of the first seed (validated options have one).
+        let first = report.options.seeds.first().copied();
+        let modes: Vec<&Mode> = report
+            .modes
+            .iter()
+            .filter(|m| Some(m.seed) == first)
+            .collect();
         limits.series.push(Series::new(
             "2 / sqrt(lambda_max), undamped",
             modes.iter().map(|m| (m.a_b, m.dt_undamped)).collect(),

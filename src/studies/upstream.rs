@@ -56,6 +56,9 @@ pub enum UpstreamError {
     /// An option is out of range.
     #[error(transparent)]
     Invalid(#[from] crate::options::InvalidOption),
+    /// The report could not be written.
+    #[error(transparent)]
+    Report(#[from] crate::studies::output::OutputError),
 }
 
 type Result<T> = std::result::Result<T, UpstreamError>;

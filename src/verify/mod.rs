@@ -32,5 +32,5 @@ pub(crate) fn write_json(
     value: &impl serde::Serialize,
 ) -> std::io::Result<()> {
     let text = serde_json::to_string_pretty(value).map_err(std::io::Error::other)?;
-    std::fs::write(path, text)
+    crate::whole_file::write_whole(path, text.as_bytes()).map_err(|e| e.cause)
 }

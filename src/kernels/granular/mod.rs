@@ -141,7 +141,8 @@ impl GranularCoeffs {
     }
 
     /// Whether rolling or twisting resistance is on (else the kernel
-    /// skips their terms).
+    /// skips their terms). Where the lanes may run is
+    /// [`GranularCoeffs::lanes_cover`]'s to decide, which names every field.
     pub fn has_rolling_or_twisting(&self) -> bool {
         self.rolling.is_some() || self.twisting != Twisting::None
     }

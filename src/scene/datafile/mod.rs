@@ -21,7 +21,8 @@
 //! `Bodies`), duplicate atom ids, unknown sections. Malformed input is an
 //! error naming the line.
 //!
-//! [`read`] parses a file into a scene; [`write`] writes a scene as a file.
+//! `read.rs` parses a file into a scene ([`read_data_file`]); `write.rs`
+//! writes a scene as a file ([`write_data_file`]).
 
 mod read;
 mod write;

@@ -154,8 +154,8 @@ struct Sections {
 /// A data line: its number in the file and its text without the comment.
 type Line<'t> = (usize, &'t str);
 
-/// Reads a data file as a scene with `boundary` periodicity (data files do
-/// not record it), the force field `force_field`, no stages and the given
+/// Reads a data file as a scene with the periodicity `periodic` (data
+/// files do not record it), the force field `force_field`, no stages and the given
 /// seed. A sphere file needs `force_field.granular`; its scene keeps the
 /// rest of `force_field` (skin, gravity, multi-contact closure) and drops
 /// only the bonded model's terms (`bond`, `pair`, `zero_net_multibody`).

@@ -315,10 +315,13 @@ pub struct LidRows {
     /// `step` column for a deck that starts at step 0).
     pub step: Vec<u64>,
     /// Time since the start of the first pass, per row.
+    #[serde(deserialize_with = "crate::json_nan::nan_if_null_each")]
     pub time: Vec<f64>,
     /// The lid's height, per row.
+    #[serde(deserialize_with = "crate::json_nan::nan_if_null_each")]
     pub lid_position: Vec<f64>,
     /// The normal force on the lid (positive when the bed pushes it).
+    #[serde(deserialize_with = "crate::json_nan::nan_if_null_each")]
     pub lid_force: Vec<f64>,
 }
 

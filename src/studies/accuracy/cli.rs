@@ -9,9 +9,10 @@ use std::path::PathBuf;
 /// The arguments of `bpm accuracy`.
 #[derive(clap::Args)]
 pub struct AccuracyArgs {
-    /// Output folder.
-    #[arg(short, long, default_value = "results/accuracy")]
-    output: PathBuf,
+    /// Output folder [default: results/accuracy; with --from, the JSON's own
+    /// folder, whose report and plot are rewritten]
+    #[arg(short, long)]
+    output: Option<PathBuf>,
     /// Multibody strength a_B of every run (k d).
     #[arg(long = "a-b", default_value_t = 0.0, allow_hyphen_values = true)]
     a_b: f64,
@@ -74,11 +75,13 @@ impl AccuracyArgs {
             from,
         } = self;
         if let Some(path) = from {
+            let output = output.unwrap_or_else(|| crate::studies::output::replot_folder(&path));
             let report = accuracy::replot(&path, &output)?;
             print!("{}", accuracy::table(&report));
             println!("wrote {}/accuracy.json and accuracy.svg", output.display());
             return Ok(());
         }
+        let output = output.unwrap_or_else(|| PathBuf::from("results/accuracy"));
         let opts = accuracy::AccuracyOptions {
             a_b,
             seed,

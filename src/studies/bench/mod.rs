@@ -49,6 +49,9 @@ pub enum BenchError {
     /// The plot could not be written.
     #[error(transparent)]
     Plot(#[from] PlotError),
+    /// The report could not be written.
+    #[error(transparent)]
+    Output(#[from] crate::studies::output::OutputError),
 }
 
 /// What both benchmarks run: the bulk solid and the steps timed.

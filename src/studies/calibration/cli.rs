@@ -105,7 +105,7 @@ impl CalibrateArgs {
 }
 
 /// The calibration tables, then the files written.
-fn print_calibration_report(report: &calibration::StudyReport) {
+fn print_calibration_report(report: &calibration::CalibrationFiles) {
     println!("\n{}", report.markdown);
     for f in &report.files {
         println!("wrote {}", f.display());

@@ -1030,8 +1030,7 @@ pub fn run_compaction(
             ));
         }
         let data = folder.join("packing.data");
-        std::fs::write(&data, write_data_file(&packing))
-            .map_err(FileError::on("writing", &data))?;
+        crate::whole_file::write_whole(&data, write_data_file(&packing).as_bytes())?;
         let scene = compaction_scene(&packing, &opts.protocol);
         let scene_path = folder.join("scene.json");
         write_scene(&scene_path, &scene).map_err(|e| CompactionError::Packing(e.to_string()))?;

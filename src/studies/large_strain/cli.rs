@@ -8,9 +8,10 @@ use std::path::PathBuf;
 /// The arguments of `bpm large-strain`.
 #[derive(clap::Args)]
 pub struct LargeStrainArgs {
-    /// Output folder.
-    #[arg(short, long, default_value = "results/large-strain")]
-    output: PathBuf,
+    /// Output folder [default: results/large-strain; with --from, the JSON's own
+    /// folder, whose report and plot are rewritten]
+    #[arg(short, long)]
+    output: Option<PathBuf>,
     /// Multibody strengths a_B (k d).
     #[arg(
         long = "a-b",
@@ -66,6 +67,7 @@ impl LargeStrainArgs {
             from,
         } = self;
         if let Some(path) = from {
+            let output = output.unwrap_or_else(|| crate::studies::output::replot_folder(&path));
             let report = large_strain::replot(&path, &output)?;
             println!(
                 "{} compressions replotted; wrote {}/large_strain.json and large_strain.svg",
@@ -74,6 +76,7 @@ impl LargeStrainArgs {
             );
             return Ok(());
         }
+        let output = output.unwrap_or_else(|| PathBuf::from("results/large-strain"));
         let opts = large_strain::LargeStrainOptions {
             a_b,
             zero_net,

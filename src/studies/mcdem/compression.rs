@@ -18,7 +18,7 @@
 //! volume fraction 0.65 and 1.4% at 0.85 (docs/protocols.md).
 
 use super::{BoxWalls, Closures, Hydrogel, Variant, WalledBox};
-use crate::analysis::plot::{Mark, Panel, PlotError, Series};
+use crate::analysis::plot::{Mark, Panel, Series};
 use crate::file_error::FileError;
 use crate::scene::{validate, Mass, Scene, StageOutput, StageSpec};
 use crate::studies::output::{self, OutputError, StudyOutput, StudyReport};
@@ -92,9 +92,6 @@ pub enum CompressionError {
         /// What stopped it.
         message: String,
     },
-    /// A plot could not be written.
-    #[error(transparent)]
-    Plot(#[from] PlotError),
     /// A file could not be written.
     #[error(transparent)]
     File(#[from] FileError),

@@ -4,7 +4,7 @@
 //! and a plot.
 
 use super::Variant;
-use crate::analysis::plot::{Mark, Panel, PlotError, Series};
+use crate::analysis::plot::{Mark, Panel, Series};
 use crate::engine::MultiContact;
 use crate::file_error::FileError;
 use crate::scene::protocols::lid::{lid_scene, LidError, LidOptions, LidRows};
@@ -30,9 +30,6 @@ pub enum LidStudyError {
     /// Writing the report.
     #[error(transparent)]
     File(#[from] FileError),
-    /// Writing the plot.
-    #[error(transparent)]
-    Plot(#[from] PlotError),
     /// The study stopped before its end (its checkpoint continues it).
     #[error(transparent)]
     Stopped(#[from] crate::studies::StudyStop),

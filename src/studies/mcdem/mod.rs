@@ -174,14 +174,18 @@ pub struct BoxWalls {
     #[serde(skip)]
     pub lid: Vec<f64>,
     /// Lid force over the box's cross-section (Pa).
+    #[serde(deserialize_with = "crate::json_nan::nan_if_null_each")]
     pub lid_stress: Vec<f64>,
     /// Mean over the four side walls of the force over the wall's area
     /// below the lid (Pa).
+    #[serde(deserialize_with = "crate::json_nan::nan_if_null_each")]
     pub side_stress: Vec<f64>,
     /// The largest multi-contact correction over its sphere's radius (0
     /// for Hertz).
+    #[serde(deserialize_with = "crate::json_nan::nan_if_null_each")]
     pub largest_correction: Vec<f64>,
     /// Contacts (or terms) the advanced closure switched off.
+    #[serde(deserialize_with = "crate::json_nan::nan_if_null_each")]
     pub switched_off: Vec<f64>,
 }
 

@@ -13,7 +13,7 @@
 //! ratio, restitution and friction.
 
 use super::{BoxWalls, Closures, Hydrogel, Variant, WalledBox};
-use crate::analysis::plot::{Mark, Panel, PlotError, Series};
+use crate::analysis::plot::{Mark, Panel, Series};
 use crate::file_error::FileError;
 use crate::scene::{validate, Mass, Scene, StageSpec};
 use crate::studies::output::{self, OutputError, StudyOutput, StudyReport};
@@ -72,9 +72,6 @@ pub enum BoxError {
         /// What stopped it.
         message: String,
     },
-    /// A plot could not be written.
-    #[error(transparent)]
-    Plot(#[from] PlotError),
     /// A file could not be written.
     #[error(transparent)]
     File(#[from] FileError),
@@ -412,7 +409,7 @@ fn write_scenes(report: &BoxReport, out: &StudyOutput) -> Result<(), BoxError> {
             let text =
                 serde_json::to_string(&scene(arrangement, variant, &report.options, &hydrogel))
                     .expect("a scene serialises");
-            std::fs::write(&path, text).map_err(FileError::on("writing", &path))?;
+            crate::whole_file::write_whole(&path, text.as_bytes())?;
         }
     }
     Ok(())

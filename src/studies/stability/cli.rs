@@ -9,9 +9,10 @@ use std::path::PathBuf;
 /// The arguments of `bpm stability`.
 #[derive(clap::Args)]
 pub struct StabilityArgs {
-    /// Output folder.
-    #[arg(short, long, default_value = "results/stability")]
-    output: PathBuf,
+    /// Output folder [default: results/stability; with --from, the JSON's own
+    /// folder, whose report and plot are rewritten]
+    #[arg(short, long)]
+    output: Option<PathBuf>,
     /// Box side L of the bulk solid (d).
     #[arg(long, default_value_t = 10.0)]
     size: f64,
@@ -85,6 +86,7 @@ impl StabilityArgs {
             runtime,
         } = self;
         if let Some(path) = from {
+            let output = output.unwrap_or_else(|| crate::studies::output::replot_folder(&path));
             let report = stability::replot(&path, &output)?;
             print_limits(&report);
             println!(
@@ -93,6 +95,7 @@ impl StabilityArgs {
             );
             return Ok(());
         }
+        let output = output.unwrap_or_else(|| PathBuf::from("results/stability"));
         let opts = stability::StabilityOptions {
             size,
             seeds,

@@ -36,7 +36,6 @@ pub use report::{table, write_report};
 
 use super::Closures;
 use crate::analysis::fit::interpolate;
-use crate::analysis::plot::PlotError;
 use crate::engine::MultiContact;
 use crate::file_error::FileError;
 use crate::reference::multicontact::ASSUMED_JAMMING_POINTS;
@@ -250,9 +249,6 @@ pub enum ShearError {
     /// The packings could not be prepared.
     #[error("preparing the packings: {0}")]
     Preparation(String),
-    /// A plot could not be written.
-    #[error(transparent)]
-    Plot(#[from] PlotError),
     /// A file could not be written.
     #[error(transparent)]
     File(#[from] FileError),
