@@ -622,7 +622,7 @@ mod tests {
     }
 
     #[test]
-    #[should_panic(expected = "no rolling or twisting")]
+    #[should_panic(expected = "the lanes do not cover these coefficients")]
     fn blocks_refuse_rolling_resistance() {
         let coeffs = GranularCoeffs::of(&GranularMaterial {
             youngs_modulus: 1.0,
