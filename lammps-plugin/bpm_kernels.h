@@ -171,12 +171,13 @@ void bpm_granular_wall_material_destroy(bpm_granular_wall_material *material);
 
 /* One wall at a force evaluation: the plane x[axis] = position moving at
  * velocity, its atoms on side +1 (above) or -1 (below); fresh != 0 when it
- * was (re)defined since the last evaluation (its friction springs restart). */
+ * was (re)defined since the last evaluation (its friction springs restart,
+ * unless keep != 0 and the wall it replaces had its number, axis and side). */
 typedef struct {
   int64_t number;
   int32_t axis, side;
   double position, velocity;
-  int32_t fresh;
+  int32_t fresh, keep;
   const bpm_granular_wall_material *material;
 } bpm_granular_wall;
 

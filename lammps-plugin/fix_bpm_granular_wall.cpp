@@ -9,6 +9,7 @@
 #include "update.h"
 #include "utils.h"
 
+#include <cstring>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -16,10 +17,12 @@
 using namespace LAMMPS_NS;
 
 static const char *const USAGE =
-    "fix ID all bpm/granular/wall number x|y|z lo|hi position velocity hertz/material ...";
+    "fix ID all bpm/granular/wall number x|y|z lo|hi position velocity [keep_history] "
+    "hertz/material ...";
 
 FixBPMGranularWall::FixBPMGranularWall(LAMMPS *lmp, int narg, char **arg) :
-    Fix(lmp, narg, arg), material(nullptr), fresh(1), local_force(0.0), total_force(0.0), summed(1)
+    Fix(lmp, narg, arg), material(nullptr), fresh(1), keep_history(0), local_force(0.0),
+    total_force(0.0), summed(1)
 {
   if (narg < 9) error->all(FLERR, std::string("Illegal fix bpm/granular/wall command: ") + USAGE);
   if (igroup != 0)
@@ -36,7 +39,12 @@ FixBPMGranularWall::FixBPMGranularWall(LAMMPS *lmp, int narg, char **arg) :
   side = s == "lo" ? 1 : -1;
   start = utils::numeric(FLERR, arg[6], false, lmp);
   velocity = utils::numeric(FLERR, arg[7], false, lmp);
-  std::vector<const char *> words(arg + 8, arg + narg);
+  int first_material_word = 8;
+  if (strcmp(arg[8], "keep_history") == 0) {
+    keep_history = 1;
+    first_material_word = 9;
+  }
+  std::vector<const char *> words(arg + first_material_word, arg + narg);
   char message[1024];
   material = bpm_granular_wall_material_create((int32_t) words.size(), words.data(), message,
                                                sizeof(message));
@@ -90,7 +98,7 @@ void FixBPMGranularWall::reset_dt()
 
 bpm_granular_wall FixBPMGranularWall::current() const
 {
-  return bpm_granular_wall{number, axis, side, position(), velocity, fresh, material};
+  return bpm_granular_wall{number, axis, side, position(), velocity, fresh, keep_history, material};
 }
 
 void FixBPMGranularWall::set_local_force(double force)

@@ -1,4 +1,4 @@
-/* fix ID all bpm/granular/wall number axis side position velocity material...
+/* fix ID all bpm/granular/wall number axis side position velocity [keep_history] material...
  *
  * A flat wall of pair_style bpm/granular: the plane axis = position +
  * velocity t (t from the fix's definition on), its atoms on the side `lo`
@@ -8,7 +8,10 @@
  * in the Rust kernels, this fix holds the wall's definition and reports
  * [1] the normal force on the wall (positive when pushed) and [2] its
  * position. Restart files keep the plane's motion: the same fix defined
- * after read_restart goes on where it was. See
+ * after read_restart goes on where it was. Defined anew (as a script
+ * does each stage), a wall restarts its contacts' friction springs, or
+ * with `keep_history` keeps them from the wall of the same number, axis
+ * and side it replaces. See
  * lammps-plugin/doc/pair_bpm_granular.md. */
 #ifndef LMP_FIX_BPM_GRANULAR_WALL_H
 #define LMP_FIX_BPM_GRANULAR_WALL_H
@@ -43,6 +46,7 @@ class FixBPMGranularWall : public Fix {
   bigint time_origin;    // the step at which the plane was at `start`
   double dt_origin;      // the timestep since then
   int fresh;
+  int keep_history;    // defined anew, keeps the friction springs of the wall it replaces
   double local_force, total_force;
   int summed;
   double position() const;

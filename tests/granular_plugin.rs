@@ -48,33 +48,60 @@ fn the_closure_in_lammps_follows_the_native_engine_and_changes_the_stress() {
         bpm: PathBuf::from(env!("CARGO_BIN_EXE_bpm")),
         dir: dir.clone(),
     };
-    for (rt, loading, mc, ranks) in [
+    for (rt, loading, mc, ranks, keep_history) in [
         (
             false,
             DemLoading::Compress,
             MultiContact::advanced(0.81, 0.015),
             1,
+            false,
         ),
         (
             true,
             DemLoading::LeesEdwards,
             MultiContact::standard(0.82),
             2,
+            false,
         ),
         (
             false,
             DemLoading::Walls,
             MultiContact::advanced(0.81, 0.015),
             2,
+            false,
+        ),
+        (
+            false,
+            DemLoading::Walls,
+            MultiContact::standard(0.82),
+            1,
+            true,
         ),
     ] {
         let mut scene = closure_scene(rt, loading, 800, mc);
         if loading == DemLoading::Walls {
-            // The walls defined anew halfway: springs restart, loads kept.
+            // The walls defined anew halfway: springs restart (or with
+            // `keep_history` go on), loads kept.
             scene = with_release(scene);
+            for wall in &mut scene.stages[1].granular_walls {
+                wall.keep_history = keep_history;
+            }
         }
-        let tag = format!("{}-{ranks}", loading.name());
+        let tag = format!("{}-{ranks}-keep-{keep_history}", loading.name());
         let native = run_native(&scene, &tag, 1).unwrap();
+        if keep_history {
+            // The springs kept change the release's wall forces.
+            let mut restarting = scene.clone();
+            for wall in &mut restarting.stages[1].granular_walls {
+                wall.keep_history = false;
+            }
+            let restarted = run_native(&restarting, &format!("{tag}-restart"), 1).unwrap();
+            let (kept, fresh) = (
+                native.stages[1].column("granular_wall0_force").unwrap(),
+                restarted.stages[1].column("granular_wall0_force").unwrap(),
+            );
+            assert_ne!(kept, fresh);
+        }
         let lammps = launcher.run(&scene, &tag, ranks, false).unwrap();
         let deviations = compare_runs(&native.stages, &lammps.stages).unwrap();
         assert!(deviations
@@ -106,6 +133,19 @@ fn the_closure_in_lammps_follows_the_native_engine_and_changes_the_stress() {
         }
         let mut plain = scene.clone();
         plain.force_field.multicontact = None;
+        if keep_history {
+            // LAMMPS's own walls, used without the closure, cannot keep
+            // their springs: refused, not run otherwise.
+            let mut hertz_walls = plain.clone();
+            for stage in &mut hertz_walls.stages {
+                if let Some(ff) = &mut stage.force_field {
+                    ff.multicontact = None;
+                }
+            }
+            let err =
+                bpm::lammps::write_driver(&hertz_walls, &dir, "keep-plain", false).unwrap_err();
+            assert!(err.to_string().contains("keep_history"), "{err}");
+        }
         let hertz = run_native(&plain, &format!("{tag}-hertz"), 1).unwrap();
         let (p, q) = (
             last(&lammps.stages, "pressure"),

@@ -113,6 +113,7 @@ fn options(gamma: f64, wall_modulus: f64) -> LidOptions {
         gravity: [0.0; 3],
         record_every: 1,
         skin: Some(0.004),
+        keep_wall_histories: false,
     }
 }
 

@@ -145,6 +145,14 @@ pub struct GranularWall {
     /// restitution, damping and friction are those of the sphere-wall
     /// contact.
     pub material: GranularMaterial,
+    /// Whether its contacts keep their friction springs from the
+    /// previous stage, when the wall at the same place in that stage's
+    /// list is on the same axis and side (LIGGGHTS and LAMMPS keep a wall
+    /// fix's histories across `run` commands). Otherwise the springs
+    /// restart with the stage, and only the loads are kept, for the
+    /// multi-contact closure.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub keep_history: bool,
 }
 
 impl GranularWall {

@@ -728,6 +728,9 @@ pub struct RawWall {
     pub velocity: f64,
     /// Not 0 when the wall was (re)defined since the last evaluation.
     pub fresh: i32,
+    /// Not 0 when a fresh wall keeps the friction springs of the wall it
+    /// replaces (same number, axis and side).
+    pub keep: i32,
     /// Its material, from [`bpm_granular_wall_material_create`].
     pub material: *const GranularMaterial,
 }
@@ -779,6 +782,7 @@ pub unsafe extern "C" fn bpm_granular_set_walls(
                     velocity: w.velocity,
                 },
                 coeffs: GranularCoeffs::between(&style.coeffs.material, material),
+                keep_history: w.keep != 0,
             });
             fresh.push(w.fresh != 0);
         }

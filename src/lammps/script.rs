@@ -161,6 +161,13 @@ fn check_supported(index: usize, stage: &StageSpec, scene: &Scene) -> Result<(),
             .is_some_and(|m| m.damping == NormalDamping::CoeffRestitution)
     };
     let closure = uses_closure(scene);
+    // LAMMPS's own granular walls are defined anew each stage; the
+    // plugin's (with the closure) can keep their springs.
+    if !closure && stage.granular_walls.iter().any(|w| w.keep_history) {
+        return Err(unsupported(
+            "granular walls that keep their friction springs across stages (`keep_history`) with plain Hertz contacts: LAMMPS's fix wall/gran/region is defined anew each stage (with the multi-contact closure the plugin's walls keep them)",
+        ));
+    }
     // The plugin's pair style and walls have the restitution form;
     // LAMMPS's do not.
     if !closure
@@ -312,7 +319,18 @@ fn external_commands(
                 ("side", side.to_string()),
                 ("wall_start", g(wall.position)),
                 ("wall_velocity", g(wall.velocity)),
-                ("wall_material", dem_pair_coeff(&wall.material, None, true)),
+                (
+                    "wall_material",
+                    format!(
+                        "{}{}",
+                        if wall.keep_history {
+                            "keep_history "
+                        } else {
+                            ""
+                        },
+                        dem_pair_coeff(&wall.material, None, true)
+                    ),
+                ),
             ] {
                 begin.push(format!("variable        {name} string \"{value}\""));
             }

@@ -4,7 +4,7 @@
 use super::compare::CompareError;
 use super::compare::{compaction_deviation, compare_runs, deviation_series};
 use super::engines::{run_native, HarnessError, LammpsLauncher};
-use super::liggghts::{lid_cross_check, LiggghtsError, LiggghtsLaw};
+use super::liggghts::{lid_cross_check, LiggghtsError, LiggghtsLaw, LiggghtsLidCheck};
 use super::moduli::{measure_moduli, CalibrationEngine};
 use super::scenes::{
     as_trajectory, contact_solid, dem_lattice, dem_trajectory, grain_pair, grain_squeeze,
@@ -144,6 +144,8 @@ pub struct CheckReport {
     pub verdicts: Vec<Verdict>,
     /// Calibration moduli, native and LAMMPS.
     pub calibration: Vec<[Moduli; 2]>,
+    /// The lid force against LIGGGHTS's, whole and pass by pass.
+    pub liggghts: Vec<LiggghtsLidCheck>,
     /// Files written (report, plots).
     pub files: Vec<String>,
 }
@@ -475,6 +477,7 @@ pub fn run_check(opts: &CheckOptions) -> Result<CheckReport> {
 
     // LIGGGHTS's hydrogel tutorial under its lid, against LIGGGHTS's own
     // lid force (committed; verify::liggghts).
+    let mut liggghts = Vec::new();
     for law in [LiggghtsLaw::Hertz, LiggghtsLaw::Closure] {
         let check = lid_cross_check(law, 2, &work, 1)?;
         let v = verdict(
@@ -486,6 +489,8 @@ pub fn run_check(opts: &CheckOptions) -> Result<CheckReport> {
         );
         print_verdict(&v);
         verdicts.push(v);
+        println!("  {}", check.by_pass_line());
+        liggghts.push(check);
     }
 
     let bulk = build_bulk(
@@ -564,6 +569,7 @@ pub fn run_check(opts: &CheckOptions) -> Result<CheckReport> {
         options: opts.clone(),
         verdicts,
         calibration,
+        liggghts,
         files,
     };
     let json = dir.join("check.json");

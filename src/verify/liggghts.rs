@@ -6,7 +6,7 @@
 //! README there). The bed and the reference are built into the program,
 //! so the check runs from any folder and needs no LIGGGHTS.
 
-use crate::analysis::lid_force::{compare_lid_force, LidComparison};
+use crate::analysis::lid_force::{compare_lid_force, compare_lid_force_by_pass, LidComparison};
 use crate::engine::MultiContact;
 use crate::file_error::FileError;
 use crate::scene::protocols::lid::{lid_scene, LidError, LidOptions, LidRows};
@@ -131,7 +131,8 @@ pub enum LiggghtsError {
 /// `bed` (SI units): walls of 5e7 Pa, spheres of 23.3e3 Pa, Poisson's
 /// ratio 0.5, restitution 0.95, friction 0.03, gravity 9.81 m/s^2 down,
 /// the lid from 0.1676430125 m to 0.1375165625 m in 30,000 steps of 1e-5 s
-/// and back, `cycles` times.
+/// and back, `cycles` times; the walls keep their friction springs from
+/// pass to pass, as LIGGGHTS's wall fixes do across its `run` commands.
 pub fn tutorial_options(bed: &Path, cycles: usize) -> LidOptions {
     let lid_start = 0.1676430125;
     let lid_end = 0.1375165625;
@@ -153,6 +154,7 @@ pub fn tutorial_options(bed: &Path, cycles: usize) -> LidOptions {
         gravity: [0.0, 0.0, -9.81],
         record_every: 100,
         skin: None,
+        keep_wall_histories: true,
     }
 }
 
@@ -205,10 +207,33 @@ pub struct LiggghtsLidCheck {
     pub cycles: usize,
     /// The difference over the loaded rows.
     pub comparison: LidComparison,
+    /// The same, pass by pass of the lid (closing, opening, ...), each
+    /// against the whole run's peak; `None` for a pass with no loaded row.
+    pub by_pass: Vec<Option<LidComparison>>,
     /// Our peak lid force.
     pub native_peak: f64,
     /// Native wall seconds.
     pub seconds: f64,
+}
+
+impl LiggghtsLidCheck {
+    /// The RMS difference of each pass, in percent of the peak, in words.
+    pub fn by_pass_line(&self) -> String {
+        let passes: Vec<String> = self
+            .by_pass
+            .iter()
+            .map(|p| {
+                p.map_or("no loaded row".into(), |c| {
+                    format!("{:.2}%", 100.0 * c.rms_of_peak)
+                })
+            })
+            .collect();
+        format!(
+            "{} lid force by pass (closing, opening, ...), RMS of the peak: {}",
+            self.law.name(),
+            passes.join(", ")
+        )
+    }
 }
 
 /// Runs the tutorial's first `cycles` lid cycles (at most two) with `law`
@@ -222,7 +247,17 @@ pub fn lid_cross_check(
 ) -> Result<LiggghtsLidCheck, LiggghtsError> {
     let bed = write_tutorial_bed(work, "hydrogel-input.data")?;
     let opts = tutorial_options(&bed, cycles.clamp(1, 2));
-    let scene = lid_scene(&opts, law.multicontact(), law.name())?;
+    lid_cross_check_with(law, &opts, threads)
+}
+
+/// [`lid_cross_check`] with the protocol `opts` (the tutorial's, from
+/// [`tutorial_options`], perhaps changed).
+pub fn lid_cross_check_with(
+    law: LiggghtsLaw,
+    opts: &LidOptions,
+    threads: usize,
+) -> Result<LiggghtsLidCheck, LiggghtsError> {
+    let scene = lid_scene(opts, law.multicontact(), law.name())?;
     let run = run_native(&scene, &format!("liggghts-{}", law.name()), threads)?;
     let rows = LidRows::read(&run.stages).map_err(|message| LiggghtsError::Rows {
         law: law.name(),
@@ -237,10 +272,21 @@ pub fn lid_cross_check(
         LOADED_FRACTION,
     )
     .ok_or(LiggghtsError::NoOverlap(law.name()))?;
+    let mut by_pass = compare_lid_force_by_pass(
+        &rows.step,
+        &rows.lid_force,
+        &ref_step,
+        &ref_force,
+        LOADED_FRACTION,
+        opts.steps_per_pass(),
+    );
+    // The reference runs two cycles; this run may stop after one.
+    by_pass.truncate(2 * opts.cycles);
     Ok(LiggghtsLidCheck {
         law,
         cycles: opts.cycles,
         comparison,
+        by_pass,
         native_peak: rows.lid_force.iter().copied().fold(0.0, f64::max),
         seconds: run.seconds,
     })

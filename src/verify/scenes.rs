@@ -457,6 +457,7 @@ fn between_walls(scene: &mut Scene, stage: &mut StageSpec) {
             position: 0.0,
             velocity: 0.0,
             material: lower,
+            keep_history: false,
         },
         GranularWall {
             axis: 2,
@@ -464,6 +465,7 @@ fn between_walls(scene: &mut Scene, stage: &mut StageSpec) {
             position: top + 0.3,
             velocity: -0.02,
             material: upper,
+            keep_history: false,
         },
     ];
 }

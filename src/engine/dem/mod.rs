@@ -417,7 +417,8 @@ impl DemModel {
     /// the same axis and side, carried at the last evaluation is kept, for
     /// the multi-contact closure, which would otherwise lose the walls'
     /// forces for the stage's first evaluation (it does not enter the
-    /// contact force itself).
+    /// contact force itself). A wall with `keep_history` keeps that
+    /// wall's whole histories, springs included.
     fn renew_wall_histories(&mut self, n: usize) {
         let planes: Vec<(usize, WallSide)> = self
             .walls
@@ -428,10 +429,14 @@ impl DemModel {
             .map(|w| {
                 let mut history = vec![ContactHistory::default(); n];
                 let same = self.wall_planes.get(w) == Some(&planes[w]);
-                if let (true, Some(old)) = (same, self.wall_histories.get(w)) {
-                    for (h, o) in history.iter_mut().zip(old) {
-                        h.normal_force = o.normal_force;
-                    }
+                let (Some(old), true) = (self.wall_histories.get(w), same) else {
+                    return history;
+                };
+                if self.walls[w].wall.keep_history && old.len() == n {
+                    return old.clone();
+                }
+                for (h, o) in history.iter_mut().zip(old) {
+                    h.normal_force = o.normal_force;
                 }
                 history
             })

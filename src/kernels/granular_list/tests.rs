@@ -102,6 +102,7 @@ fn a_wall_is_a_contact_of_the_closure_in_both_passes() {
             velocity: -0.01,
         },
         coeffs: GranularCoeffs::between(&m, &wall_material),
+        keep_history: false,
     };
     let x = [[0.0, 0.0, 0.46], [0.02, 0.01, 1.41]];
     let v = [[0.01, 0.0, -0.02], [0.0, 0.01, -0.03]];
@@ -291,6 +292,7 @@ fn a_wall_defined_anew_keeps_only_its_load() {
             velocity: 0.0,
         },
         coeffs: GranularCoeffs::of(&m),
+        keep_history: false,
     };
     let slots = 2;
     let hist = Layout::history(slots);
@@ -348,6 +350,45 @@ fn a_wall_defined_anew_keeps_only_its_load() {
     assert!(list
         .set_walls(&[wall(0, 1.0)], &[true], &mut history, 1)
         .is_err());
+}
+
+/// A wall defined anew with `keep_history` keeps its whole entries, friction
+/// springs too, when it has the number, axis and side of the wall it
+/// replaces; on the other side its entries are forgotten all the same.
+#[test]
+fn a_wall_defined_anew_keeping_its_history_keeps_its_springs() {
+    let m = material();
+    let wall = |number, sign, keep_history| ListWall {
+        number,
+        plane: WallPlane {
+            axis: 2,
+            sign,
+            position: 0.0,
+            velocity: 0.0,
+        },
+        coeffs: GranularCoeffs::of(&m),
+        keep_history,
+    };
+    let hist = Layout::history(2);
+    let loaded = ContactHistory {
+        tangential: [1e-3, 2e-3, 0.0],
+        rolling: [0.0, 1e-3, 0.0],
+        twist: 0.1,
+        normal_force: 4.0,
+    };
+    let mut list = GranularList::new(GranularCoeffs::of(&m), None, 2);
+    let mut history = vec![0.0; hist.stride()];
+    let first = [wall(1, 1.0, false), wall(2, -1.0, false)];
+    list.set_walls(&first, &[true, true], &mut history, 1)
+        .unwrap();
+    for key in [-1.0, -2.0] {
+        assert!(hist.put(&mut history, 0, key, &loaded.to_values()));
+    }
+    let anew = [wall(1, 1.0, true), wall(2, 1.0, true)];
+    list.set_walls(&anew, &[true, true], &mut history, 1)
+        .unwrap();
+    assert_eq!(hist.get(&history, 0, -1.0), Some(&loaded.to_values()[..]));
+    assert_eq!(hist.get(&history, 0, -2.0), None);
 }
 
 #[test]

@@ -17,6 +17,9 @@ pub struct ListWall {
     pub plane: WallPlane,
     /// The sphere-wall contact coefficients.
     pub coeffs: GranularCoeffs,
+    /// Whether, defined anew, it keeps its contacts' whole histories
+    /// (friction springs too) from the wall it replaces.
+    pub keep_history: bool,
 }
 
 impl ListWall {
@@ -35,7 +38,9 @@ impl GranularList {
     /// force an owned atom's entry carried is kept, for the closure's
     /// first pass, when a wall of the same number, axis and side was set
     /// at the last evaluation (the native engine keeps a wall's load
-    /// under the same condition); otherwise the entry is forgotten.
+    /// under the same condition); otherwise the entry is forgotten. A
+    /// wall with `keep_history` keeps the whole entry, springs too, under
+    /// that condition.
     pub fn set_walls(
         &mut self,
         walls: &[ListWall],
@@ -60,6 +65,9 @@ impl GranularList {
             let kept = self.walls.iter().any(|o| {
                 o.number == w.number && o.plane.axis == w.plane.axis && o.plane.sign == w.plane.sign
             });
+            if kept && w.keep_history {
+                continue;
+            }
             for a in 0..n_owned {
                 let Some(values) = hist.get(history, a, w.key()) else {
                     continue;

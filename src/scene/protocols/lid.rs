@@ -27,6 +27,9 @@ pub struct WalledBox {
     pub height: f64,
     /// The walls' material.
     pub material: GranularMaterial,
+    /// Whether the walls keep their contacts' friction springs from one
+    /// pass of the lid to the next ([`GranularWall::keep_history`]).
+    pub keep_history: bool,
 }
 
 impl WalledBox {
@@ -39,6 +42,7 @@ impl WalledBox {
             position,
             velocity,
             material: self.material,
+            keep_history: self.keep_history,
         };
         let mut walls = vec![
             wall(2, WallSide::Lo, 0.0, 0.0),
@@ -111,6 +115,11 @@ pub struct LidOptions {
     pub record_every: u64,
     /// Neighbour skin; `None`: a tenth of the mean diameter.
     pub skin: Option<f64>,
+    /// Whether the walls keep their contacts' friction springs from one
+    /// pass to the next, as LIGGGHTS's wall fixes do across `run`
+    /// commands (otherwise they restart with each pass).
+    #[serde(default)]
+    pub keep_wall_histories: bool,
 }
 
 /// Why the lid protocol's scene could not be built.
@@ -251,6 +260,7 @@ pub fn lid_scene(
             youngs_modulus: opts.wall_modulus,
             ..sphere_material
         },
+        keep_history: opts.keep_wall_histories,
     };
     let steps = opts.steps_per_pass();
     let velocity = opts.lid_velocity();

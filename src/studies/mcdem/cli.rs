@@ -212,6 +212,11 @@ pub struct PackingArgs {
     /// diameter).
     #[arg(long)]
     skin: Option<f64>,
+    /// With --packing: the walls keep their contacts' friction springs
+    /// from one pass of the lid to the next, as LIGGGHTS's wall fixes do
+    /// across `run` commands (by default they restart with each pass).
+    #[arg(long)]
+    keep_wall_histories: bool,
 }
 
 impl McCompressArgs {
@@ -270,6 +275,7 @@ impl McCompressArgs {
             ("--gravity", !p.gravity.is_empty()),
             ("--record-every", p.record_every.is_some()),
             ("--skin", p.skin.is_some()),
+            ("--keep-wall-histories", p.keep_wall_histories),
         ];
         if let Some((option, _)) = given.iter().find(|(_, given)| *given) {
             bail!("{option} belongs to the lid protocol on a bed from a data file: give --packing FILE.data too");
@@ -356,6 +362,7 @@ fn lid_options(
         gravity,
         record_every: p.record_every.unwrap_or(100),
         skin: p.skin,
+        keep_wall_histories: p.keep_wall_histories,
     };
     opts.validate()?;
     Ok(opts)

@@ -112,6 +112,7 @@ impl WalledBox {
                 youngs_modulus: wall_modulus / hydrogel.youngs_modulus,
                 ..hydrogel.material()
             },
+            keep_history: false,
         }
     }
 
