@@ -276,14 +276,9 @@ fn a_wall_is_a_contact_of_the_closure_in_both_passes() {
     );
 }
 
-/// A wall defined anew restarts its springs and keeps its load if it
-/// has the number, axis and side of a wall at the last evaluation;
-/// otherwise its entries are forgotten. Walls sharing a number are
-/// refused.
-#[test]
-fn a_wall_defined_anew_keeps_only_its_load() {
-    let m = material();
-    let wall = |number, sign| ListWall {
+/// A resting wall of [`material`] at z = 0, its atoms on side `sign`.
+fn z_wall(number: i64, sign: f64, keep_history: bool) -> ListWall {
+    ListWall {
         number,
         plane: WallPlane {
             axis: 2,
@@ -291,9 +286,19 @@ fn a_wall_defined_anew_keeps_only_its_load() {
             position: 0.0,
             velocity: 0.0,
         },
-        coeffs: GranularCoeffs::of(&m),
-        keep_history: false,
-    };
+        coeffs: GranularCoeffs::of(&material()),
+        keep_history,
+    }
+}
+
+/// A wall defined anew restarts its springs and keeps its load if it
+/// has the number, axis and side of a wall at the last evaluation;
+/// otherwise its entries are forgotten. Walls sharing a number are
+/// refused.
+#[test]
+fn a_wall_defined_anew_keeps_only_its_load() {
+    let m = material();
+    let wall = |number, sign| z_wall(number, sign, false);
     let slots = 2;
     let hist = Layout::history(slots);
     let loaded = ContactHistory {
@@ -358,17 +363,7 @@ fn a_wall_defined_anew_keeps_only_its_load() {
 #[test]
 fn a_wall_defined_anew_keeping_its_history_keeps_its_springs() {
     let m = material();
-    let wall = |number, sign, keep_history| ListWall {
-        number,
-        plane: WallPlane {
-            axis: 2,
-            sign,
-            position: 0.0,
-            velocity: 0.0,
-        },
-        coeffs: GranularCoeffs::of(&m),
-        keep_history,
-    };
+    let wall = z_wall;
     let hist = Layout::history(2);
     let loaded = ContactHistory {
         tangential: [1e-3, 2e-3, 0.0],
