@@ -293,9 +293,12 @@ fn largest_difference(a: &[f64], b: &[f64]) -> f64 {
 pub struct Ensemble {
     /// delta / R.
     pub overlap_over_r: Vec<f64>,
-    /// Mean normalised force over the squeezes that reach that overlap.
+    /// Mean normalised force over the squeezes that reach that overlap
+    /// (NaN where none does: squeezes that stopped early).
+    #[serde(deserialize_with = "crate::json_nan::nan_if_null_each")]
     pub mean: Vec<f64>,
     /// Standard deviation.
+    #[serde(deserialize_with = "crate::json_nan::nan_if_null_each")]
     pub sd: Vec<f64>,
     /// How many squeezes contribute.
     pub count: Vec<usize>,
