@@ -9,12 +9,17 @@
 #include "update.h"
 #include "utils.h"
 
+#include <cstddef>
 #include <cstring>
 #include <sstream>
 #include <string>
 #include <vector>
 
 using namespace LAMMPS_NS;
+
+static_assert(sizeof(bpm_granular_wall) == 48 && offsetof(bpm_granular_wall, keep) == 36 &&
+                  offsetof(bpm_granular_wall, material) == 40,
+              "bpm_granular_wall must match the Rust RawWall layout (src/ffi/granular.rs)");
 
 static const char *const USAGE =
     "fix ID all bpm/granular/wall number x|y|z lo|hi position velocity [keep_history] "

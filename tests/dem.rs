@@ -459,8 +459,9 @@ fn a_sphere_through_a_granular_wall_stops_the_run() {
 
 /// The tangential force of a sphere sliding between a floor and a lid,
 /// before and after the walls are set again for a new stage
-/// (`keep_history` on both or neither).
-fn friction_across_a_stage(keep_history: bool) -> (f64, f64) {
+/// (`keep_history` on both or neither; with `swapped` the new stage lists
+/// the lid first).
+fn friction_across_a_stage(keep_history: bool, swapped: bool) -> (f64, f64) {
     use bpm::engine::{ExternalTerms, GranularWall, StageDrivers, WallSide};
     let material = bpm::kernels::GranularMaterial {
         sliding_friction: 0.5,
@@ -483,32 +484,41 @@ fn friction_across_a_stage(keep_history: bool) -> (f64, f64) {
         material,
         keep_history,
     };
-    let drivers = StageDrivers {
+    let drivers_with = |granular_walls| StageDrivers {
         dt: 1e-3,
         external: ExternalTerms {
-            granular_walls: vec![wall(WallSide::Lo, 0.0), wall(WallSide::Hi, 1.99)],
+            granular_walls,
             ..Default::default()
         },
         ..Default::default()
     };
+    let mut walls = vec![wall(WallSide::Lo, 0.0), wall(WallSide::Hi, 1.99)];
+    let drivers = drivers_with(walls.clone());
     sys.setup(&drivers).unwrap();
     let start = sys.simbox.clone();
     for step in 1..=200 {
         sys.step(&drivers, step, &start).unwrap();
     }
     let before = sys.particles.f[0][0];
-    sys.setup(&drivers).unwrap();
+    if swapped {
+        walls.reverse();
+    }
+    sys.setup(&drivers_with(walls)).unwrap();
     (before, sys.particles.f[0][0])
 }
 
 /// Walls set again for a new stage restart their contacts' friction
 /// springs, unless they keep their histories: then the tangential force
-/// goes on as if no stage had started.
+/// goes on as if no stage had started. A wall keeps only the springs of
+/// the wall at its place in the last stage's list, if on its axis and
+/// side: listed in another order, they restart.
 #[test]
 fn walls_keep_their_friction_springs_across_stages_only_when_asked() {
-    let (before, kept) = friction_across_a_stage(true);
-    let (same_before, restarted) = friction_across_a_stage(false);
+    let (before, kept) = friction_across_a_stage(true, false);
+    let (same_before, restarted) = friction_across_a_stage(false, false);
+    let (_, reordered) = friction_across_a_stage(true, true);
     assert_eq!(before, same_before);
+    assert_eq!(reordered, restarted);
     eprintln!("before {before:e}, kept {kept:e}, restarted {restarted:e}");
     assert!(before < 0.0, "friction opposes the sliding: {before:e}");
     // The stage's first evaluation sees the step's full velocities where

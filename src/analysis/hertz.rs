@@ -75,7 +75,9 @@ pub struct HertzDeviation {
     pub rms: f64,
     /// Root-mean-square of `normalised / (delta/R)^(3/2) - 1`.
     pub rms_relative: f64,
-    /// Least-squares slope of `ln f` against `ln delta` (Hertz: 3/2).
+    /// Least-squares slope of `ln f` against `ln delta` (Hertz: 3/2);
+    /// NaN if no line fits.
+    #[serde(deserialize_with = "crate::json_nan::nan_if_null")]
     pub loglog_slope: f64,
 }
 

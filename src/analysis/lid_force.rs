@@ -43,7 +43,8 @@ pub fn compare_lid_force(
 /// [`compare_lid_force`] for each pass of the lid (`pass_steps` steps
 /// each; the pass ending at step `k pass_steps` holds it), with the
 /// whole reference's peak: where in the protocol the differences are.
-/// A pass with no loaded row matched is `None`.
+/// A pass with no loaded row matched is `None`. Both series in increasing
+/// steps, as for [`compare_lid_force`].
 pub fn compare_lid_force_by_pass(
     step: &[u64],
     force: &[f64],
@@ -60,7 +61,9 @@ pub fn compare_lid_force_by_pass(
         let pass = pass_of(ref_step[first]);
         let end = first + ref_step[first..].partition_point(|&s| pass_of(s) == pass);
         let range = first..end;
-        passes.resize(pass as usize, None);
+        if passes.len() < pass as usize {
+            passes.resize(pass as usize, None);
+        }
         passes.push(compare_against_peak(
             step,
             force,

@@ -102,6 +102,11 @@ fn parse(words: &[&str], wall: bool) -> Result<GranularStyleCoeffs, String> {
             return Err(format!("`{word}` is given twice"));
         }
         seen.push(word);
+        if wall && word == "keep_history" {
+            return Err(
+                "`keep_history` goes right after the velocity, before the material words".into(),
+            );
+        }
         if wall && matches!(word, "multicontact" | "slots") {
             return Err(format!(
                 "`{word}` belongs to pair_coeff of pair_style bpm/granular, not to a wall (the closure counts the wall as a contact of its atoms)"
@@ -735,10 +740,19 @@ pub struct RawWall {
     pub material: *const GranularMaterial,
 }
 
+// `bpm_granular_wall` in bpm_kernels.h has this layout (checked there too).
+const _: () = assert!(
+    std::mem::size_of::<RawWall>() == 48
+        && std::mem::offset_of!(RawWall, fresh) == 32
+        && std::mem::offset_of!(RawWall, keep) == 36
+        && std::mem::offset_of!(RawWall, material) == 40
+);
+
 /// Sets the `nwalls` walls of the coming passes ([`GranularList::set_walls`]):
 /// their coefficients mix each wall's material with the spheres'; fresh
 /// walls restart the friction springs of the contacts in `history`
-/// (`nlocal` memory rows). On bad walls (a number below 1 or shared, an
+/// (`nlocal` memory rows), unless `keep` and the wall replaces one of its
+/// number, axis and side. On bad walls (a number below 1 or shared, an
 /// axis not 0 to 2, a side not +1 or -1) returns BPM_ERR_STOPPED with why
 /// in `message`.
 ///

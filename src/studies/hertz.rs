@@ -297,8 +297,7 @@ pub struct Ensemble {
     /// (NaN where none does: squeezes that stopped early).
     #[serde(deserialize_with = "crate::json_nan::nan_if_null_each")]
     pub mean: Vec<f64>,
-    /// Standard deviation.
-    #[serde(deserialize_with = "crate::json_nan::nan_if_null_each")]
+    /// Standard deviation (0 where fewer than two squeezes reach).
     pub sd: Vec<f64>,
     /// How many squeezes contribute.
     pub count: Vec<usize>,
@@ -667,4 +666,21 @@ pub fn panels(report: &HertzReport) -> Vec<Panel> {
             series,
         },
     ]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Where no squeeze reaches an overlap the ensemble's mean is
+    /// undefined: written as null, read back as NaN.
+    #[test]
+    fn an_ensemble_with_unreached_overlaps_reads_back() {
+        let empty = ensemble(&[], 0.01);
+        assert!(empty.mean.iter().all(|m| m.is_nan()));
+        let json = serde_json::to_string(&empty).unwrap();
+        let read: Ensemble = serde_json::from_str(&json).unwrap();
+        assert_eq!(read.count, empty.count);
+        assert!(read.mean.iter().all(|m| m.is_nan()));
+    }
 }

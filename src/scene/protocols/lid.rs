@@ -118,7 +118,7 @@ pub struct LidOptions {
     /// Whether the walls keep their contacts' friction springs from one
     /// pass to the next, as LIGGGHTS's wall fixes do across `run`
     /// commands (otherwise they restart with each pass).
-    #[serde(default)]
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub keep_wall_histories: bool,
 }
 
