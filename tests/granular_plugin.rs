@@ -102,12 +102,9 @@ fn the_closure_in_lammps_follows_the_native_engine_and_changes_the_stress() {
             );
             // Far above the trajectory tolerance, so the LAMMPS run's
             // agreement below shows the plugin keeps them too.
-            let scale = kept.iter().fold(0.0f64, |m, f| m.max(f.abs()));
-            let apart = kept
-                .iter()
-                .zip(&fresh)
-                .fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
-            assert!(apart > 1e-6 * scale, "kept {kept:?}, restarted {fresh:?}");
+            let rows = |c: &[f64]| c.iter().map(|&f| [f]).collect::<Vec<[f64; 1]>>();
+            let apart = max_relative_deviation(&rows(&fresh), &rows(&kept));
+            assert!(apart > 1e-6, "kept {kept:?}, restarted {fresh:?}");
         }
         let lammps = launcher.run(&scene, &tag, ranks, false).unwrap();
         let deviations = compare_runs(&native.stages, &lammps.stages).unwrap();
