@@ -273,6 +273,7 @@ const SUBCOMMANDS: &[&[&str]] = &[
     &["mc-compress", "-o", "{out}"],
     &["mc-calibrate", "{data}", "-o", "{out}"],
     &["mc-shear", "-o", "{out}"],
+    &["mc-shear-trend", "{data}", "-o", "{out}"],
 ];
 
 /// Value names of options that take paths or words, not numbers.

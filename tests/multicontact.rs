@@ -614,8 +614,8 @@ fn the_closure_is_the_same_across_a_tilt_flip() {
 fn spheres_sheared_above_jamming_resume_and_the_closure_stiffens_them() {
     use bpm::engine::{Deformation, ShearRemap};
     use bpm::studies::mcdem::shear::{
-        prepare_packings, run_shear, shear_scene, write_report, ContactLaw, Grid, RecordedRun,
-        RunKey, ShearOptions,
+        gather_folders, prepare_packings, run_shear, shear_scene, write_report, ContactLaw, Grid,
+        RecordedRun, RunKey, ShearOptions,
     };
     let opts = ShearOptions::grid(Grid::Quick);
     let dir = common::scratch_dir("mc-shear");
@@ -712,5 +712,25 @@ fn spheres_sheared_above_jamming_resume_and_the_closure_stiffens_them() {
     assert_eq!(json(&again), json(&report), "bit for bit");
     let (third, _) = run_shear(&opts, &dir, "test", false).unwrap();
     assert_eq!(third.ran, 0);
+
+    // The trend reads the study back: one curve per law, each with a row
+    // per stage at its rate, fitted over both fractions (two points are
+    // too few for a power law, so no fit); the written beta plot is there.
+    assert!(dir.join("beta.svg").exists());
+    let trend = gather_folders(&[dir.as_path()], "test").unwrap();
+    assert_eq!(trend.curves.len(), 3);
+    for c in &trend.curves {
+        let rates: Vec<f64> = c.rows.iter().map(|r| r.rate).collect();
+        assert_eq!(rates, vec![opts.rate * opts.rate_factor, opts.rate]);
+        if c.spec.law == ContactLaw::Standard {
+            // Stopped at 0.9: only 0.75 is measured.
+            assert_eq!(c.fractions, vec![0.75]);
+        } else {
+            assert_eq!(c.fractions, vec![0.75, 0.9]);
+        }
+        assert!(c.rows.iter().all(|r| r.fit.is_none()));
+    }
+    let missing = gather_folders(&[dir.join("nowhere").as_path()], "test").unwrap_err();
+    assert!(missing.to_string().contains("nowhere"), "{missing}");
     std::fs::remove_dir_all(&dir).ok();
 }

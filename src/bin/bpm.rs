@@ -15,7 +15,9 @@ use bpm::studies::compaction::cli::{AnalysePackingArgs, CompactArgs, CompareComp
 use bpm::studies::hertz::cli::HertzArgs;
 use bpm::studies::hertz_sweep::cli::HertzSweepArgs;
 use bpm::studies::large_strain::cli::LargeStrainArgs;
-use bpm::studies::mcdem::cli::{McBoxArgs, McCalibrateArgs, McCompressArgs, McShearArgs};
+use bpm::studies::mcdem::cli::{
+    McBoxArgs, McCalibrateArgs, McCompressArgs, McShearArgs, McShearTrendArgs,
+};
 use bpm::studies::stability::cli::StabilityArgs;
 use bpm::studies::upstream::cli::UpstreamCheckArgs;
 use bpm::verify::cli::{CheckArgs, CrossCheckArgs};
@@ -171,6 +173,13 @@ enum Command {
     /// finishes and reused by a rerun with the same parameters. Writes
     /// DIR/shear.json, DIR/table.txt, DIR/shear.svg and DIR/scene.json.
     McShear(McShearArgs),
+    /// The exponent beta of `bpm mc-shear` against shear rate and system
+    /// size: reads the shear.json of each study folder given (each one
+    /// system size, its slow and fast stage two rates) and fits every
+    /// curve's measured pressures over the volume fractions all of its
+    /// folders hold. Writes DIR/trend.json, DIR/trend.txt and
+    /// DIR/trend.svg.
+    McShearTrend(McShearTrendArgs),
 }
 
 fn main() {
@@ -211,5 +220,6 @@ fn real_main() -> Result<()> {
         Command::McCompress(args) => args.run(threads),
         Command::McCalibrate(args) => args.run(threads),
         Command::McShear(args) => args.run(),
+        Command::McShearTrend(args) => args.run(),
     }
 }

@@ -675,3 +675,29 @@ impl McShearArgs {
         Ok(())
     }
 }
+
+/// The arguments of `bpm mc-shear-trend`.
+#[derive(clap::Args)]
+pub struct McShearTrendArgs {
+    /// Folders of `bpm mc-shear` studies (each with its shear.json).
+    #[arg(required = true)]
+    folders: Vec<PathBuf>,
+    /// Output folder.
+    #[arg(short, long, default_value = "results/mcdem/shear-beta")]
+    output: PathBuf,
+}
+
+impl McShearTrendArgs {
+    /// `bpm mc-shear-trend`.
+    pub fn run(self) -> Result<()> {
+        let folders: Vec<&std::path::Path> = self.folders.iter().map(|f| f.as_path()).collect();
+        let trend = shear::gather_folders(&folders, &command_line())?;
+        crate::studies::output::write_report(&trend, &self.output)?;
+        print!("{}", shear::trend_table(&trend));
+        println!(
+            "wrote {}/trend.json, trend.txt and trend.svg",
+            self.output.display()
+        );
+        Ok(())
+    }
+}

@@ -2,6 +2,7 @@
 //! the quasi-static test, the power-law fits, the comparison with the
 //! study's tables and its trends.
 
+use super::beta::{diagnose, BetaDiagnosis};
 use super::protocol::{stage_rates, stiffness};
 use super::{sorted_distinct, ContactLaw, RecordedRun, SeriesSpec, ShearOptions, StageSeries};
 use crate::analysis::jamming::{power_law_at, power_law_with_jamming_point, PowerLaw};
@@ -245,6 +246,10 @@ pub struct SeriesResult {
     /// Root mean square of the log of those ratios.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub paper_log_rms: Option<f64>,
+    /// The exponent fitted at the measured rates and at other jamming
+    /// points.
+    #[serde(default)]
+    pub beta: BetaDiagnosis,
 }
 
 /// Our pressure over the tables' law at one volume fraction.
@@ -340,6 +345,7 @@ pub fn analyse(opts: &ShearOptions, runs: &[RecordedRun]) -> Analysis {
                     / paper_ratio.len() as f64)
                     .sqrt()
             });
+            let beta = diagnose(&points, phi_c, paper);
             SeriesResult {
                 spec: *spec,
                 stiffness: stiffness(spec.poisson_ratio),
@@ -351,6 +357,7 @@ pub fn analyse(opts: &ShearOptions, runs: &[RecordedRun]) -> Analysis {
                 paper,
                 paper_ratio,
                 paper_log_rms,
+                beta,
             }
         })
         .collect();
@@ -569,33 +576,7 @@ mod tests {
 
     fn recorded(fast: f64, slow: f64) -> RecordedRun {
         let opts = ShearOptions::grid(Grid::Quick);
-        let packing = Packing {
-            fraction: 0.9,
-            length: cube_edge(108, 0.9),
-            reached: 0.9,
-            centres: Vec::new(),
-        };
-        let key = RunKey::new(&opts, &opts.series[0], &packing);
-        let stage = |name: &str, strain: f64, p: f64| StageSeries {
-            name: name.into(),
-            strain: (0..=40).map(|k| strain * k as f64 / 40.0).collect(),
-            pressure: vec![p; 41],
-            shear_stress: vec![0.25 * p; 41],
-            largest_correction: vec![0.0; 41],
-            switched_off: vec![0.0; 41],
-            complete: true,
-            ..Default::default()
-        };
-        RecordedRun {
-            version: String::new(),
-            stages: vec![
-                stage("fast", key.strains[0], fast),
-                stage("slow", key.strains[1], slow),
-            ],
-            key,
-            seconds: 1.0,
-            stopped: None,
-        }
+        RecordedRun::steady_for_tests(&opts, opts.series[0], 0.9, fast, slow)
     }
 
     #[test]

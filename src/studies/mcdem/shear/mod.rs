@@ -21,18 +21,22 @@
 //! the analysis can be redone without running anything.
 
 mod analysis;
+mod beta;
 mod protocol;
 mod report;
+mod trend;
 
 pub use analysis::{
     analyse, window_mean, Analysis, Regime, SeriesResult, ShearPoint, TrendCheck, WindowMean,
     BLOCKS,
 };
+pub use beta::BetaDiagnosis;
 pub use protocol::{
     cube_edge, material, prepare_packings, run_point, shear_rate, shear_scene, stage_rates,
     stiffness, Packing, RecordedRun, RunKey, StageSeries,
 };
 pub use report::{table, write_report};
+pub use trend::{gather_folders, trend_table, ShearTrend, TrendCurve, TrendRow};
 
 use super::Closures;
 use crate::analysis::fit::interpolate;

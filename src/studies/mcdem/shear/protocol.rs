@@ -241,6 +241,47 @@ pub struct RecordedRun {
     pub stopped: Option<String>,
 }
 
+#[cfg(test)]
+impl RecordedRun {
+    /// A complete run of `series` at `fraction` whose pressure (over `k`)
+    /// is `fast` and `slow` throughout its two stages.
+    pub(crate) fn steady_for_tests(
+        opts: &ShearOptions,
+        series: SeriesSpec,
+        fraction: f64,
+        fast: f64,
+        slow: f64,
+    ) -> Self {
+        let packing = Packing {
+            fraction,
+            length: cube_edge(opts.spheres, fraction),
+            reached: fraction,
+            centres: Vec::new(),
+        };
+        let key = RunKey::new(opts, &series, &packing);
+        let stage = |name: &str, strain: f64, p: f64| StageSeries {
+            name: name.into(),
+            strain: (0..=40).map(|k| strain * k as f64 / 40.0).collect(),
+            pressure: vec![p; 41],
+            shear_stress: vec![0.25 * p; 41],
+            largest_correction: vec![0.0; 41],
+            switched_off: vec![0.0; 41],
+            complete: true,
+            ..Default::default()
+        };
+        Self {
+            version: String::new(),
+            stages: vec![
+                stage("fast", key.strains[0], fast),
+                stage("slow", key.strains[1], slow),
+            ],
+            key,
+            seconds: 1.0,
+            stopped: None,
+        }
+    }
+}
+
 /// The material of a run's spheres.
 pub fn material(series: &SeriesSpec, restitution: f64) -> GranularMaterial {
     liggghts_hertz_material(series.poisson_ratio, restitution, series.friction)

@@ -135,6 +135,7 @@ pub fn table(report: &ShearReport) -> String {
             ))
         );
     }
+    out += &beta_section(report);
     out += "\ntrends the study reports (quasi-static points only):\n";
     for c in &report.analysis.checks {
         let verdict = match c.holds {
@@ -160,6 +161,64 @@ pub fn table(report: &ShearReport) -> String {
     out
 }
 
+/// Jamming points at which the text shows the scanned `beta`.
+const SHOWN_JAMMING_POINTS: [f64; 5] = [0.55, 0.58, 0.6, 0.62, 0.64];
+
+/// The section on why `beta` differs from Table D.2: the exponent of the
+/// measured pressures at each rate, against the jamming point assumed,
+/// and the jamming point that would give the tables' exponent.
+fn beta_section(report: &ShearReport) -> String {
+    let opts = &report.options;
+    let mut out = format!(
+        "\nwhy beta differs: every point fitted at the measured slow rate ({}) and fast rate ({}), \
+         unextrapolated, at the assumed phi_c; every point (extrapolated) at other phi_c; \
+         the phi_c at which that fit gives Table D.2's beta, and its alpha there over D.1\n",
+        opts.rate,
+        opts.rate * opts.rate_factor
+    );
+    out += &format!(
+        "{:<9} {:>4} {:>5} {:>6} | {:>6} {:>12} {:>12} |",
+        "law", "mu", "nu", "D.2", "phi_c", "beta slow", "beta fast"
+    );
+    for c in SHOWN_JAMMING_POINTS {
+        out += &format!(" {:>6}", format!("@{c}"));
+    }
+    out += &format!(" | {:>9} {:>7}\n", "phi_c(D.2)", "a/D.1");
+    let with_error = |f: Option<PowerLaw>| {
+        f.map_or("-".into(), |f| {
+            format!("{:.3}+-{:.3}", f.exponent, f.exponent_error)
+        })
+    };
+    for s in &report.analysis.series {
+        let b = &s.beta;
+        out += &format!(
+            "{:<9} {:>4} {:>5} {:>6} | {:>6.3} {:>12} {:>12} |",
+            s.spec.law.name(),
+            s.spec.friction,
+            s.spec.poisson_ratio,
+            fmt_opt(s.paper.map(|p| p.beta), 3),
+            opts.jamming_point(s.spec.friction),
+            with_error(b.slow),
+            with_error(b.fast),
+        );
+        for c in SHOWN_JAMMING_POINTS {
+            let at = b
+                .scan
+                .iter()
+                .find(|(phi_c, _)| (phi_c - c).abs() < 1e-9)
+                .map(|(_, beta)| *beta);
+            out += &format!(" {:>6}", fmt_opt(at, 3));
+        }
+        let m = b.paper_phi_c;
+        out += &format!(
+            " | {:>9} {:>7}\n",
+            fmt_opt(m.map(|m| m.phi_c), 4),
+            fmt_opt(m.zip(s.paper).map(|(m, p)| m.prefactor / p.alpha), 3),
+        );
+    }
+    out
+}
+
 /// Writes `shear.json`, `table.txt`, `shear.svg` and the first run's scene
 /// (`scene.json`) into `dir` (the runs are already under `dir/runs`).
 pub fn write_report(report: &ShearReport, scene: &Scene, dir: &Path) -> Result<(), ShearError> {
@@ -175,6 +234,7 @@ impl StudyReport for ShearReport {
     fn draw(&self, out: &StudyOutput) -> Result<(), OutputError> {
         out.text("table.txt", &table(self))?;
         out.svg_rows("shear.svg", &panels(self), 3)?;
+        out.svg_rows("beta.svg", &beta_panels(self), 3)?;
         Ok(())
     }
 }
@@ -257,6 +317,60 @@ fn panels(report: &ShearReport) -> Vec<Panel> {
                 log_x: true,
                 log_y: true,
                 series,
+            }
+        })
+        .collect()
+}
+
+/// One panel per friction coefficient: each curve's `beta` (every point)
+/// against the jamming point assumed, and Table D.2's `beta` at each
+/// Poisson's ratio drawn, as a flat line.
+fn beta_panels(report: &ShearReport) -> Vec<Panel> {
+    let series = &report.analysis.series;
+    let frictions = super::sorted_distinct(series.iter().map(|s| s.spec.friction));
+    frictions
+        .iter()
+        .map(|&mu| {
+            let curves: Vec<_> = series.iter().filter(|s| s.spec.friction == mu).collect();
+            let mut drawn: Vec<Series> = curves
+                .iter()
+                .map(|s| {
+                    Series::new(
+                        format!("{}, nu {}", s.spec.law.name(), s.spec.poisson_ratio),
+                        s.beta.scan.clone(),
+                        Mark::LinePoints,
+                    )
+                })
+                .collect();
+            let span = curves
+                .iter()
+                .flat_map(|s| s.beta.scan.iter().map(|(c, _)| *c))
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), c| {
+                    (lo.min(c), hi.max(c))
+                });
+            let mut listed: Vec<f64> = Vec::new();
+            for s in &curves {
+                if let Some(p) = s.paper {
+                    if span.0 < span.1 && !listed.contains(&s.spec.poisson_ratio) {
+                        listed.push(s.spec.poisson_ratio);
+                        drawn.push(Series::new(
+                            format!("Table D.2, nu {}", s.spec.poisson_ratio),
+                            vec![(span.0, p.beta), (span.1, p.beta)],
+                            Mark::Line,
+                        ));
+                    }
+                }
+            }
+            Panel {
+                title: format!(
+                    "friction {mu}: beta against the assumed phi_c (ours {:.3})",
+                    report.options.jamming_point(mu)
+                ),
+                x_label: "assumed phi_c".into(),
+                y_label: "beta".into(),
+                log_x: false,
+                log_y: false,
+                series: drawn,
             }
         })
         .collect()
