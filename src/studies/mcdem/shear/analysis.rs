@@ -2,10 +2,11 @@
 //! the quasi-static test, the power-law fits, the comparison with the
 //! study's tables and its trends.
 
-use super::beta::{diagnose, BetaDiagnosis};
+pub(super) use super::beta::MIN_DISTANCE;
+use super::beta::{diagnose, fit, BetaDiagnosis, CurvePressures};
 use super::protocol::{stage_rates, stiffness};
 use super::{sorted_distinct, ContactLaw, RecordedRun, SeriesSpec, ShearOptions, StageSeries};
-use crate::analysis::jamming::{power_law_at, power_law_with_jamming_point, PowerLaw};
+use crate::analysis::jamming::{power_law_with_jamming_point, PowerLaw};
 use crate::reference::multicontact::{PaperLaw, PaperTables};
 use serde::{Deserialize, Serialize};
 
@@ -277,19 +278,30 @@ pub struct TrendCheck {
 /// Fits `points` to `p / k = alpha (phi - phi_c)^beta` at `phi_c`, from
 /// points more than 0.005 above it.
 pub fn fit_at(points: &[ShearPoint], phi_c: f64, use_extrapolated: bool) -> Option<PowerLaw> {
-    let (phi, p): (Vec<f64>, Vec<f64>) = points
+    let pressures: Vec<(f64, f64)> = points
         .iter()
-        .filter(|pt| pt.fraction > phi_c + MIN_DISTANCE)
         .filter_map(|pt| {
             pt.fitted_pressure(use_extrapolated)
                 .map(|p| (pt.fraction, p))
         })
-        .unzip();
-    power_law_at(&phi, &p, phi_c, 1.0)
+        .collect();
+    fit(&pressures, phi_c)
 }
 
-/// Closest a fitted point may lie to the jamming point.
-pub(super) const MIN_DISTANCE: f64 = 0.005;
+/// A curve's pressures as the exponent's diagnosis fits them.
+fn curve_pressures(points: &[ShearPoint]) -> CurvePressures {
+    let measured = |window: fn(&ShearPoint) -> Option<f64>| -> Vec<(f64, f64)> {
+        points
+            .iter()
+            .filter_map(|pt| window(pt).map(|p| (pt.fraction, p)))
+            .collect()
+    };
+    CurvePressures {
+        slow: measured(|pt| pt.slow.map(|w| w.mean)),
+        fast: measured(|pt| pt.fast.map(|w| w.mean)),
+        every: measured(|pt| pt.fitted_pressure(true)),
+    }
+}
 
 /// The analysed study.
 #[derive(Clone, Debug, Serialize, serde::Deserialize)]
@@ -345,7 +357,7 @@ pub fn analyse(opts: &ShearOptions, runs: &[RecordedRun]) -> Analysis {
                     / paper_ratio.len() as f64)
                     .sqrt()
             });
-            let beta = diagnose(&points, phi_c, paper);
+            let beta = diagnose(&curve_pressures(&points), phi_c, paper);
             SeriesResult {
                 spec: *spec,
                 stiffness: stiffness(spec.poisson_ratio),

@@ -8,11 +8,12 @@
 //! lowers `beta`. The diagnosis measures both effects on our points, so a
 //! disagreement can be put down to them or not.
 
-use super::analysis::{ShearPoint, MIN_DISTANCE};
 use crate::analysis::jamming::{power_law_at, PowerLaw};
 use crate::reference::multicontact::PaperLaw;
 use serde::{Deserialize, Serialize};
 
+/// Closest a fitted point may lie to the jamming point.
+pub(super) const MIN_DISTANCE: f64 = 0.005;
 /// Lowest jamming point the scan tries.
 const SCAN_FROM: f64 = 0.50;
 /// Step of the scan.
@@ -53,18 +54,24 @@ pub(super) fn fit(points: &[(f64, f64)], phi_c: f64) -> Option<PowerLaw> {
     power_law_at(&phi, &p, phi_c, 1.0)
 }
 
-/// The diagnosis of one curve's `points` at its assumed jamming point
-/// `phi_c`, against the tables' law `paper` where listed.
-pub fn diagnose(points: &[ShearPoint], phi_c: f64, paper: Option<PaperLaw>) -> BetaDiagnosis {
-    let measured = |window: fn(&ShearPoint) -> Option<f64>| -> Vec<(f64, f64)> {
-        points
-            .iter()
-            .filter_map(|pt| window(pt).map(|p| (pt.fraction, p)))
-            .collect()
-    };
-    let slow = fit(&measured(|pt| pt.slow.map(|w| w.mean)), phi_c);
-    let fast = fit(&measured(|pt| pt.fast.map(|w| w.mean)), phi_c);
-    let every = measured(|pt| pt.fitted_pressure(true));
+/// The pressures over `k` of one curve, `(phi, p)`, as the diagnosis
+/// fits them.
+pub struct CurvePressures {
+    /// Measured at the slow rate.
+    pub slow: Vec<(f64, f64)>,
+    /// Measured at the fast rate.
+    pub fast: Vec<(f64, f64)>,
+    /// Every point's pressure as the study fits it (rate-dependent ones
+    /// extrapolated).
+    pub every: Vec<(f64, f64)>,
+}
+
+/// The diagnosis of one curve at its assumed jamming point `phi_c`,
+/// against the tables' law `paper` where listed.
+pub fn diagnose(curve: &CurvePressures, phi_c: f64, paper: Option<PaperLaw>) -> BetaDiagnosis {
+    let slow = fit(&curve.slow, phi_c);
+    let fast = fit(&curve.fast, phi_c);
+    let every = &curve.every;
     let smallest = every
         .iter()
         .map(|(phi, _)| *phi)
@@ -79,9 +86,9 @@ pub fn diagnose(points: &[ShearPoint], phi_c: f64, paper: Option<PaperLaw>) -> B
     let scan: Vec<(f64, f64)> = (0..=steps)
         .map(|k| SCAN_FROM + k as f64 * SCAN_STEP)
         .filter(|&c| holds_every_point(c))
-        .filter_map(|c| fit(&every, c).map(|f| (c, f.exponent)))
+        .filter_map(|c| fit(every, c).map(|f| (c, f.exponent)))
         .collect();
-    let paper_phi_c = paper.and_then(|law| crossing(&every, &scan, law.beta));
+    let paper_phi_c = paper.and_then(|law| crossing(every, &scan, law.beta));
     BetaDiagnosis {
         slow,
         fast,
@@ -112,42 +119,20 @@ fn crossing(points: &[(f64, f64)], scan: &[(f64, f64)], target: f64) -> Option<P
 
 #[cfg(test)]
 mod tests {
-    use super::super::analysis::{Regime, WindowMean};
     use super::*;
-
-    fn point(phi: f64, slow: f64, fast: f64) -> ShearPoint {
-        let window = |mean| WindowMean {
-            mean,
-            error: 0.0,
-            rows: 100,
-            drifts: false,
-        };
-        ShearPoint {
-            fraction: phi,
-            fast: Some(window(fast)),
-            slow: Some(window(slow)),
-            stress_ratio: None,
-            rate_effect: Some(fast / slow - 1.0),
-            regime: Some(Regime::QuasiStatic),
-            quasi_static: Some(slow),
-            extrapolated_linear: None,
-            largest_correction: 0.0,
-            switched_off: 0.0,
-            seconds: 0.0,
-            stopped: None,
-        }
-    }
 
     /// A curve `0.2 (phi - 0.62)^1.4` at the slow rate, raised near
     /// jamming at the fast rate.
-    fn curve() -> Vec<ShearPoint> {
-        [0.65, 0.7, 0.75, 0.8, 0.85, 0.9]
+    fn curve() -> CurvePressures {
+        let slow: Vec<(f64, f64)> = [0.65, 0.7, 0.75, 0.8, 0.85, 0.9]
             .iter()
-            .map(|&phi: &f64| {
-                let slow = 0.2 * (phi - 0.62f64).powf(1.4);
-                point(phi, slow, slow + 0.002)
-            })
-            .collect()
+            .map(|&phi: &f64| (phi, 0.2 * (phi - 0.62f64).powf(1.4)))
+            .collect();
+        CurvePressures {
+            fast: slow.iter().map(|&(phi, p)| (phi, p + 0.002)).collect(),
+            every: slow.clone(),
+            slow,
+        }
     }
 
     #[test]
@@ -160,6 +145,8 @@ mod tests {
         let fast = d.fast.unwrap();
         assert!(fast.exponent < 1.3, "{fast:?}");
         assert!(d.paper_phi_c.is_none());
+        // A point within 0.005 of the jamming point is left out.
+        assert_eq!(fit(&curve().slow, 0.646).unwrap().points, 5);
     }
 
     #[test]
