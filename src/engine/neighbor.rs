@@ -7,7 +7,7 @@
 
 use super::simbox::SimBox;
 use super::team::{chunk_range, Team};
-use crate::kernels::Separation;
+use crate::kernels::{MinimumImage, Separation};
 use nalgebra::{Matrix3, Vector3};
 
 /// Pairs a pair list leaves out: for each particle its sorted partners
@@ -77,8 +77,9 @@ pub struct NeighbourList {
     /// Whether the rebuild test in a closed box discounts rigid motion
     /// (default; off only to measure what it saves).
     pub follow_rigid_motion: bool,
+    /// Each atom's bin, per dimension.
     #[serde(skip)]
-    bin_of: Vec<usize>,
+    bin_of: Vec<[usize; 3]>,
     #[serde(skip)]
     bin_start: Vec<usize>,
     #[serde(skip)]
@@ -97,6 +98,115 @@ struct RowPart {
     neighbours: Vec<i32>,
     /// Each row's length.
     lengths: Vec<usize>,
+}
+
+/// The bins next to bin `b` of `m` along one dimension, `b` included:
+/// wrapped where the dimension is periodic, left out beyond its ends
+/// where it is not. Returns the bins and how many there are.
+fn axis_bins(b: usize, m: usize, periodic: bool) -> ([usize; 3], usize) {
+    let mut bins = [0usize; 3];
+    let mut k = 0;
+    if b > 0 {
+        bins[k] = b - 1;
+        k += 1;
+    } else if periodic {
+        bins[k] = m - 1;
+        k += 1;
+    }
+    bins[k] = b;
+    k += 1;
+    if b + 1 < m {
+        bins[k] = b + 1;
+        k += 1;
+    } else if periodic {
+        bins[k] = 0;
+        k += 1;
+    }
+    (bins, k)
+}
+
+/// The bins of a build, as the row search reads them.
+struct BinGrid<'a> {
+    nbins: [usize; 3],
+    periodic: [bool; 3],
+    /// Whether a stencil can reach one bin twice (a periodic dimension of
+    /// one or two bins).
+    repeats: bool,
+    /// Each atom's bin, per dimension.
+    bin_of: &'a [[usize; 3]],
+    /// Where each flat bin's atoms start in `bin_atoms`.
+    bin_start: &'a [usize],
+    /// The atoms, bin after bin, each bin's in increasing index.
+    bin_atoms: &'a [usize],
+}
+
+/// Which candidate pairs a row keeps.
+struct PairTest<'a> {
+    image: &'a MinimumImage,
+    x: &'a [[f64; 3]],
+    cut_sq: f64,
+    exclude: Option<&'a Exclusions>,
+}
+
+/// Searches the rows of `atoms` into `part`: for each atom `i`, every
+/// `j > i` in the 27 bins around its own within the cutoff and not
+/// excluded, in increasing order. A plain function, not a closure, so
+/// that the grid and positions reach it as arguments the compiler may
+/// keep in registers across the row's pushes.
+fn search_rows(
+    grid: &BinGrid,
+    pairs: &PairTest,
+    atoms: std::ops::Range<usize>,
+    part: &mut RowPart,
+) {
+    let [nx_bins, ny_bins, _] = grid.nbins;
+    let flat = |b: [usize; 3]| (b[2] * ny_bins + b[1]) * nx_bins + b[0];
+    let x = pairs.x;
+    part.neighbours.clear();
+    part.lengths.clear();
+    let mut stencil = [0usize; 27];
+    for i in atoms {
+        let b = grid.bin_of[i];
+        let [(xs, nx), (ys, ny), (zs, nz)] =
+            [0, 1, 2].map(|d| axis_bins(b[d], grid.nbins[d], grid.periodic[d]));
+        let mut bins = 0;
+        for &z in &zs[..nz] {
+            for &y in &ys[..ny] {
+                for &xb in &xs[..nx] {
+                    stencil[bins] = flat([xb, y, z]);
+                    bins += 1;
+                }
+            }
+        }
+        if grid.repeats {
+            stencil[..bins].sort_unstable();
+            let mut kept = 0;
+            for k in 0..bins {
+                if k == 0 || stencil[k] != stencil[kept - 1] {
+                    stencil[kept] = stencil[k];
+                    kept += 1;
+                }
+            }
+            bins = kept;
+        }
+        let row_start = part.neighbours.len();
+        let xi = x[i];
+        for &bin in &stencil[..bins] {
+            for &j in &grid.bin_atoms[grid.bin_start[bin]..grid.bin_start[bin + 1]] {
+                if j <= i {
+                    continue;
+                }
+                let d = pairs.image.delta(&xi, &x[j]);
+                if d[0] * d[0] + d[1] * d[1] + d[2] * d[2] < pairs.cut_sq
+                    && !pairs.exclude.is_some_and(|e| e.excludes(i, j))
+                {
+                    part.neighbours.push(j as i32);
+                }
+            }
+        }
+        part.neighbours[row_start..].sort_unstable();
+        part.lengths.push(part.neighbours.len() - row_start);
+    }
 }
 
 impl Default for NeighbourList {
@@ -205,6 +315,9 @@ impl NeighbourList {
     ) {
         let list_cut = cutoff + skin;
         let cut_sq = list_cut * list_cut;
+        // Prepared once: `SimBox::delta` would divide by the box lengths
+        // at every candidate pair.
+        let image = simbox.minimum_image();
         let n = x.len();
         let frac: Vec<[f64; 3]> = x.iter().map(|p| simbox.to_fractional(p)).collect();
         let faces = simbox.face_distances();
@@ -227,25 +340,33 @@ impl NeighbourList {
         let bin_index = |s: &[f64; 3]| -> [usize; 3] {
             let mut b = [0usize; 3];
             for d in 0..3 {
-                let t = ((s[d] - lo[d]) / span[d] * nbins[d] as f64).floor();
-                let t = if simbox.periodic[d] {
-                    t.rem_euclid(nbins[d] as f64)
-                } else {
-                    t
-                };
-                b[d] = (t.max(0.0) as usize).min(nbins[d] - 1);
+                let m = nbins[d] as i64;
+                // An integer floor: `f64::floor` is a library call on the
+                // baseline instruction set. NaN lands in bin 0.
+                let t = (s[d] - lo[d]) / span[d] * nbins[d] as f64;
+                let mut k = t as i64;
+                if (k as f64) > t {
+                    k -= 1;
+                }
+                if simbox.periodic[d] && !(0..m).contains(&k) {
+                    k = k.rem_euclid(m);
+                }
+                b[d] = k.clamp(0, m - 1) as usize;
             }
             b
         };
         let flat = |b: [usize; 3]| (b[2] * nbins[1] + b[1]) * nbins[0] + b[0];
+        // A periodic dimension of one or two bins reaches the same bin
+        // twice; only then must a stencil drop repeated bins.
+        let repeats = (0..3).any(|d| simbox.periodic[d] && nbins[d] < 3);
         let total_bins = nbins[0] * nbins[1] * nbins[2];
 
         self.bin_of.clear();
-        self.bin_of.extend(frac.iter().map(|s| flat(bin_index(s))));
+        self.bin_of.extend(frac.iter().map(bin_index));
         self.bin_start.clear();
         self.bin_start.resize(total_bins + 1, 0);
         for &b in &self.bin_of {
-            self.bin_start[b + 1] += 1;
+            self.bin_start[flat(b) + 1] += 1;
         }
         for b in 0..total_bins {
             self.bin_start[b + 1] += self.bin_start[b];
@@ -254,6 +375,7 @@ impl NeighbourList {
         self.bin_atoms.resize(n, 0);
         let mut cursor = self.bin_start.clone();
         for (i, &b) in self.bin_of.iter().enumerate() {
+            let b = flat(b);
             self.bin_atoms[cursor[b]] = i;
             cursor[b] += 1;
         }
@@ -263,55 +385,22 @@ impl NeighbourList {
         // for any number of threads.
         let chunks = team.threads();
         self.parts.resize_with(chunks, RowPart::default);
-        let (bin_start, bin_atoms) = (&self.bin_start, &self.bin_atoms);
+        let grid = BinGrid {
+            nbins,
+            periodic: simbox.periodic,
+            repeats,
+            bin_of: &self.bin_of,
+            bin_start: &self.bin_start,
+            bin_atoms: &self.bin_atoms,
+        };
+        let pairs = PairTest {
+            image: &image,
+            x,
+            cut_sq,
+            exclude,
+        };
         let search = |atoms: std::ops::Range<usize>, part: &mut RowPart| {
-            part.neighbours.clear();
-            part.lengths.clear();
-            let mut stencil: Vec<usize> = Vec::with_capacity(27);
-            for i in atoms {
-                let b = bin_index(&frac[i]);
-                stencil.clear();
-                for dz in -1i64..=1 {
-                    for dy in -1i64..=1 {
-                        for dx in -1i64..=1 {
-                            let mut nb = [0usize; 3];
-                            let mut inside = true;
-                            for (d, off) in [dx, dy, dz].into_iter().enumerate() {
-                                let t = b[d] as i64 + off;
-                                let m = nbins[d] as i64;
-                                if simbox.periodic[d] {
-                                    nb[d] = t.rem_euclid(m) as usize;
-                                } else if (0..m).contains(&t) {
-                                    nb[d] = t as usize;
-                                } else {
-                                    inside = false;
-                                }
-                            }
-                            if inside {
-                                stencil.push(flat(nb));
-                            }
-                        }
-                    }
-                }
-                stencil.sort_unstable();
-                stencil.dedup();
-                let row_start = part.neighbours.len();
-                for &bin in &stencil {
-                    for &j in &bin_atoms[bin_start[bin]..bin_start[bin + 1]] {
-                        if j <= i {
-                            continue;
-                        }
-                        let d = simbox.delta(&x[i], &x[j]);
-                        if d[0] * d[0] + d[1] * d[1] + d[2] * d[2] < cut_sq
-                            && !exclude.is_some_and(|e| e.excludes(i, j))
-                        {
-                            part.neighbours.push(j as i32);
-                        }
-                    }
-                }
-                part.neighbours[row_start..].sort_unstable();
-                part.lengths.push(part.neighbours.len() - row_start);
-            }
+            search_rows(&grid, &pairs, atoms, part)
         };
         if chunks == 1 {
             // One thread searches straight into the list's own buffer.
@@ -439,6 +528,9 @@ mod tests {
             ([3.1, 3.1, 3.1], [0.0, 0.0, 0.0], [true; 3]),
             ([7.0, 5.0, 9.0], [1.2, -0.8, 0.5], [true; 3]),
             ([6.0, 6.0, 6.0], [0.0, 0.0, 0.0], [true, true, false]),
+            // One, three and four bins: a stencil that repeats its bin
+            // along x only.
+            ([2.9, 4.6, 6.2], [0.3, 0.0, -0.4], [true; 3]),
         ] {
             let simbox = SimBox {
                 lo: [0.0; 3],
@@ -446,9 +538,17 @@ mod tests {
                 tilt,
                 periodic,
             };
-            let x: Vec<[f64; 3]> = (0..150)
+            let mut x: Vec<[f64; 3]> = (0..150)
                 .map(|_| simbox.to_cartesian(&[rng.gen(), rng.gen(), rng.gen()]))
                 .collect();
+            // Atoms an image away from the box (as round-off leaves them
+            // at its faces) are binned where their wrapped selves are.
+            for (k, p) in x.iter_mut().enumerate().step_by(7) {
+                let n = [1 - (k % 3) as i32, (k % 2) as i32, -((k % 5 == 0) as i32)];
+                let n = std::array::from_fn(|d| if periodic[d] { n[d] } else { 0 });
+                let w = simbox.image_vector(&n);
+                *p = [p[0] + w[0], p[1] + w[1], p[2] + w[2]];
+            }
             let mut list = NeighbourList::default();
             list.build(&simbox, &x, 1.2, 0.3, None);
             let mut expected = brute_force(&simbox, &x, 1.5);
