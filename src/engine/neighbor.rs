@@ -2,8 +2,11 @@
 //!
 //! Atoms are binned in fractional coordinates with bins at least one
 //! list cutoff thick (face to face), so every pair within the cutoff sits in
-//! the same or an adjacent bin. The stencil is deduplicated, which keeps
-//! boxes of one or two bins per dimension correct under the minimum image.
+//! the same or an adjacent bin. Where a periodic dimension has one or two
+//! bins the stencil reaches a bin twice; it is then deduplicated, which
+//! keeps such boxes correct under the minimum image. Atoms a little
+//! outside a periodic box (round-off at its faces) are binned where their
+//! wrapped selves are.
 
 use super::simbox::SimBox;
 use super::team::{chunk_range, Team};
@@ -100,6 +103,11 @@ struct RowPart {
     lengths: Vec<usize>,
 }
 
+/// The flat index of bin `b` in a grid of `nbins`, x fastest.
+fn flat_bin(b: [usize; 3], nbins: [usize; 3]) -> usize {
+    (b[2] * nbins[1] + b[1]) * nbins[0] + b[0]
+}
+
 /// The bins next to bin `b` of `m` along one dimension, `b` included:
 /// wrapped where the dimension is periodic, left out beyond its ends
 /// where it is not. Returns the bins and how many there are.
@@ -159,8 +167,6 @@ fn search_rows(
     atoms: std::ops::Range<usize>,
     part: &mut RowPart,
 ) {
-    let [nx_bins, ny_bins, _] = grid.nbins;
-    let flat = |b: [usize; 3]| (b[2] * ny_bins + b[1]) * nx_bins + b[0];
     let x = pairs.x;
     part.neighbours.clear();
     part.lengths.clear();
@@ -173,7 +179,7 @@ fn search_rows(
         for &z in &zs[..nz] {
             for &y in &ys[..ny] {
                 for &xb in &xs[..nx] {
-                    stencil[bins] = flat([xb, y, z]);
+                    stencil[bins] = flat_bin([xb, y, z], grid.nbins);
                     bins += 1;
                 }
             }
@@ -290,7 +296,8 @@ impl NeighbourList {
     }
 
     /// Rebuilds the list for `cutoff + skin`, leaving out the pairs of
-    /// `exclude`, on one thread. Positions must already be wrapped.
+    /// `exclude`, on one thread. Positions should be wrapped; atoms an
+    /// image or so outside a periodic box are still listed correctly.
     pub fn build(
         &mut self,
         simbox: &SimBox,
@@ -346,7 +353,9 @@ impl NeighbourList {
                 let t = (s[d] - lo[d]) / span[d] * nbins[d] as f64;
                 let mut k = t as i64;
                 if (k as f64) > t {
-                    k -= 1;
+                    // Saturating: a blown-up coordinate (-inf) must not
+                    // overflow before the run's finiteness check sees it.
+                    k = k.saturating_sub(1);
                 }
                 if simbox.periodic[d] && !(0..m).contains(&k) {
                     k = k.rem_euclid(m);
@@ -355,7 +364,7 @@ impl NeighbourList {
             }
             b
         };
-        let flat = |b: [usize; 3]| (b[2] * nbins[1] + b[1]) * nbins[0] + b[0];
+        let flat = |b: [usize; 3]| flat_bin(b, nbins);
         // A periodic dimension of one or two bins reaches the same bin
         // twice; only then must a stencil drop repeated bins.
         let repeats = (0..3).any(|d| simbox.periodic[d] && nbins[d] < 3);
@@ -531,6 +540,9 @@ mod tests {
             // One, three and four bins: a stencil that repeats its bin
             // along x only.
             ([2.9, 4.6, 6.2], [0.3, 0.0, -0.4], [true; 3]),
+            // An open dimension of one bin beside periodic ones of two and
+            // four.
+            ([3.3, 2.2, 6.2], [0.0, 0.0, 0.0], [true, false, true]),
         ] {
             let simbox = SimBox {
                 lo: [0.0; 3],
@@ -559,6 +571,21 @@ mod tests {
                 "box {lengths:?} tilt {tilt:?}"
             );
         }
+    }
+
+    #[test]
+    fn a_blown_up_atom_is_binned_without_overflow_and_pairs_with_nothing() {
+        let simbox = SimBox {
+            lo: [0.0; 3],
+            lengths: [6.0; 3],
+            tilt: [0.0; 3],
+            periodic: [true, true, false],
+        };
+        let mut x = vec![[1.0, 1.0, 1.0], [1.5, 1.0, 1.0], [3.0, 3.0, 3.0]];
+        x.push([f64::NEG_INFINITY, 1.0, 2.0]);
+        let mut list = NeighbourList::default();
+        list.build(&simbox, &x, 1.0, 0.0, None);
+        assert_eq!(listed(&list, x.len()), vec![(0, 1)]);
     }
 
     #[test]

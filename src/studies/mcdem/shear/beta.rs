@@ -18,8 +18,9 @@ pub(super) const MIN_DISTANCE: f64 = 0.005;
 const SCAN_FROM: f64 = 0.50;
 /// Step of the scan.
 const SCAN_STEP: f64 = 0.0025;
-/// Bisection steps refining where the scan crosses the tables' `beta`.
-const BISECTIONS: usize = 50;
+/// Bisection steps refining where the scan crosses the tables' `beta`
+/// (the scan's step over 2^40 is far below any meaningful `phi_c`).
+const BISECTIONS: usize = 40;
 
 /// The exponent of one curve, fitted other ways.
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
@@ -34,8 +35,8 @@ pub struct BetaDiagnosis {
     pub fast: Option<PowerLaw>,
     /// `(phi_c, beta)`: every point (rate-dependent ones extrapolated)
     /// fitted at jamming points from 0.50 up to more than 0.005 below the
-    /// smallest volume fraction, so that every scan fit holds the same
-    /// points.
+    /// smallest volume fraction measured, so that every scan fit holds the
+    /// same points.
     pub scan: Vec<(f64, f64)>,
     /// The jamming point at which the same fit gives the tables' `beta`,
     /// if the scan crosses it.
@@ -72,8 +73,12 @@ pub fn diagnose(curve: &CurvePressures, phi_c: f64, paper: Option<PaperLaw>) -> 
     let slow = fit(&curve.slow, phi_c);
     let fast = fit(&curve.fast, phi_c);
     let every = &curve.every;
-    let smallest = every
+    // The jamming point lies below every volume fraction that carried a
+    // measured pressure, whether or not its extrapolation stayed positive.
+    let smallest = curve
+        .slow
         .iter()
+        .chain(every)
         .map(|(phi, _)| *phi)
         .fold(f64::INFINITY, f64::min);
     // Strictly below, so that round-off cannot drop the first point.
@@ -173,6 +178,13 @@ mod tests {
         assert!(m.phi_c > 0.62 && m.phi_c < 0.6425, "{m:?}");
         assert_eq!(m.points, 6);
         assert!((m.exponent - 0.9).abs() < 1e-9, "{m:?}");
+        // A first point whose extrapolated pressure fell below zero (left
+        // out of the fits) still bounds the scan: the jamming point lies
+        // below every fraction that carried a pressure.
+        let mut dropped = curve();
+        dropped.every.remove(0);
+        let d = diagnose(&dropped, 0.62, Some(law));
+        assert!((d.scan.last().unwrap().0 - 0.6425).abs() < 1e-12);
         // A beta the scan never reaches has no crossing.
         let steep = PaperLaw {
             alpha: 0.1,
