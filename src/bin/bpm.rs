@@ -171,7 +171,8 @@ enum Command {
     /// p/k = alpha (phi - phi_c)^beta against the multi-contact study's
     /// Tables D.1 and D.2. Each run is saved under DIR/runs as it
     /// finishes and reused by a rerun with the same parameters. Writes
-    /// DIR/shear.json, DIR/table.txt, DIR/shear.svg and DIR/scene.json.
+    /// DIR/shear.json, DIR/table.txt, DIR/shear.svg, DIR/beta.svg (the
+    /// exponent against the jamming point assumed) and DIR/scene.json.
     McShear(McShearArgs),
     /// The exponent beta of `bpm mc-shear` against shear rate and system
     /// size: reads the shear.json of each study folder given (each one

@@ -669,7 +669,7 @@ impl McShearArgs {
         shear::write_report(&report, &scene, &output)?;
         print!("{}", shear::table(&report));
         println!(
-            "wrote {}/shear.json, table.txt, shear.svg, scene.json and runs/",
+            "wrote {}/shear.json, table.txt, shear.svg, beta.svg, scene.json and runs/",
             output.display()
         );
         Ok(())

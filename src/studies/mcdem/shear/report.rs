@@ -219,8 +219,9 @@ fn beta_section(report: &ShearReport) -> String {
     out
 }
 
-/// Writes `shear.json`, `table.txt`, `shear.svg` and the first run's scene
-/// (`scene.json`) into `dir` (the runs are already under `dir/runs`).
+/// Writes `shear.json`, `table.txt`, `shear.svg`, `beta.svg` and the first
+/// run's scene (`scene.json`) into `dir` (the runs are already under
+/// `dir/runs`).
 pub fn write_report(report: &ShearReport, scene: &Scene, dir: &Path) -> Result<(), ShearError> {
     let out = output::write_report(report, dir)?;
     out.json("scene.json", scene)?;
