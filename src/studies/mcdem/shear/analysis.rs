@@ -289,7 +289,7 @@ pub fn fit_at(points: &[ShearPoint], phi_c: f64, use_extrapolated: bool) -> Opti
 }
 
 /// A curve's pressures as the exponent's diagnosis fits them.
-fn curve_pressures(points: &[ShearPoint]) -> CurvePressures {
+pub(super) fn curve_pressures(points: &[ShearPoint]) -> CurvePressures {
     let measured = |window: fn(&ShearPoint) -> Option<f64>| -> Vec<(f64, f64)> {
         points
             .iter()

@@ -13,6 +13,38 @@ fn fmt_opt(v: Option<f64>, digits: usize) -> String {
     v.map_or("-".into(), |v| format!("{v:.digits$}"))
 }
 
+/// A fit's exponent with its standard error, or `-` without a fit.
+pub(super) fn fmt_exponent(f: Option<PowerLaw>) -> String {
+    f.map_or("-".into(), |f| {
+        format!("{:.3}+-{:.3}", f.exponent, f.exponent_error)
+    })
+}
+
+/// Table D.2's `beta` as a flat line over `[from, to]`, once for each
+/// Poisson's ratio of `curves` (`(nu, the tables' law)`) the tables list;
+/// none when the span is empty.
+pub(super) fn paper_beta_lines(
+    curves: impl IntoIterator<Item = (f64, Option<PaperLaw>)>,
+    from: f64,
+    to: f64,
+) -> Vec<Series> {
+    let mut listed: Vec<f64> = Vec::new();
+    let mut lines = Vec::new();
+    for (nu, paper) in curves {
+        if let Some(p) = paper {
+            if from < to && !listed.contains(&nu) {
+                listed.push(nu);
+                lines.push(Series::new(
+                    format!("Table D.2, nu {nu}"),
+                    vec![(from, p.beta), (to, p.beta)],
+                    Mark::Line,
+                ));
+            }
+        }
+    }
+    lines
+}
+
 /// The report as text: every point, the fits against the tables, and the
 /// trend checks.
 pub fn table(report: &ShearReport) -> String {
@@ -55,10 +87,7 @@ pub fn table(report: &ShearReport) -> String {
         format!(
             "{:>8} {:>12} {:>2} {:>6} {:>6}",
             fmt_opt(f.map(|f| f.prefactor), 4),
-            f.map_or("-".into(), |f| format!(
-                "{:.3}+-{:.3}",
-                f.exponent, f.exponent_error
-            )),
+            fmt_exponent(f),
             f.map_or(0, |f| f.points),
             fmt_opt(f.zip(paper).map(|(f, p)| f.prefactor / p.alpha), 2),
             fmt_opt(f.zip(paper).map(|(f, p)| f.exponent - p.beta), 2),
@@ -184,11 +213,6 @@ fn beta_section(report: &ShearReport) -> String {
         out += &format!(" {:>6}", format!("@{c}"));
     }
     out += &format!(" | {:>9} {:>7}\n", "phi_c(D.2)", "a/D.1");
-    let with_error = |f: Option<PowerLaw>| {
-        f.map_or("-".into(), |f| {
-            format!("{:.3}+-{:.3}", f.exponent, f.exponent_error)
-        })
-    };
     for s in &report.analysis.series {
         let b = &s.beta;
         out += &format!(
@@ -198,8 +222,8 @@ fn beta_section(report: &ShearReport) -> String {
             s.spec.poisson_ratio,
             fmt_opt(s.paper.map(|p| p.beta), 3),
             opts.jamming_point(s.spec.friction),
-            with_error(b.slow),
-            with_error(b.fast),
+            fmt_exponent(b.slow),
+            fmt_exponent(b.fast),
         );
         for c in SHOWN_JAMMING_POINTS {
             let at = b
@@ -349,19 +373,11 @@ fn beta_panels(report: &ShearReport) -> Vec<Panel> {
                 .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), c| {
                     (lo.min(c), hi.max(c))
                 });
-            let mut listed: Vec<f64> = Vec::new();
-            for s in &curves {
-                if let Some(p) = s.paper {
-                    if span.0 < span.1 && !listed.contains(&s.spec.poisson_ratio) {
-                        listed.push(s.spec.poisson_ratio);
-                        drawn.push(Series::new(
-                            format!("Table D.2, nu {}", s.spec.poisson_ratio),
-                            vec![(span.0, p.beta), (span.1, p.beta)],
-                            Mark::Line,
-                        ));
-                    }
-                }
-            }
+            drawn.extend(paper_beta_lines(
+                curves.iter().map(|s| (s.spec.poisson_ratio, s.paper)),
+                span.0,
+                span.1,
+            ));
             Panel {
                 title: format!(
                     "friction {mu}: beta against the assumed phi_c (ours {:.3})",

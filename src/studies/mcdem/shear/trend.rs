@@ -5,7 +5,9 @@
 //! boxes. Each curve is fitted over the volume fractions that every
 //! folder holding it measured, so that the fits compare like with like.
 
+use super::analysis::curve_pressures;
 use super::beta::fit;
+use super::report::{fmt_exponent, paper_beta_lines};
 use super::{ContactLaw, SeriesSpec, ShearError, ShearReport};
 use crate::analysis::jamming::PowerLaw;
 use crate::analysis::plot::{Mark, Panel, Series};
@@ -62,22 +64,15 @@ pub struct ShearTrend {
     pub curves: Vec<TrendCurve>,
 }
 
-/// The pressures over `k` of one curve in one study, at the slow
+/// The positive pressures over `k` of one curve in one study, at the slow
 /// (`slow`) or the fast stage, by volume fraction.
 fn measured(report: &ShearReport, spec: &SeriesSpec, slow: bool) -> Vec<(f64, f64)> {
-    report
-        .analysis
-        .series
-        .iter()
-        .filter(|s| s.spec == *spec)
-        .flat_map(|s| s.points.iter())
-        .filter_map(|pt| {
-            let window = if slow { pt.slow } else { pt.fast };
-            window
-                .filter(|w| w.mean > 0.0)
-                .map(|w| (pt.fraction, w.mean))
-        })
-        .collect()
+    let Some(series) = report.analysis.series.iter().find(|s| s.spec == *spec) else {
+        return Vec::new();
+    };
+    let pressures = curve_pressures(&series.points);
+    let stage = if slow { pressures.slow } else { pressures.fast };
+    stage.into_iter().filter(|(_, p)| *p > 0.0).collect()
 }
 
 /// Gathers the curves of `reports` (each with its folder's name).
@@ -203,10 +198,7 @@ pub fn trend_table(trend: &ShearTrend) -> String {
                 r.seed,
                 if r.slow { "slow" } else { "fast" },
                 r.phi_c,
-                r.fit.map_or("-".into(), |f| format!(
-                    "{:.3}+-{:.3}",
-                    f.exponent, f.exponent_error
-                )),
+                fmt_exponent(r.fit),
                 r.fit.map_or("-".into(), |f| format!("{:.4}", f.prefactor)),
                 r.folder,
             );
@@ -270,20 +262,16 @@ fn trend_panels(trend: &ShearTrend) -> Vec<Panel> {
                     ));
                 }
             }
-            let mut listed = Vec::new();
-            for c in &curves {
-                if let Some(p) = c.paper {
-                    if c.spec.law == ContactLaw::Advanced && !listed.contains(&c.spec.poisson_ratio)
-                    {
-                        listed.push(c.spec.poisson_ratio);
-                        series.push(Series::new(
-                            format!("Table D.2, nu {}", c.spec.poisson_ratio),
-                            vec![(rates.0, p.beta), (rates.1, p.beta)],
-                            Mark::Line,
-                        ));
-                    }
-                }
-            }
+            // The tables fit the advanced closure: their lines in its
+            // curves' order.
+            series.extend(paper_beta_lines(
+                curves
+                    .iter()
+                    .filter(|c| c.spec.law == ContactLaw::Advanced)
+                    .map(|c| (c.spec.poisson_ratio, c.paper)),
+                rates.0,
+                rates.1,
+            ));
             Panel {
                 title: format!("friction {mu}: beta against shear rate"),
                 x_label: "gamma_dot d / sqrt(k / rho)".into(),
