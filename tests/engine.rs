@@ -144,6 +144,45 @@ fn bond_forces_do_not_depend_on_the_thread_count() {
     assert_eq!(run(3), serial, "3 threads");
 }
 
+/// The barostat's scalar pressure, `(sum m v^2 + W_xx + W_yy + W_zz) / 3 /
+/// V` in LAMMPS's order: on one thread exactly that, from the kinetic
+/// energy's own sum; on two and three threads, whose shares of `sum m v^2`
+/// are summed by the thread that holds them, the same to round-off.
+#[test]
+fn scalar_pressure_sums_the_kinetic_part_per_thread_to_round_off() {
+    let mut hold = StageSpec::hold("md", 20, 0.1);
+    hold.set_velocities = Some(bpm::scene::VelocityInit { rms_speed: 0.05 });
+    let mut ff = ForceField::paper(-0.5);
+    ff.pair = None;
+    let scene = solid_with(ff, vec![hold]);
+    let pressure = |threads| {
+        let mut sys = build_system(&scene, threads);
+        let (_, err) = run_scene(&mut sys, &scene, &opts(threads));
+        assert!(err.is_none());
+        let sum_mv2 = 2.0 * sys.kinetic_energy();
+        let dof = (3 * sys.len()) as f64 - 3.0;
+        let w = sys.interaction_tally().virial;
+        let [lx, ly, lz] = sys.simbox.lengths;
+        let formula =
+            (dof * (sum_mv2 * (1.0 / dof)) + w[0] + w[1] + w[2]) / 3.0 * (1.0 / (lx * ly * lz));
+        let kinetic = sum_mv2 / 3.0 / (lx * ly * lz);
+        (sys.scalar_pressure(), formula, kinetic)
+    };
+    let (serial, formula, kinetic) = pressure(1);
+    assert_eq!(serial, formula);
+    assert!(
+        kinetic > 1e-3 * serial.abs(),
+        "kinetic part {kinetic} of {serial}"
+    );
+    for threads in [2, 3] {
+        let (p, _, _) = pressure(threads);
+        assert!(
+            (p - serial).abs() <= 1e-14 * serial.abs(),
+            "{threads} threads: {p} against {serial}"
+        );
+    }
+}
+
 #[test]
 fn affine_isotropic_compression_loads_springs_but_not_the_multibody_term() {
     let scene = solid_with(ForceField::paper(0.0), vec![StageSpec::hold("h", 1, 0.1)]);

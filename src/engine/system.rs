@@ -179,12 +179,21 @@ impl System {
                 self.add_kinetic_tensor(&mut k);
                 k[0] + k[1] + k[2]
             }
-            None => {
-                p.v.iter()
-                    .zip(&p.mass)
-                    .map(|(v, &m)| (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]) * m)
-                    .sum()
-            }
+            // Each thread sums its own share of the velocities, which it
+            // has just updated: read by one thread, the other's share would
+            // cross between the cores' caches twice a step.
+            None => self.team.map_reduce(
+                p.len(),
+                0.0,
+                |range| {
+                    p.v[range.clone()]
+                        .iter()
+                        .zip(&p.mass[range])
+                        .map(|(v, &m)| (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]) * m)
+                        .sum::<f64>()
+                },
+                |a, b| a + b,
+            ),
         };
         let temperature = if dof > 0.0 {
             sum_mv2 * (1.0 / dof)
