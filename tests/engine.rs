@@ -4,7 +4,7 @@ mod common;
 
 use bpm::engine::{Barostat, ExternalTerms, FlatWall, StageDrivers, Tether, WallSide};
 use bpm::scene::builders::bulk::{build_bulk, BulkParams};
-use bpm::scene::{build_system, run_scene, ForceField, RunOptions, Scene, StageSpec};
+use bpm::scene::{build_system, run_scene, ForceField, Mass, RunOptions, Scene, StageSpec};
 use std::sync::OnceLock;
 
 /// A small bulk solid (L = 5 d, shortened build), built once per test binary.
@@ -145,35 +145,47 @@ fn bond_forces_do_not_depend_on_the_thread_count() {
 }
 
 /// The barostat's scalar pressure, `(sum m v^2 + W_xx + W_yy + W_zz) / 3 /
-/// V` in LAMMPS's order: on one thread exactly that, from the kinetic
-/// energy's own sum; on two and three threads, whose shares of `sum m v^2`
-/// are summed by the thread that holds them, the same to round-off.
+/// V` in LAMMPS's order, on a moving, loaded solid of unequal masses: on one
+/// thread exactly that, from the kinetic energy's own sum; on two and three
+/// threads, whose shares of `sum m v^2` are summed by the thread that holds
+/// them, the same to round-off.
 #[test]
 fn scalar_pressure_sums_the_kinetic_part_per_thread_to_round_off() {
     let mut hold = StageSpec::hold("md", 20, 0.1);
     hold.set_velocities = Some(bpm::scene::VelocityInit { rms_speed: 0.05 });
     let mut ff = ForceField::paper(-0.5);
     ff.pair = None;
-    let scene = solid_with(ff, vec![hold]);
+    let mut scene = solid_with(ff, vec![hold]);
+    let n = scene.particles.positions.len();
+    let masses = (0..n).map(|p| 1.0 + 0.5 * (p % 3) as f64).collect();
+    scene.particles.mass = Mass::PerParticle(masses);
     let pressure = |threads| {
         let mut sys = build_system(&scene, threads);
         let (_, err) = run_scene(&mut sys, &scene, &opts(threads));
         assert!(err.is_none());
+        // Forces and their virial once more, at the final state.
+        sys.setup(&StageDrivers {
+            dt: 0.1,
+            ..Default::default()
+        })
+        .unwrap();
         let sum_mv2 = 2.0 * sys.kinetic_energy();
         let dof = (3 * sys.len()) as f64 - 3.0;
         let w = sys.interaction_tally().virial;
         let [lx, ly, lz] = sys.simbox.lengths;
         let formula =
             (dof * (sum_mv2 * (1.0 / dof)) + w[0] + w[1] + w[2]) / 3.0 * (1.0 / (lx * ly * lz));
-        let kinetic = sum_mv2 / 3.0 / (lx * ly * lz);
-        (sys.scalar_pressure(), formula, kinetic)
+        let parts = [sum_mv2, w[0] + w[1] + w[2]].map(|c| c / 3.0 / (lx * ly * lz));
+        (sys.scalar_pressure(), formula, parts)
     };
-    let (serial, formula, kinetic) = pressure(1);
+    let (serial, formula, [kinetic, virial]) = pressure(1);
     assert_eq!(serial, formula);
-    assert!(
-        kinetic > 1e-3 * serial.abs(),
-        "kinetic part {kinetic} of {serial}"
-    );
+    for part in [kinetic, virial] {
+        assert!(
+            part.abs() > 1e-3 * serial.abs(),
+            "kinetic part {kinetic}, virial part {virial} of {serial}"
+        );
+    }
     for threads in [2, 3] {
         let (p, _, _) = pressure(threads);
         assert!(

@@ -180,7 +180,7 @@ impl System {
                 k[0] + k[1] + k[2]
             }
             // Each thread sums its own share of the velocities, which it
-            // has just updated: read by one thread, the other's share would
+            // has just updated: read by one thread, the others' shares would
             // cross between the cores' caches twice a step.
             None => self.team.map_reduce(
                 p.len(),
