@@ -2,8 +2,7 @@
 //! the quasi-static test, the power-law fits, the comparison with the
 //! study's tables and its trends.
 
-pub(super) use super::beta::MIN_DISTANCE;
-use super::beta::{diagnose, fit, BetaDiagnosis, CurvePressures};
+use super::beta::{diagnose, fit, BetaDiagnosis, CurvePressures, MIN_DISTANCE};
 use super::protocol::{stage_rates, stiffness};
 use super::{sorted_distinct, ContactLaw, RecordedRun, SeriesSpec, ShearOptions, StageSeries};
 use crate::analysis::jamming::{power_law_with_jamming_point, PowerLaw};

@@ -1,6 +1,6 @@
 //! The study's report as text and plots.
 
-use super::analysis::MIN_DISTANCE;
+use super::beta::MIN_DISTANCE;
 use super::{ContactLaw, Regime, ShearError, ShearReport};
 use crate::analysis::jamming::PowerLaw;
 use crate::analysis::plot::{Mark, Panel, Series};

@@ -64,15 +64,18 @@ pub struct ShearTrend {
     pub curves: Vec<TrendCurve>,
 }
 
-/// The positive pressures over `k` of one curve in one study, at the slow
-/// (`slow`) or the fast stage, by volume fraction.
-fn measured(report: &ShearReport, spec: &SeriesSpec, slow: bool) -> Vec<(f64, f64)> {
+/// A curve's `(phi, p / k)` in one study: `[slow stage, fast stage]`.
+type StagePressures = [Vec<(f64, f64)>; 2];
+
+/// The positive pressures over `k` of one curve in one study, by volume
+/// fraction.
+fn measured(report: &ShearReport, spec: &SeriesSpec) -> StagePressures {
     let Some(series) = report.analysis.series.iter().find(|s| s.spec == *spec) else {
-        return Vec::new();
+        return [Vec::new(), Vec::new()];
     };
     let pressures = curve_pressures(&series.points);
-    let stage = if slow { pressures.slow } else { pressures.fast };
-    stage.into_iter().filter(|(_, p)| *p > 0.0).collect()
+    [pressures.slow, pressures.fast]
+        .map(|stage| stage.into_iter().filter(|(_, p)| *p > 0.0).collect())
 }
 
 /// Gathers the curves of `reports` (each with its folder's name).
@@ -88,25 +91,21 @@ pub fn gather(reports: &[(String, ShearReport)], command: &str) -> ShearTrend {
     let curves = specs
         .iter()
         .map(|spec| {
-            let holding: Vec<&(String, ShearReport)> = reports
+            let holding: Vec<(&(String, ShearReport), StagePressures)> = reports
                 .iter()
                 .filter(|(_, r)| r.analysis.series.iter().any(|s| s.spec == *spec))
+                .map(|study| (study, measured(&study.1, spec)))
                 .collect();
             let mut fractions: Option<Vec<f64>> = None;
-            for (_, r) in &holding {
-                for slow in [true, false] {
-                    let have: Vec<f64> = measured(r, spec, slow)
-                        .iter()
-                        .map(|(phi, _)| *phi)
-                        .collect();
-                    fractions = Some(match fractions {
-                        None => have,
-                        Some(f) => f.into_iter().filter(|phi| have.contains(phi)).collect(),
-                    });
-                }
+            for stage in holding.iter().flat_map(|(_, stages)| stages) {
+                let have: Vec<f64> = stage.iter().map(|(phi, _)| *phi).collect();
+                fractions = Some(match fractions {
+                    None => have,
+                    Some(f) => f.into_iter().filter(|phi| have.contains(phi)).collect(),
+                });
             }
             let fractions = fractions.unwrap_or_default();
-            let (_, first) = holding[0];
+            let ((_, first), _) = holding[0];
             let paper = first
                 .analysis
                 .series
@@ -115,11 +114,13 @@ pub fn gather(reports: &[(String, ShearReport)], command: &str) -> ShearTrend {
                 .and_then(|s| s.paper);
             let mut rows: Vec<TrendRow> = holding
                 .iter()
-                .flat_map(|(folder, r)| {
+                .flat_map(|((folder, r), stages)| {
                     [true, false].map(|slow| {
-                        let points: Vec<(f64, f64)> = measured(r, spec, slow)
-                            .into_iter()
+                        let stage = &stages[usize::from(!slow)];
+                        let points: Vec<(f64, f64)> = stage
+                            .iter()
                             .filter(|(phi, _)| fractions.contains(phi))
+                            .copied()
                             .collect();
                         let rate = if slow {
                             r.options.rate
