@@ -151,23 +151,26 @@ impl SurfaceCorrections {
         contacts: &[ContactPoint],
     ) -> BlockSums {
         let compressible = half_space.compressible() != 0.0;
+        let standard = matches!(take, Take::All);
         let args = (half_space, radius, take, block, contacts, &self.sources[..]);
-        #[cfg(target_arch = "x86_64")]
-        if self.isa == Isa::Avx2 {
-            // SAFETY: `on` keeps Avx2 only when the processor has it.
-            return unsafe {
-                if compressible {
-                    sums_avx2::<true>(args)
-                } else {
-                    sums_avx2::<false>(args)
+        macro_rules! dispatch {
+            ($sums:ident $(, $unsafe:tt)?) => {
+                $($unsafe)? {
+                    match (compressible, standard) {
+                        (true, true) => $sums::<true, true>(args),
+                        (true, false) => $sums::<true, false>(args),
+                        (false, true) => $sums::<false, true>(args),
+                        (false, false) => $sums::<false, false>(args),
+                    }
                 }
             };
         }
-        if compressible {
-            receiver_sums::<true>(args)
-        } else {
-            receiver_sums::<false>(args)
+        #[cfg(target_arch = "x86_64")]
+        if self.isa == Isa::Avx2 {
+            // SAFETY: `on` keeps Avx2 only when the processor has it.
+            return dispatch!(sums_avx2, unsafe);
         }
+        dispatch!(receiver_sums)
     }
 }
 
@@ -182,15 +185,20 @@ type SumArgs<'a> = (
 
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
-unsafe fn sums_avx2<const COMPRESSIBLE: bool>(args: SumArgs<'_>) -> BlockSums {
-    receiver_sums::<COMPRESSIBLE>(args)
+unsafe fn sums_avx2<const COMPRESSIBLE: bool, const STANDARD: bool>(
+    args: SumArgs<'_>,
+) -> BlockSums {
+    receiver_sums::<COMPRESSIBLE, STANDARD>(args)
 }
 
 /// Each lane's receiver takes [`HalfSpace::displacement`]'s term (the
 /// same function) from every source but itself, in source order;
-/// `COMPRESSIBLE` says whether the material's `1 - 2 nu` term is on.
+/// `COMPRESSIBLE` says whether the material's `1 - 2 nu` term is on, and
+/// `STANDARD` that every term adds up (`take` is then [`Take::All`]): its
+/// lanes select with one vector comparison, where the advanced closure's
+/// tests and counts go lane by lane.
 #[inline(always)]
-fn receiver_sums<const COMPRESSIBLE: bool>(
+fn receiver_sums<const COMPRESSIBLE: bool, const STANDARD: bool>(
     (half_space, radius, take, block, contacts, sources): SumArgs<'_>,
 ) -> BlockSums {
     let coincident = COINCIDENT_POINTS * radius;
@@ -217,6 +225,19 @@ fn receiver_sums<const COMPRESSIBLE: bool>(
                 (&point, &normal),
                 coincident,
             );
+        }
+        if STANDARD {
+            // Every lane adds, and the one lane whose receiver is the
+            // source itself (if this block holds it) gets its sum back.
+            let before = sums.sum;
+            for l in 0..LANES {
+                sums.sum[l] += terms[l];
+            }
+            let own = k.wrapping_sub(block.contact[0]);
+            if own < LANES && block.contact[own] == k {
+                sums.sum[own] = before[own];
+            }
+            continue;
         }
         for l in 0..LANES {
             let t = terms[l];
