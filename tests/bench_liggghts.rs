@@ -1,6 +1,6 @@
 //! The LIGGGHTS case of `bpm bench` (`studies::bench::bench_liggghts`):
 //! LIGGGHTS's hydrogel tutorial under its lid, plain Hertz and the
-//! closure, in LIGGGHTS and natively. A few steps only, and no timing is
+//! closure, in LIGGGHTS and natively, and the advanced closure natively. A few steps only, and no timing is
 //! judged (timings belong to the benchmark): the report's fields are there
 //! and positive, and a LIGGGHTS that fails is reported, not fatal.
 
@@ -49,8 +49,19 @@ fn the_liggghts_case_times_both_laws_in_both_programs() {
         let command = s["command"].as_str().unwrap();
         assert!(command.contains("-in in.bench_"), "{command}");
     }
-    assert_eq!(lines.len(), 2, "one line per law: {lines:?}");
-    assert!(lines.iter().all(|l| l.contains("LIGGGHTS / native")));
+    let advanced = report["advanced_native_ns"].as_f64().unwrap_or(f64::NAN);
+    assert!(advanced.is_finite() && advanced > 0.0, "{advanced}");
+    assert_eq!(
+        lines.len(),
+        3,
+        "one line per law, then the advanced closure: {lines:?}"
+    );
+    assert!(lines[..2].iter().all(|l| l.contains("LIGGGHTS / native")));
+    assert!(
+        lines[2].contains("advanced closure (native only)"),
+        "{}",
+        lines[2]
+    );
 }
 
 #[test]
@@ -68,6 +79,8 @@ fn a_liggghts_that_cannot_run_is_reported_and_the_case_goes_on() {
         lines.push(l.to_string())
     });
     assert!(bench.speeds.is_empty());
+    // Nothing to compare the advanced closure with: not run.
+    assert!(bench.advanced_native_ns.is_nan());
     assert_eq!(
         bench.failures.len(),
         2,

@@ -221,6 +221,99 @@ pub struct StyleResult {
     pub pressure: [[f64; 6]; 2],
     /// Loop time of the `steps` run (s).
     pub loop_seconds: f64,
+    /// That run's timing breakdown (s per section).
+    pub sections: LoopSections,
+}
+
+/// The seconds of one LAMMPS run's loop in each section of its timing
+/// breakdown (`Pair | ...`, `Bond | ...`), NaN where the table has no
+/// such line: where a loop's time goes.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct LoopSections {
+    /// Pair forces.
+    pub pair: f64,
+    /// Bond forces.
+    pub bond: f64,
+    /// Neighbour list builds.
+    pub neigh: f64,
+    /// Communication (ghost atoms, also on one rank).
+    pub comm: f64,
+    /// Fixes (the integrator).
+    pub modify: f64,
+    /// Output.
+    pub output: f64,
+    /// The rest.
+    pub other: f64,
+}
+
+impl LoopSections {
+    /// No section timed.
+    pub const UNTIMED: Self = Self {
+        pair: f64::NAN,
+        bond: f64::NAN,
+        neigh: f64::NAN,
+        comm: f64::NAN,
+        modify: f64::NAN,
+        output: f64::NAN,
+        other: f64::NAN,
+    };
+
+    /// The sections of the last timing breakdown in a LAMMPS `log` (the
+    /// average column of `Section | min time | avg time | ...`).
+    pub fn of_log(log: &str) -> Self {
+        let Some(start) = log.rfind("MPI task timing breakdown") else {
+            return Self::UNTIMED;
+        };
+        let table = &log[start..];
+        let seconds = |name: &str| {
+            table
+                .lines()
+                .find(|l| l.split('|').next().is_some_and(|h| h.trim() == name))
+                .and_then(|l| l.split('|').nth(2))
+                .and_then(|t| t.trim().parse::<f64>().ok())
+                .unwrap_or(f64::NAN)
+        };
+        Self {
+            pair: seconds("Pair"),
+            bond: seconds("Bond"),
+            neigh: seconds("Neigh"),
+            comm: seconds("Comm"),
+            modify: seconds("Modify"),
+            output: seconds("Output"),
+            other: seconds("Other"),
+        }
+    }
+
+    /// Each section times `factor` (seconds to ns per particle-step).
+    pub fn scaled(&self, factor: f64) -> Self {
+        Self {
+            pair: self.pair * factor,
+            bond: self.bond * factor,
+            neigh: self.neigh * factor,
+            comm: self.comm * factor,
+            modify: self.modify * factor,
+            output: self.output * factor,
+            other: self.other * factor,
+        }
+    }
+
+    /// `pair 1.2, bond 3.4, ...`, one decimal.
+    pub fn text(&self) -> String {
+        [
+            ("pair", self.pair),
+            ("bond", self.bond),
+            ("neigh", self.neigh),
+            ("comm", self.comm),
+            ("modify", self.modify),
+            ("output", self.output),
+            ("other", self.other),
+        ]
+        .iter()
+        .filter(|(_, v)| v.is_finite())
+        .map(|(name, v)| format!("{name} {v:.1}"))
+        .collect::<Vec<_>>()
+        .join(", ")
+    }
 }
 
 /// One configuration of the comparison.
@@ -359,6 +452,7 @@ pub fn run_style(
             numbers(&out, "BPM_PRESSURE1")?,
         ],
         loop_seconds,
+        sections: LoopSections::of_log(&out),
     })
 }
 
@@ -514,6 +608,10 @@ pub struct SpeedRow {
     pub upstream_ns: f64,
     /// ours / upstream.
     pub ratio: f64,
+    /// Our run's loop by section (ns per particle-step), of the fastest run.
+    pub ours_sections: LoopSections,
+    /// Upstream's likewise.
+    pub upstream_sections: LoopSections,
 }
 
 impl SpeedRow {
@@ -536,18 +634,25 @@ pub fn speed(
     dir: &Path,
 ) -> Result<SpeedRow> {
     let n = config.scene.particles.positions.len() as f64;
-    let (mut ours, mut upstream) = (f64::INFINITY, f64::INFINITY);
+    let mut fastest = [(f64::INFINITY, LoopSections::UNTIMED); 2];
     for _ in 0..repeats.max(1) {
-        ours = ours.min(run_style(lammps, config, true, 1.0, steps, 1, dir)?.loop_seconds);
-        upstream = upstream.min(run_style(lammps, config, false, 1.0, steps, 1, dir)?.loop_seconds);
+        for (kept, ours) in fastest.iter_mut().zip([true, false]) {
+            let run = run_style(lammps, config, ours, 1.0, steps, 1, dir)?;
+            if run.loop_seconds < kept.0 {
+                *kept = (run.loop_seconds, run.sections);
+            }
+        }
     }
-    let ns = |s: f64| s * 1e9 / (n * steps as f64);
+    let [(ours, ours_sections), (upstream, upstream_sections)] = fastest;
+    let per = 1e9 / (n * steps as f64);
     Ok(SpeedRow {
         configuration: config.name.clone(),
         particles: n as usize,
-        ours_ns: ns(ours),
-        upstream_ns: ns(upstream),
+        ours_ns: ours * per,
+        upstream_ns: upstream * per,
         ratio: ours / upstream,
+        ours_sections: ours_sections.scaled(per),
+        upstream_sections: upstream_sections.scaled(per),
     })
 }
 
@@ -752,4 +857,46 @@ pub fn run_upstream_check(
         speeds,
         json,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::LoopSections;
+
+    #[test]
+    fn loop_sections_are_read_from_the_last_timing_breakdown() {
+        // Two runs: only the second table counts; Bond is missing in it.
+        let log = "\
+MPI task timing breakdown:
+Section |  min time  |  avg time  |  max time  |%varavg| %total
+---------------------------------------------------------------
+Pair    | 9          | 9          | 9          |   0.0 | 90
+Loop time of 2 on 1 procs for 10 steps with 5 atoms
+MPI task timing breakdown:
+Section |  min time  |  avg time  |  max time  |%varavg| %total
+---------------------------------------------------------------
+Pair    | 0.5        | 0.625      | 0.75       |   0.0 | 50.00
+Neigh   | 0.125      | 0.25       | 0.375      |   0.0 | 20.00
+Comm    | 0.0625     | 0.0625     | 0.0625     |   0.0 |  5.00
+Output  | 1e-05      | 1e-05      | 1e-05      |   0.0 |  0.00
+Modify  | 0.25       | 0.25       | 0.25       |   0.0 | 20.00
+Other   |            | 0.0625     |            |       |  5.00
+
+Nlocal:              5 ave           5 max           5 min
+";
+        let s = LoopSections::of_log(log);
+        assert_eq!(
+            (s.pair, s.neigh, s.comm, s.output, s.modify, s.other),
+            (0.625, 0.25, 0.0625, 1e-5, 0.25, 0.0625)
+        );
+        assert!(s.bond.is_nan());
+        assert_eq!(
+            s.scaled(2.0).text(),
+            "pair 1.2, neigh 0.5, comm 0.1, modify 0.5, output 0.0, other 0.1"
+        );
+        let none = LoopSections::of_log("Loop time of 1 on 1 procs");
+        assert!([none.pair, none.bond, none.other]
+            .iter()
+            .all(|v| v.is_nan()));
+    }
 }

@@ -14,7 +14,9 @@
 //! stage's set-up force evaluation; building the scene is not timed).
 
 use super::REPEATS;
+use crate::engine::MultiContact;
 use crate::file_error::FileError;
+use crate::reference::multicontact::{ADVANCED_GAMMA, ADVANCED_MPR};
 use crate::scene::protocols::lid::{lid_scene, LidError};
 use crate::scene::{build_system, run_scene, RunOptions, Scene};
 use crate::verify::liggghts::{tutorial_options, write_tutorial_bed, LiggghtsLaw};
@@ -211,19 +213,40 @@ fn run_liggghts(
 /// under the lid's first pass with `law`, cut to `steps` steps, a row
 /// every [`THERMO_EVERY`].
 pub fn native_scene(bed: &Path, law: LiggghtsLaw, steps: u64) -> Result<Scene, LidError> {
-    let mut scene = lid_scene(&tutorial_options(bed, 1), law.multicontact(), law.name())?;
+    closure_scene(bed, law.multicontact(), law.name(), steps)
+}
+
+/// [`native_scene`] with any closure (`None`: plain Hertz), named `name`.
+pub fn closure_scene(
+    bed: &Path,
+    multicontact: Option<MultiContact>,
+    name: &str,
+    steps: u64,
+) -> Result<Scene, LidError> {
+    let mut scene = lid_scene(&tutorial_options(bed, 1), multicontact, name)?;
     scene.stages.truncate(1);
     scene.stages[0].steps = steps;
     scene.stages[0].record.every = THERMO_EVERY;
     Ok(scene)
 }
 
+/// The advanced closure as the multi-contact studies run it (prefactor
+/// and maximum penetration ratio of the source study's calibration).
+pub fn advanced_closure() -> MultiContact {
+    MultiContact::advanced(ADVANCED_GAMMA, ADVANCED_MPR)
+}
+
 /// The native engine on the same bed, lid and law, `steps` steps of the
 /// first pass on `threads`: the stage's wall seconds.
 fn run_native(bed: &Path, law: LiggghtsLaw, steps: u64, threads: usize) -> Result<f64, String> {
     let scene = native_scene(bed, law, steps).map_err(|e| e.to_string())?;
-    let mut sys = build_system(&scene, threads);
-    let (stages, error) = run_scene(&mut sys, &scene, &RunOptions::quiet(threads));
+    run_native_scene(&scene, threads)
+}
+
+/// `scene` on `threads`: its first stage's wall seconds.
+fn run_native_scene(scene: &Scene, threads: usize) -> Result<f64, String> {
+    let mut sys = build_system(scene, threads);
+    let (stages, error) = run_scene(&mut sys, scene, &RunOptions::quiet(threads));
     if let Some(e) = error {
         return Err(e.to_string());
     }
@@ -286,14 +309,20 @@ pub struct LiggghtsBench {
     pub native: String,
     /// Plain Hertz and the closure, each measured in both programs.
     pub speeds: Vec<LiggghtsSpeed>,
+    /// The advanced closure ([`advanced_closure`]), natively on one thread
+    /// (ns per particle-step; LIGGGHTS has no such closure): NaN when its
+    /// runs failed.
+    pub advanced_native_ns: f64,
     /// What failed, one message per law (the other law still runs).
     pub failures: Vec<String>,
 }
 
 /// Times both laws, `steps` steps (1 to [`PASS_STEPS`]), in LIGGGHTS (in
 /// `work`, removed afterwards) and in the native engine on 1 and 2
-/// threads, [`REPEATS`] rounds, each side's fastest run kept. A law whose
-/// run fails is reported in `failures` and by `log`; the other law runs.
+/// threads, [`REPEATS`] rounds, each side's fastest run kept; then, when
+/// plain Hertz was measured, the advanced closure natively on one thread.
+/// A law whose run fails is reported in `failures` and by `log`; the
+/// other law runs.
 pub fn bench_liggghts(
     install: &LiggghtsInstall,
     steps: u64,
@@ -308,6 +337,7 @@ pub fn bench_liggghts(
             "verify::liggghts::tutorial_options(bed, 1) through lid_scene, the first stage cut to {steps} steps, a row every {THERMO_EVERY}; the stage's wall time"
         ),
         speeds: Vec::new(),
+        advanced_native_ns: f64::NAN,
         failures: Vec::new(),
     };
     let bed = match write_tutorial_bed(work, "hydrogel-input.data") {
@@ -381,6 +411,33 @@ pub fn bench_liggghts(
                 log(&message);
                 bench.failures.push(message);
             }
+        }
+    }
+    // Its goal is a ratio to native Hertz, which is timed only beside
+    // LIGGGHTS: without that, there is nothing to compare it with.
+    if !bench.speeds.iter().any(|s| s.law == LiggghtsLaw::Hertz) {
+        let _ = std::fs::remove_dir_all(work);
+        return bench;
+    }
+    let advanced = closure_scene(&bed, Some(advanced_closure()), "advanced closure", steps)
+        .map_err(|e| e.to_string())
+        .and_then(|scene| {
+            (0..REPEATS).try_fold(f64::INFINITY, |kept, _| {
+                Ok(kept.min(run_native_scene(&scene, 1)?))
+            })
+        });
+    match advanced {
+        Ok(seconds) => {
+            bench.advanced_native_ns = per(seconds);
+            log(&format!(
+                "liggghts advanced closure (native only) {PARTICLES} particles {steps} steps: native {:.1} ns ({seconds:.2} s) on 1 thread per particle-step",
+                bench.advanced_native_ns
+            ));
+        }
+        Err(e) => {
+            let message = format!("the native advanced closure run failed: {e}");
+            log(&message);
+            bench.failures.push(message);
         }
     }
     let _ = std::fs::remove_dir_all(work);

@@ -11,7 +11,7 @@
 
 use super::{
     check_copies, faster_on_1_and_2, steps_on_copies, upstream_speeds, BenchCase, BenchError,
-    UpstreamSpeed,
+    UpstreamSpeed, BENCH_STRAIN,
 };
 use crate::engine::Stage;
 use crate::scene::builders::grain::GrainKind;
@@ -132,7 +132,7 @@ pub fn bench_packing(
             }));
         }
     }
-    bench.upstream = upstream_speeds(&packing, &name, workload.steps, log);
+    bench.upstream = upstream_speeds(&packing, &name, workload.steps, BENCH_STRAIN, log);
     Ok(bench)
 }
 
