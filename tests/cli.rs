@@ -297,6 +297,10 @@ fn bench_prints_every_goal_and_writes_them_as_json() {
         "packing: native speed-up over upstream LAMMPS",
         "packing: compaction stages",
         "packing: 2-thread speed-up",
+        "plugin loop time / upstream's, solid squeezed 1%",
+        "DEM bed, Hertz: LIGGGHTS time / native's",
+        "DEM bed: standard closure's cost / native Hertz's",
+        "DEM bed: advanced closure's cost / native Hertz's",
     ] {
         assert!(
             stdout.contains(&format!("goal: {figure}")),

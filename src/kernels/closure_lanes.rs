@@ -195,8 +195,8 @@ unsafe fn sums_avx2<const COMPRESSIBLE: bool, const STANDARD: bool>(
 /// same function) from every source but itself, in source order;
 /// `COMPRESSIBLE` says whether the material's `1 - 2 nu` term is on, and
 /// `STANDARD` that every term adds up (`take` is then [`Take::All`]): its
-/// lanes select with one vector comparison, where the advanced closure's
-/// tests and counts go lane by lane.
+/// lanes add in one vector pass, where the advanced closure's tests and
+/// counts go lane by lane.
 #[inline(always)]
 fn receiver_sums<const COMPRESSIBLE: bool, const STANDARD: bool>(
     (half_space, radius, take, block, contacts, sources): SumArgs<'_>,
@@ -228,7 +228,9 @@ fn receiver_sums<const COMPRESSIBLE: bool, const STANDARD: bool>(
         }
         if STANDARD {
             // Every lane adds, and the one lane whose receiver is the
-            // source itself (if this block holds it) gets its sum back.
+            // source itself (if this block holds it) gets its sum back. Its
+            // term is 0 (coincident points), but 0 turns a sum of -0 (the
+            // empty sum, which the one-term loop keeps) into +0.
             let before = sums.sum;
             for l in 0..LANES {
                 sums.sum[l] += terms[l];
@@ -352,6 +354,41 @@ mod tests {
             switched > 200,
             "only {switched} contacts or terms switched off"
         );
+    }
+
+    #[test]
+    fn a_receiver_whose_only_source_is_itself_keeps_the_empty_sum() {
+        // Five contacts, only the last pressing: its own correction is the
+        // empty sum, -0 in the one-term loop, and must stay -0 in lanes.
+        let radius = 1.0;
+        let contacts: Vec<ContactPoint> = (0..5)
+            .map(|k| {
+                let a = 2.0 * std::f64::consts::PI * k as f64 / 5.0;
+                let force = if k == 4 { 1.0 } else { 0.0 };
+                ContactPoint::new([a.cos(), a.sin(), 0.0], force, radius)
+            })
+            .collect();
+        let half_space = HalfSpace::new(1.0, 1.0, 0.3);
+        let mut expected = [f64::NAN; 5];
+        surface_corrections(
+            &half_space,
+            &Closure::Standard,
+            radius,
+            &contacts,
+            &mut expected,
+        );
+        assert_eq!(expected[4].to_bits(), (-0.0f64).to_bits());
+        for isa in [Isa::Portable, Isa::Avx2] {
+            let mut got = [f64::NAN; 5];
+            SurfaceCorrections::on(isa).compute(
+                &half_space,
+                &Closure::Standard,
+                radius,
+                &contacts,
+                &mut got,
+            );
+            assert_eq!(got.map(f64::to_bits), expected.map(f64::to_bits), "{isa:?}");
+        }
     }
 
     #[test]

@@ -594,8 +594,9 @@ pub fn compare_configuration(
     Ok(())
 }
 
-/// ns per particle-step of ours and upstream on `scene` (reference state,
-/// squeezed 1.5%), `steps` steps, one rank, same LAMMPS, same run.
+/// ns per particle-step of ours and upstream on a configuration (its
+/// scene squeezed to its box scale), `steps` steps, one rank, same LAMMPS,
+/// same run.
 #[derive(Clone, Debug, Serialize)]
 pub struct SpeedRow {
     /// Scene.
