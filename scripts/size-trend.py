@@ -11,8 +11,10 @@ For every run it prints three estimates of the jamming point:
   - the bracket's midpoint.
 Then the weighted least-squares fit phi_c = phi_inf - b d/R of each
 estimate over the runs with the most common grain number (each R weighted
-by the standard error of its seeds' mean; a single seed takes the mean
-spread of the R that have several). Runs with other grain numbers are
+by the standard error of its seeds' mean; an R with fewer than three seeds
+takes the mean spread of the R that have three or more: the spread of two
+values has one degree of freedom and can come out near 0 by chance, which
+would give that R all the weight). Runs with other grain numbers are
 listed beside the runs of their R with the common number, which separates
 grain number from grain size.
 
@@ -24,6 +26,10 @@ grain number from grain size.
 import json
 import statistics
 import sys
+
+
+# Seeds an R needs for its own spread to weight it.
+MIN_SEEDS_FOR_SPREAD = 3
 
 
 def fixed_exponent_phi_c(states, exponent=1.5, window=0.1):
@@ -116,14 +122,16 @@ def main(folders):
     estimates = [("fit", "free fit"), ("fixed", "exponent 3/2"), ("midpoint", "bracket midpoint")]
     for key, name in estimates:
         by_r = {R: [r[key] for r in runs if r["R"] == R] for R in radii}
-        spreads = [statistics.stdev(v) for v in by_r.values() if len(v) > 1]
+        spreads = [statistics.stdev(v) for v in by_r.values() if len(v) >= MIN_SEEDS_FOR_SPREAD]
         pooled = statistics.mean(spreads)
         points = []
         print(f"\nphi_c ({name}) per R: mean, sd of the seeds, seeds")
         for R, values in by_r.items():
-            sd = statistics.stdev(values) if len(values) > 1 else pooled
+            own = len(values) >= MIN_SEEDS_FOR_SPREAD
+            sd = statistics.stdev(values) if own else pooled
             mean = statistics.mean(values)
-            print(f"  R = {R:g}: {mean:.4f} sd {sd:.4f} ({len(values)} seeds)")
+            note = "" if own else f"; pooled sd used, the seeds' own: {statistics.stdev(values):.4f}" if len(values) > 1 else "; pooled sd"
+            print(f"  R = {R:g}: {mean:.4f} sd {sd:.4f} ({len(values)} seeds{note})")
             points.append((R, mean, sd / len(values) ** 0.5))
         phi_inf, b, e_inf, e_b = weighted_line(points)
         at10 = phi_inf - b / 10.0
