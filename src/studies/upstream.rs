@@ -247,16 +247,39 @@ pub struct LoopSections {
 }
 
 impl LoopSections {
+    /// The sections' names in LAMMPS's table, in the order of
+    /// [`Self::from_values`] and [`Self::values`].
+    pub const NAMES: [&'static str; 7] =
+        ["Pair", "Bond", "Neigh", "Comm", "Modify", "Output", "Other"];
+
     /// No section timed.
-    pub const UNTIMED: Self = Self {
-        pair: f64::NAN,
-        bond: f64::NAN,
-        neigh: f64::NAN,
-        comm: f64::NAN,
-        modify: f64::NAN,
-        output: f64::NAN,
-        other: f64::NAN,
-    };
+    pub const UNTIMED: Self = Self::from_values([f64::NAN; 7]);
+
+    /// The sections from their values in the order of [`Self::NAMES`].
+    pub const fn from_values([pair, bond, neigh, comm, modify, output, other]: [f64; 7]) -> Self {
+        Self {
+            pair,
+            bond,
+            neigh,
+            comm,
+            modify,
+            output,
+            other,
+        }
+    }
+
+    /// The values in the order of [`Self::NAMES`].
+    pub fn values(&self) -> [f64; 7] {
+        [
+            self.pair,
+            self.bond,
+            self.neigh,
+            self.comm,
+            self.modify,
+            self.output,
+            self.other,
+        ]
+    }
 
     /// The sections of the last timing breakdown in a LAMMPS `log` (the
     /// average column of `Section | min time | avg time | ...`).
@@ -273,46 +296,23 @@ impl LoopSections {
                 .and_then(|t| t.trim().parse::<f64>().ok())
                 .unwrap_or(f64::NAN)
         };
-        Self {
-            pair: seconds("Pair"),
-            bond: seconds("Bond"),
-            neigh: seconds("Neigh"),
-            comm: seconds("Comm"),
-            modify: seconds("Modify"),
-            output: seconds("Output"),
-            other: seconds("Other"),
-        }
+        Self::from_values(Self::NAMES.map(seconds))
     }
 
     /// Each section times `factor` (seconds to ns per particle-step).
     pub fn scaled(&self, factor: f64) -> Self {
-        Self {
-            pair: self.pair * factor,
-            bond: self.bond * factor,
-            neigh: self.neigh * factor,
-            comm: self.comm * factor,
-            modify: self.modify * factor,
-            output: self.output * factor,
-            other: self.other * factor,
-        }
+        Self::from_values(self.values().map(|v| v * factor))
     }
 
     /// `pair 1.2, bond 3.4, ...`, one decimal.
     pub fn text(&self) -> String {
-        [
-            ("pair", self.pair),
-            ("bond", self.bond),
-            ("neigh", self.neigh),
-            ("comm", self.comm),
-            ("modify", self.modify),
-            ("output", self.output),
-            ("other", self.other),
-        ]
-        .iter()
-        .filter(|(_, v)| v.is_finite())
-        .map(|(name, v)| format!("{name} {v:.1}"))
-        .collect::<Vec<_>>()
-        .join(", ")
+        Self::NAMES
+            .iter()
+            .zip(self.values())
+            .filter(|(_, v)| v.is_finite())
+            .map(|(name, v)| format!("{} {v:.1}", name.to_lowercase()))
+            .collect::<Vec<_>>()
+            .join(", ")
     }
 }
 

@@ -1199,17 +1199,16 @@ pub fn lammps_bond_timing(
         &vars,
         steps,
     )?;
-    let field = |prefix: &str, col: usize| -> Option<f64> {
-        let line = text.lines().find(|l| l.starts_with(prefix))?;
-        line.split(['|', ' '])
-            .filter(|t| !t.is_empty())
-            .nth(col)?
-            .parse()
-            .ok()
-    };
     let missing = |what: &str| BenchError::Timing(what.into());
-    let bond = field("Bond    |", 2).ok_or_else(|| missing("no Bond line in LAMMPS timing"))?;
-    let total = field("Loop time of", 3).ok_or_else(|| missing("no loop time"))?;
+    let bond = Some(LoopSections::of_log(&text).bond)
+        .filter(|b| b.is_finite())
+        .ok_or_else(|| missing("no Bond line in LAMMPS timing"))?;
+    let total = text
+        .lines()
+        .find(|l| l.starts_with("Loop time of"))
+        .and_then(|l| l.split_whitespace().nth(3))
+        .and_then(|t| t.parse::<f64>().ok())
+        .ok_or_else(|| missing("no loop time"))?;
     let per = |secs: f64| secs * 1e9 / (steps as f64 * solid.particles.positions.len() as f64);
     Ok(LammpsBondTiming {
         name: variant.name(),
