@@ -732,7 +732,7 @@ fn runs_without_times(report: &bpm::studies::compaction::CompactionReport) -> se
 fn a_compaction_study_stopped_twice_resumes_to_the_same_report() {
     use bpm::scene::checkpoint::StudyCheckpoint;
     use bpm::scene::CheckpointEvery;
-    use bpm::studies::compaction::{run_compaction, CompactionError};
+    use bpm::studies::compaction::{run_compaction, CompactOptions, CompactionError};
     use bpm::studies::{StudyRuntime, StudyStop};
     use std::sync::atomic::Ordering;
     let mut opts = tiny_study(None, 20_000);
@@ -753,7 +753,7 @@ fn a_compaction_study_stopped_twice_resumes_to_the_same_report() {
             CheckpointEvery::Steps(700),
             resume,
             "compact",
-            &opts,
+            &opts.checkpoint_identity(),
             1,
         )
         .unwrap();
@@ -809,6 +809,33 @@ fn a_compaction_study_stopped_twice_resumes_to_the_same_report() {
     assert_eq!(runs_without_times(&straight), runs_without_times(&resumed));
     // The finished run and the first measurement came from the checkpoint.
     assert!(lines.iter().any(|l| l.contains("moduli 2/2")), "{lines:?}");
+    // Resumed with another moduli protocol, the study takes the packing
+    // and the run from the checkpoint (its wall time comes back to the
+    // bit) and measures the moduli anew.
+    let mut relaxed_longer = opts.clone();
+    relaxed_longer.moduli.protocol.relax_time = 150.0;
+    let identity = |o: &CompactOptions| serde_json::to_value(o.checkpoint_identity()).unwrap();
+    assert_eq!(identity(&relaxed_longer), identity(&opts));
+    let remeasured = run_compaction(
+        &relaxed_longer,
+        &session(true),
+        None,
+        &dir,
+        "test",
+        &mut |_| {},
+    )
+    .unwrap();
+    let (a, b) = (&resumed.runs[0], &remeasured.runs[0]);
+    assert_eq!(a.run_seconds.to_bits(), b.run_seconds.to_bits());
+    assert_eq!(
+        serde_json::to_value(&a.states).unwrap(),
+        serde_json::to_value(&b.states).unwrap()
+    );
+    assert_eq!(b.moduli.len(), 2);
+    for (m, n) in a.moduli.iter().zip(&b.moduli) {
+        assert_eq!(m.step, n.step);
+        assert_ne!(m.moduli.bulk, n.moduli.bulk);
+    }
     // Options other than the checkpoint's are refused.
     let mut other = opts.clone();
     other.seeds = vec![4];
@@ -817,9 +844,69 @@ fn a_compaction_study_stopped_twice_resumes_to_the_same_report() {
         CheckpointEvery::Steps(700),
         true,
         "compact",
-        &other,
+        &other.checkpoint_identity(),
         1,
     )
     .unwrap_err();
     assert!(e.to_string().contains("other options"), "{e}");
+}
+
+/// The native moduli measurement relaxes a state once and starts its
+/// three loadings from the relaxed state: the records equal those of the
+/// three full runs (relaxation and loading each), bit for bit, on one and
+/// two threads.
+#[test]
+fn the_moduli_loadings_branch_from_one_relaxation_as_three_full_runs() {
+    use bpm::scene::protocols::PackingModuliProtocol;
+    use bpm::scene::{build_system, run_scene, RunOptions};
+    use bpm::studies::compaction::moduli::relax_once_then_load;
+    let mut base = small_compaction(3).unwrap();
+    // Jostled, so the relaxation has something to relax.
+    let jostle = common::random_rows(base.particles.positions.len(), 0.03, 11);
+    for (x, dx) in base.particles.positions.iter_mut().zip(&jostle) {
+        (0..3).for_each(|k| x[k] += dx[k]);
+    }
+    let protocol = PackingModuliProtocol {
+        dt: 0.05,
+        relax_time: 15.0,
+        compression_rate: 1e-5,
+        shear_rate: 2e-5,
+        rows: 8,
+        ..PackingModuliProtocol::paper()
+    };
+    let scenes = [
+        protocol.compression_stages(),
+        protocol.shear_stages(),
+        protocol.control_stages(),
+    ]
+    .map(|stages| {
+        let mut scene = base.clone();
+        scene.stages = stages;
+        scene
+    });
+    for threads in [1, 2] {
+        let branched = relax_once_then_load(&scenes, threads).unwrap();
+        for (scene, runs) in scenes.iter().zip(&branched) {
+            let mut sys = build_system(scene, threads);
+            let (full, error) = run_scene(&mut sys, scene, &RunOptions::quiet(threads));
+            assert!(error.is_none(), "{error:?}");
+            assert_eq!(full.len(), 2);
+            for (a, b) in full.iter().zip(runs) {
+                assert_eq!(a.name, b.name);
+                assert!(!a.rows.is_empty());
+                assert_eq!(a.rows, b.rows, "stage {} on {threads} thread(s)", a.name);
+            }
+        }
+        // Not vacuous: the relaxation moved the pressure, and the
+        // compression's pressure left the control's.
+        let p = |k: usize, s: usize| branched[k][s].column("pressure").unwrap();
+        let relax = p(0, 0);
+        assert!(relax[0] != *relax.last().unwrap(), "{relax:?}");
+        assert!(p(0, 1).last() != p(2, 1).last());
+    }
+    // Scenes that differ before their loadings cannot share a relaxation.
+    let mut other = scenes.clone();
+    other[2].stages[0].dt = 0.04;
+    let e = relax_once_then_load(&other, 1).unwrap_err();
+    assert!(e.contains("differ only in their second"), "{e}");
 }

@@ -156,6 +156,14 @@ impl Default for Mass {
 }
 
 impl Mass {
+    /// The mean mass: the uniform one, or the mean of those listed.
+    pub fn mean(&self) -> f64 {
+        match self {
+            Mass::Uniform(m) => *m,
+            Mass::PerParticle(m) => m.iter().sum::<f64>() / m.len().max(1) as f64,
+        }
+    }
+
     /// The masses of `n` particles.
     pub fn values(&self, n: usize) -> Vec<f64> {
         match self {

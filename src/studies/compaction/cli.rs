@@ -117,7 +117,9 @@ pub struct CompactArgs {
     mc_points: u64,
     /// States per run at which the packing's bulk and shear moduli are
     /// measured (0 = none), spread evenly in ln(phi - phi_c); default 6
-    /// for bonded grains, 0 (the only choice) for DEM spheres.
+    /// for bonded grains, 0 (the only choice) for DEM spheres. This and
+    /// the other --moduli-* options may differ on --resume: the packings
+    /// and runs come from the checkpoint, the moduli are measured anew.
     #[arg(long)]
     moduli_states: Option<usize>,
     /// Relaxation before each modulus loading (tau) (paper: 1e4).
@@ -343,7 +345,7 @@ impl CompactArgs {
         };
         opts.validate()?;
         let exe = std::env::current_exe().context("locating the bpm executable")?;
-        let runtime = runtime.runtime("compact", &opts, threads)?;
+        let runtime = runtime.runtime("compact", &opts.checkpoint_identity(), threads)?;
         let report = compaction::run_compaction(
             &opts,
             &runtime,

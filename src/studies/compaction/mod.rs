@@ -28,7 +28,7 @@ use crate::scene::builders::packing::{
     PackingSummary,
 };
 use crate::scene::datafile::{read_data_file, write_data_file};
-use crate::scene::model::{Mass, ModelKind};
+use crate::scene::model::ModelKind;
 use crate::scene::protocols::{compaction_scene, CompactionProtocol};
 use crate::scene::run::Checkpoint;
 use crate::scene::validate::{simbox_of, SceneError};
@@ -161,6 +161,18 @@ impl CompactionError {
 }
 
 impl CompactOptions {
+    /// What a study's checkpoint must have been written with to be resumed
+    /// by these options: everything but the moduli's. A resumed study
+    /// may measure other states, or by another protocol, taking the
+    /// packings and runs from the checkpoint (each measurement is kept
+    /// under its step and protocol).
+    pub fn checkpoint_identity(&self) -> Self {
+        Self {
+            moduli: ModuliOptions::default(),
+            ..self.clone()
+        }
+    }
+
     /// Checks the options; the error names the one at fault.
     pub fn validate(&self) -> Result<(), InvalidOption> {
         let p = &self.protocol;
@@ -597,8 +609,11 @@ fn packing(
                     let (mut scene, summary) =
                         build_sphere_packing(&p, placeholder, threads, false)
                             .map_err(packing_error)?;
-                    let material =
-                        dem.material_of(moduli, summary.template_radius, mean_mass(&scene));
+                    let material = dem.material_of(
+                        moduli,
+                        summary.template_radius,
+                        scene.particles.mass.mean(),
+                    );
                     scene.force_field = dem.force_field(material);
                     (scene, summary)
                 }
@@ -620,7 +635,7 @@ fn packing(
                             path.display()
                         ))
                     })?;
-                    let material = dem.material_of(moduli, radius, mean_mass(&scene));
+                    let material = dem.material_of(moduli, radius, scene.particles.mass.mean());
                     scene.force_field = dem.force_field(material);
                     separate_spheres(&mut scene).map_err(packing_error)?
                 }
@@ -673,14 +688,6 @@ fn grain_count(packing: &Scene) -> usize {
         _ if packing.model == ModelKind::Dem => packing.particles.positions.len(),
         Some(g) => g.iter().max().map_or(0, |m| *m as usize + 1),
         None => 0,
-    }
-}
-
-/// The mean particle mass of a scene.
-fn mean_mass(scene: &Scene) -> f64 {
-    match &scene.particles.mass {
-        Mass::Uniform(m) => *m,
-        Mass::PerParticle(m) => m.iter().sum::<f64>() / m.len().max(1) as f64,
     }
 }
 
@@ -1104,7 +1111,10 @@ pub fn run_compaction(
             let Some(checkpoint) = checkpoint_of(&stages, &row) else {
                 continue;
             };
-            let measured = runtime.part(&format!("seed-{seed}/moduli-{}", row.step), || {
+            // Keyed by the protocol too: a study resumed with another
+            // protocol measures anew (`checkpoint_identity`).
+            let key = format!("seed-{seed}/moduli-{}/{:?}", row.step, opts.moduli.protocol);
+            let measured = runtime.part(&key, || {
                 Ok::<_, CompactionError>(moduli::measure_state(
                     &packing,
                     checkpoint,
