@@ -878,3 +878,95 @@ fn bond_rows_report_a_collapsed_bond_and_refuse_bad_atoms() {
         })
     ));
 }
+
+/// The row kernel's cube root on every instruction set gives the bits of
+/// the scalar `cube_root` whatever mix of volume ratios a block of four
+/// rows holds: near 1 (the series alone), beyond 1/32 (series and one
+/// Halley step), beyond 1/4 (the scalar routine), in the same block.
+#[test]
+fn row_kernel_cube_roots_match_the_scalar_routine_across_its_ranges() {
+    let (x0, bonds, r0) = random_network(400, 5.0, 1.5, 51);
+    // Squeezed from nothing at x = 0 to 13% (linear) at x = 5: every
+    // range of the volume ratio, mixed along the rows.
+    let x: Vec<[f64; 3]> = x0
+        .iter()
+        .map(|p| {
+            let s = 1.0 - 0.13 * p[0] / 5.0;
+            [p[0] * s, p[1] * s, p[2] * s]
+        })
+        .collect();
+    let n = x.len();
+    let all = Ownership::all(n);
+    let mut vol0 = vec![0.0; n];
+    accumulate_reference_volumes(&bonds, &r0, all, &mut vol0);
+    let rows = BondRows::new(
+        n,
+        bonds
+            .iter()
+            .zip(&r0)
+            .enumerate()
+            .map(|(k, (b, &r))| (b.i as usize, b.j as usize, r, k)),
+        Some(&vol0),
+    )
+    .unwrap();
+    let mut lengths = vec![[0.0; 2]; rows.len()];
+    row_volumes_on(
+        Isa::Portable,
+        &Unwrapped,
+        &rows,
+        0..rows.len(),
+        &x,
+        &mut lengths,
+    );
+    let mut vol = vec![0.0; n];
+    gather_volumes(&rows, 0..n, &lengths, &mut vol);
+    // The range of each row's ratio, as the rows list them.
+    let class: Vec<u8> = (0..rows.len())
+        .map(|k| {
+            let (i, j) = (bonds[k].i as usize, bonds[k].j as usize);
+            let d = ((vol[i] + vol[j]) / (vol0[i] + vol0[j]) - 1.0).abs();
+            u8::from(d > 1.0 / 32.0) + u8::from(d > 0.25)
+        })
+        .collect();
+    for c in 0..3 {
+        let count = class.iter().filter(|&&k| k == c).count();
+        assert!(count >= 20, "{count} rows in range {c} of {}", rows.len());
+    }
+    let mixed = class
+        .chunks_exact(4)
+        .filter(|b| b.iter().any(|&k| k != b[0]))
+        .count();
+    assert!(mixed >= 20, "{mixed} blocks mix ranges");
+    let inputs = RowInputs {
+        x: &x,
+        v: None,
+        coeffs: BondCoeffs {
+            k: 1.0,
+            a: -0.7,
+            gamma: 0.0,
+        },
+        multibody: Some((&vol[..], &lengths[..])),
+        tally: false,
+    };
+    let forces = |isa: Isa| {
+        let mut out = vec![[f64::NAN; 4]; rows.len()];
+        let pass = row_forces_on(isa, &Unwrapped, &rows, 0..rows.len(), &inputs, &mut out);
+        assert!(pass.fault.is_none(), "{isa:?}: {:?}", pass.fault);
+        out
+    };
+    let portable = forces(Isa::Portable);
+    // The portable rows are the force law itself, bond by bond.
+    for (k, b) in bonds.iter().enumerate() {
+        let (i, j) = (b.i as usize, b.j as usize);
+        let r = dist(&x[i], &x[j]);
+        let fmag = -(r - r0[k]) - 0.7 * (dilation(vol[i], vol[j], vol0[i], vol0[j]) - r / r0[k]);
+        assert_relative_eq!(
+            portable[k][0] * r / (x[i][0] - x[j][0]),
+            fmag,
+            max_relative = 1e-9
+        );
+    }
+    if Isa::Avx2.available() {
+        assert_eq!(forces(Isa::Avx2), portable);
+    }
+}

@@ -83,7 +83,7 @@ pub fn cube_root(q: f64) -> f64 {
     if x.abs() <= CLOSE_TO_ONE {
         return cube_root_near_one(x);
     }
-    let y = if x.abs() <= 0.25 {
+    let y = if x.abs() <= SERIES_AND_STEP_UP_TO {
         series_to_degree_7(x)
     } else if q > f64::MIN_POSITIVE && q < 1e300 {
         let mut y = f64::from_bits(q.to_bits() / 3 + 0x2A9F_7893_782D_A1CE);
@@ -99,6 +99,10 @@ pub fn cube_root(q: f64) -> f64 {
 
 /// `|q - 1|` up to which [`cube_root_near_one`] is exact to round-off.
 pub(super) const CLOSE_TO_ONE: f64 = 1.0 / 32.0;
+
+/// `|q - 1|` up to which [`cube_root`] refines the degree-7 series by one
+/// Halley step.
+pub(super) const SERIES_AND_STEP_UP_TO: f64 = 0.25;
 
 /// `(1 + x)^(1/3)` for `|x| <= 1/32`, the common case (volume strains of a
 /// few percent): degree 9, truncation error below 1.1e-17, no division and

@@ -16,7 +16,7 @@
 //! The arithmetic per bond is that of [`super::bond_forces`], operation by
 //! operation and without fused multiply-adds, on every instruction set.
 
-use super::bond::{cube_root, reciprocal, BondCoeffs, CLOSE_TO_ONE};
+use super::bond::{cube_root, reciprocal, BondCoeffs, CLOSE_TO_ONE, SERIES_AND_STEP_UP_TO};
 use super::fault::{Fault, ForcePass, COLLAPSED_BELOW, OVERSTRETCHED_ABOVE};
 use super::isa::Isa;
 use super::tally::Tally;
@@ -783,11 +783,12 @@ mod avx2 {
         _mm256_permute4x64_pd::<0b11_01_10_00>(mixed)
     }
 
-    /// The series of `(1 + x)^(1/3)` of [`super::super::bond`] to degree 9
-    /// (exact to round-off for `|x| <= 1/32`), lane by lane.
+    /// The series of `(1 + x)^(1/3)` of [`super::super::bond`], lane by
+    /// lane: to degree 7 (the start of the Halley step beyond `1/32`), and
+    /// to degree 9 (exact to round-off for `|x| <= 1/32`).
     #[target_feature(enable = "avx2")]
     #[inline]
-    unsafe fn cube_root_near_one(x: __m256d) -> __m256d {
+    unsafe fn cube_root_series(x: __m256d) -> (__m256d, __m256d) {
         use crate::kernels::bond::CBRT_SERIES as C;
         // c0 + c1 x for the coefficients k, k + 1.
         macro_rules! pair {
@@ -803,7 +804,56 @@ mod avx2 {
         let low = _mm256_add_pd(pair!(0), _mm256_mul_pd(x2, pair!(2)));
         let high = _mm256_add_pd(pair!(4), _mm256_mul_pd(x2, pair!(6)));
         let degree_7 = _mm256_add_pd(low, _mm256_mul_pd(x4, high));
-        _mm256_add_pd(degree_7, _mm256_mul_pd(_mm256_mul_pd(x4, x4), pair!(8)))
+        let degree_9 = _mm256_add_pd(degree_7, _mm256_mul_pd(_mm256_mul_pd(x4, x4), pair!(8)));
+        (degree_7, degree_9)
+    }
+
+    /// One Halley step towards the cube root of `q` from `y`, lane by lane,
+    /// in the scalar step's order of operations (the same bits).
+    #[target_feature(enable = "avx2")]
+    #[inline]
+    unsafe fn halley_cbrt_step(y: __m256d, q: __m256d) -> __m256d {
+        let two = _mm256_set1_pd(2.0);
+        let y3 = _mm256_mul_pd(_mm256_mul_pd(y, y), y);
+        _mm256_div_pd(
+            _mm256_mul_pd(y, _mm256_add_pd(y3, _mm256_mul_pd(two, q))),
+            _mm256_add_pd(_mm256_mul_pd(two, y3), q),
+        )
+    }
+
+    /// [`cube_root`] of four ratios `q` (`xq = q - 1`), the same bits lane
+    /// by lane: the degree-9 series where `|xq| <= 1/32`, else the degree-7
+    /// series and a Halley step where `|xq| <= 1/4` (a squeeze of a few
+    /// percent puts a fraction of the bonds there, scattered over the
+    /// blocks, so all four lanes take the step together rather than branch
+    /// lane by lane), and the scalar routine for the rare rest.
+    #[target_feature(enable = "avx2")]
+    #[inline]
+    unsafe fn cube_roots(q: __m256d, xq: __m256d) -> __m256d {
+        let magnitude = _mm256_and_pd(xq, _mm256_castsi256_pd(_mm256_set1_epi64x(i64::MAX)));
+        let (degree_7, degree_9) = cube_root_series(xq);
+        let far = _mm256_cmp_pd::<_CMP_GT_OQ>(magnitude, _mm256_set1_pd(CLOSE_TO_ONE));
+        if _mm256_movemask_pd(far) == 0 {
+            return degree_9;
+        }
+        let stepped = halley_cbrt_step(degree_7, q);
+        let roots = _mm256_blendv_pd(degree_9, stepped, far);
+        let beyond = _mm256_movemask_pd(_mm256_cmp_pd::<_CMP_GT_OQ>(
+            magnitude,
+            _mm256_set1_pd(SERIES_AND_STEP_UP_TO),
+        ));
+        if beyond == 0 {
+            return roots;
+        }
+        let (mut lanes, mut qs) = ([0.0; 4], [0.0; 4]);
+        _mm256_storeu_pd(lanes.as_mut_ptr(), roots);
+        _mm256_storeu_pd(qs.as_mut_ptr(), q);
+        for l in 0..4 {
+            if beyond & (1 << l) != 0 {
+                lanes[l] = cube_root(qs[l]);
+            }
+        }
+        _mm256_loadu_pd(lanes.as_ptr())
     }
 
     #[target_feature(enable = "avx2")]
@@ -833,7 +883,6 @@ mod avx2 {
         );
         let infinity = _mm256_set1_pd(f64::INFINITY);
         let magnitude = _mm256_castsi256_pd(_mm256_set1_epi64x(i64::MAX));
-        let close = _mm256_set1_pd(CLOSE_TO_ONE);
         let image = sep.minimum_image().map(|m| LaneImage::new(m));
         let mut pass = ForcePass::default();
         let full = range.len() / 4 * 4;
@@ -861,23 +910,7 @@ mod avx2 {
                 let inv_v0sum = _mm256_loadu_pd(rows.inv_v0sum.as_ptr().add(row));
                 let q = _mm256_mul_pd(vsum, inv_v0sum);
                 let xq = _mm256_sub_pd(q, one);
-                let mut dilation = cube_root_near_one(xq);
-                let far = _mm256_movemask_pd(_mm256_cmp_pd::<_CMP_GT_OQ>(
-                    _mm256_and_pd(xq, magnitude),
-                    close,
-                ));
-                if far != 0 {
-                    let mut lanes = [0.0; 4];
-                    let mut qs = [0.0; 4];
-                    _mm256_storeu_pd(lanes.as_mut_ptr(), dilation);
-                    _mm256_storeu_pd(qs.as_mut_ptr(), q);
-                    for l in 0..4 {
-                        if (qs[l] - 1.0).abs() > CLOSE_TO_ONE {
-                            lanes[l] = cube_root(qs[l]);
-                        }
-                    }
-                    dilation = _mm256_loadu_pd(lanes.as_ptr());
-                }
+                let dilation = cube_roots(q, xq);
                 let inv_r0 = _mm256_loadu_pd(rows.inv_r0.as_ptr().add(row));
                 fmag = _mm256_add_pd(
                     fmag,
