@@ -275,6 +275,12 @@ fn bench_prints_every_goal_and_writes_them_as_json() {
             "1.5",
             "--packing-steps",
             "20",
+            "--dem-spheres",
+            "12",
+            "--dem-steps",
+            "20",
+            "--dem-replicas",
+            "1,2",
             "--liggghts-steps",
             "100",
             "-o",
@@ -301,6 +307,7 @@ fn bench_prints_every_goal_and_writes_them_as_json() {
         "DEM bed, Hertz: LIGGGHTS time / native's",
         "DEM bed: standard closure's cost / native Hertz's",
         "DEM bed: advanced closure's cost / native Hertz's",
+        "periodic DEM bed: sizes timed on 1 and 2 threads, 12 to 96 spheres",
     ] {
         assert!(
             stdout.contains(&format!("goal: {figure}")),
@@ -328,6 +335,25 @@ fn bench_prints_every_goal_and_writes_them_as_json() {
         .all(|c| c["ns_per_particle_step"].as_f64().unwrap() > 0.0
             && !c["name"].as_str().unwrap().contains("stopped")));
     assert_eq!(report["packing_workload"]["grains"], 13);
+    // The periodic DEM bed and its copies: Hertz and the closure, 1 and 2
+    // threads, spheres in contact.
+    let bed = &report["dem_bed"];
+    assert!(bed["contacts_per_sphere"].as_f64().unwrap() > 1.0, "{bed}");
+    for law in ["hertz", "closure"] {
+        let cases = bed[law].as_array().unwrap();
+        assert_eq!(cases.len(), 4, "2 sizes x 2 thread counts: {bed}");
+        assert!(cases
+            .iter()
+            .all(|c| c["ns_per_particle_step"].as_f64().unwrap() > 0.0
+                && !c["name"].as_str().unwrap().contains("stopped")));
+        assert_eq!(cases[2]["particles"], 96);
+    }
+    assert!(
+        stdout.lines().any(|l| l.starts_with("DEM bed ")
+            && l.contains(" 96 spheres ")
+            && l.contains("closure cost / Hertz's")),
+        "{stdout}"
+    );
     // The LIGGGHTS case where LIGGGHTS is installed, a note where not.
     assert_eq!(report["liggghts_steps"], 100);
     if bpm::studies::bench::LiggghtsInstall::locate().is_ok() {

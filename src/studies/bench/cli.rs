@@ -39,6 +39,19 @@ pub struct BenchArgs {
     /// at the default packing)
     #[arg(long, value_delimiter = ',', default_value = "1")]
     packing_replicas: Vec<usize>,
+    /// Spheres of the periodic DEM bed: the template of `bpm compact
+    /// --model dem` squeezed into contact, held with plain Hertz and with
+    /// the standard closure (0 skips it)
+    #[arg(long, default_value_t = 1000)]
+    dem_spheres: usize,
+    /// Steps timed on the DEM bed (fewer on its copies: about the same
+    /// sphere-steps per case, at least 20 steps)
+    #[arg(long, default_value_t = 400)]
+    dem_steps: u64,
+    /// Copies of the DEM bed per side, for its cost against size (10 gives
+    /// a million spheres at the default bed)
+    #[arg(long, value_delimiter = ',', default_value = "1")]
+    dem_replicas: Vec<usize>,
     /// Steps of the LIGGGHTS case: LIGGGHTS's hydrogel tutorial (514
     /// beads) under its closing lid, plain Hertz and the closure, in
     /// LIGGGHTS and natively (at most 30000, the lid's first pass; 0 skips
@@ -62,6 +75,9 @@ impl BenchArgs {
             packing_radius,
             packing_steps,
             packing_replicas,
+            dem_spheres,
+            dem_steps,
+            dem_replicas,
             liggghts_steps,
             output,
         } = self;
@@ -75,6 +91,12 @@ impl BenchArgs {
                 radius: packing_radius,
                 steps: packing_steps,
                 replicas: packing_replicas,
+                seed,
+            }),
+            dem_bed: (dem_spheres > 0).then_some(bench::DemBedWorkload {
+                spheres: dem_spheres,
+                steps: dem_steps,
+                replicas: dem_replicas,
                 seed,
             }),
             liggghts_steps,
@@ -123,6 +145,7 @@ impl BenchLammpsArgs {
             steps,
             replicas: vec![1],
             packing: None,
+            dem_bed: None,
             liggghts_steps: 0,
         };
         let lmp = std::env::current_exe()?.with_file_name("lmp-bpm");

@@ -6,9 +6,11 @@
 //! ([`run_bench_lammps`]) runs the Debian LAMMPS variants alone.
 
 pub mod cli;
+mod dem_bed;
 mod liggghts;
 mod packing;
 
+pub use dem_bed::{bench_dem_bed, dem_bed, DemBedBench, DemBedWorkload, BED_FRACTION};
 pub use liggghts::{
     bench_liggghts, loop_time, native_scene, trimmed_deck, LiggghtsBench, LiggghtsInstall,
     LiggghtsSpeed, PASS_STEPS,
@@ -68,6 +70,8 @@ pub struct BenchOptions {
     pub replicas: Vec<usize>,
     /// The compaction workload, or `None` to skip it.
     pub packing: Option<PackingWorkload>,
+    /// The periodic DEM bed, or `None` to skip it.
+    pub dem_bed: Option<DemBedWorkload>,
     /// Steps of the LIGGGHTS case (at most [`PASS_STEPS`]; 0 skips it).
     pub liggghts_steps: u64,
 }
@@ -140,6 +144,8 @@ pub struct Bench {
     pub debian: Option<DebianSpeed>,
     /// The compaction workload (`None` when skipped).
     pub packing: Option<PackingBench>,
+    /// The periodic DEM bed (`None` when skipped).
+    pub dem_bed: Option<DemBedBench>,
     /// LIGGGHTS's hydrogel tutorial in LIGGGHTS and natively (`None` when
     /// skipped: `--liggghts-steps 0`, or LIGGGHTS or its mesh missing).
     pub liggghts: Option<LiggghtsBench>,
@@ -487,6 +493,10 @@ impl Bench {
             goal: ">= 4, 3,000 to > 1,000,000".into(),
             met: Some(sizes.len() >= 4 && smallest >= 3_000 && largest > 1_000_000),
         });
+        let bed_sizes: Vec<usize> = self.dem_bed.as_ref().map_or(Vec::new(), |b| {
+            b.hertz.iter().map(|c| c.particles).collect()
+        });
+        goals.push(sizes_goal("periodic DEM bed", &bed_sizes, "spheres"));
         goals
     }
 
@@ -572,6 +582,9 @@ impl Bench {
         if let Some(p) = &self.packing {
             lines.extend(size_lines("packing", &p.cases, &caches));
         }
+        if let Some(bed) = &self.dem_bed {
+            lines.extend(bed_size_lines(bed, &caches));
+        }
         lines.join("\n")
     }
 
@@ -596,7 +609,98 @@ impl Bench {
                 &p.cases,
             ));
         }
+        if let Some(bed) = self
+            .dem_bed
+            .as_ref()
+            .filter(|b| b.hertz.iter().any(|c| c.particles != b.spheres))
+        {
+            panels.push(bed_panel(bed));
+        }
         panels
+    }
+}
+
+/// The goal of a workload's cost against size: timed at four sizes or
+/// more, on 1 and 2 threads, from a few thousand `units` (at most 5,000) to
+/// more than a million.
+fn sizes_goal(workload: &str, timed: &[usize], units: &str) -> Goal {
+    let mut sizes = timed.to_vec();
+    sizes.sort_unstable();
+    sizes.dedup();
+    let (smallest, largest) = (
+        sizes.first().copied().unwrap_or(0),
+        sizes.last().copied().unwrap_or(0),
+    );
+    Goal {
+        figure: format!(
+            "{workload}: sizes timed on 1 and 2 threads, {smallest} to {largest} {units}"
+        ),
+        measured: sizes.len() as f64,
+        goal: ">= 4, <= 5,000 to > 1,000,000".into(),
+        met: Some(sizes.len() >= 4 && smallest <= 5_000 && largest > 1_000_000),
+    }
+}
+
+/// ns per sphere-step of the DEM bed's `cases` at `spheres` and `threads`.
+fn bed_ns(cases: &[BenchCase], spheres: usize, threads: usize) -> f64 {
+    cases
+        .iter()
+        .find(|c| c.particles == spheres && c.threads == threads)
+        .map_or(f64::NAN, |c| c.ns_per_particle_step)
+}
+
+/// One line per size of the DEM bed: working set and the cache it fits
+/// in, the closure's cost over Hertz's and the 2-thread speed-ups.
+fn bed_size_lines(bed: &DemBedBench, caches: &CacheSizes) -> Vec<String> {
+    let mut sizes: Vec<usize> = bed.hertz.iter().map(|c| c.particles).collect();
+    sizes.dedup();
+    sizes
+        .iter()
+        .map(|&n| {
+            let ws = dem_bed::bed_working_set_bytes(n);
+            let (h, c) = (&bed.hertz, &bed.closure);
+            format!(
+                "DEM bed  {n:>8} spheres   (working set {:.1} MB, {}): closure cost / Hertz's (1 thread) {:.2}x   2-thread speed-up {:.2}x (Hertz), {:.2}x (closure)",
+                ws as f64 / 1e6,
+                caches.fit(ws),
+                bed_ns(c, n, 1) / bed_ns(h, n, 1),
+                bed_ns(h, n, 1) / bed_ns(h, n, 2),
+                bed_ns(c, n, 1) / bed_ns(c, n, 2)
+            )
+        })
+        .collect()
+}
+
+/// ns per sphere-step against spheres: Hertz and the closure, 1 and 2
+/// threads.
+fn bed_panel(bed: &DemBedBench) -> Panel {
+    let series = [("Hertz", &bed.hertz), ("standard closure", &bed.closure)]
+        .into_iter()
+        .flat_map(|(law, cases)| {
+            [1, 2].map(|threads| {
+                let points = cases
+                    .iter()
+                    .filter(|c| c.threads == threads)
+                    .map(|c| (c.particles as f64, c.ns_per_particle_step))
+                    .collect();
+                Series::new(
+                    format!("{law}, {threads} thread(s)"),
+                    points,
+                    Mark::LinePoints,
+                )
+            })
+        })
+        .collect();
+    Panel {
+        title: format!(
+            "native engine, periodic DEM bed (phi = {BED_FRACTION}) and copies of it ({})",
+            Isa::detect().name()
+        ),
+        x_label: "spheres".into(),
+        y_label: "ns per sphere-step".into(),
+        log_x: true,
+        log_y: false,
+        series,
     }
 }
 
@@ -753,6 +857,9 @@ pub fn run_bench(
     if let Some(workload) = &opts.packing {
         workload.validate()?;
     }
+    if let Some(workload) = &opts.dem_bed {
+        workload.validate()?;
+    }
     if opts.liggghts_steps > PASS_STEPS {
         return Err(BenchError::Options(format!(
             "--liggghts-steps times the lid's first pass: at most {PASS_STEPS} (0 skips the case), got {}",
@@ -792,6 +899,10 @@ pub fn run_bench(
         Some(workload) => Some(bench_packing(workload, threads, log)?),
         None => None,
     };
+    let dem_bed = match &opts.dem_bed {
+        Some(workload) => Some(bench_dem_bed(workload, threads, log)?),
+        None => None,
+    };
     let liggghts = liggghts_case(opts.liggghts_steps, log);
     Ok(Bench {
         size: opts.size,
@@ -800,6 +911,7 @@ pub fn run_bench(
         upstream,
         debian,
         packing,
+        dem_bed,
         liggghts,
     })
 }
@@ -833,7 +945,7 @@ impl Bench {
             "steps": opts.steps, "replicas": opts.replicas, "isa": Isa::detect().name(), "cases": self.cases,
             "specialisations": self.specialisations, "upstream": self.upstream,
             "debian": self.debian, "packing_workload": opts.packing, "packing": self.packing,
-            "liggghts_steps": opts.liggghts_steps, "liggghts": self.liggghts,
+            "dem_bed_workload": opts.dem_bed, "dem_bed": self.dem_bed, "liggghts_steps": opts.liggghts_steps, "liggghts": self.liggghts,
             "goals": self.goals(),
         });
         crate::studies::output::write_json(path, &report)?;
@@ -1432,6 +1544,7 @@ mod tests {
             upstream: Vec::new(),
             debian: Some(debian),
             packing: None,
+            dem_bed: None,
             liggghts: None,
         };
         let goals = bench.goals();
@@ -1458,6 +1571,8 @@ mod tests {
             .iter()
             .all(|g| g.measured == 2.0 && g.met == Some(true)));
         assert_eq!(find("sizes timed").met, Some(true));
+        let bed = find("periodic DEM bed: sizes timed");
+        assert_eq!((bed.measured, bed.met), (0.0, Some(false)), "skipped");
         // Upstream measured: 8x is met on the L = 14 solid, and not judged
         // on another, for which the goal is not set.
         let upstream = UpstreamSpeed {
@@ -1532,6 +1647,7 @@ mod tests {
             upstream: Vec::new(),
             debian: None,
             packing: None,
+            dem_bed: None,
             liggghts: Some(liggghts),
         };
         let goals = bench.dem_goals();
