@@ -879,10 +879,11 @@ fn bond_rows_report_a_collapsed_bond_and_refuse_bad_atoms() {
     ));
 }
 
-/// The row kernel's cube root on every instruction set gives the bits of
-/// the scalar `cube_root` whatever mix of volume ratios a block of four
-/// rows holds: near 1 (the series alone), beyond 1/32 (series and one
-/// Halley step), beyond 1/4 (the scalar routine), in the same block.
+/// The row kernel's and the scatter kernel's cube roots on every
+/// instruction set give the bits of the scalar `cube_root` whatever mix of
+/// volume ratios a block holds: near 1 (the series alone), beyond 1/32
+/// (series and one Halley step), beyond 1/4 (the scalar routine), in the
+/// same block.
 #[test]
 fn row_kernel_cube_roots_match_the_scalar_routine_across_its_ranges() {
     let (x0, bonds, r0) = random_network(400, 5.0, 1.5, 51);
@@ -968,5 +969,28 @@ fn row_kernel_cube_roots_match_the_scalar_routine_across_its_ranges() {
     }
     if Isa::Avx2.available() {
         assert_eq!(forces(Isa::Avx2), portable);
+    }
+    // The scatter kernel (the plugin's) on every instruction set: the same
+    // forces as the rows, bit for bit.
+    let mut gathered = vec![[0.0; 3]; n];
+    gather_forces_on(Isa::Portable, &rows, 0..n, &portable, &mut gathered);
+    let coeffs = [inputs.coeffs];
+    let scatter = BondInputs {
+        x: &x,
+        v: None,
+        bonds: &bonds,
+        r0: &r0,
+        coeffs: &coeffs,
+        volumes: Some((&vol[..], &vol0[..])),
+        tally: false,
+    };
+    for isa in [Isa::Portable, Isa::Avx2]
+        .into_iter()
+        .filter(|i| i.available())
+    {
+        let mut f = vec![[0.0; 3]; n];
+        let pass = bond_forces_on(isa, &Unwrapped, &scatter, all, &mut f);
+        assert!(pass.fault.is_none(), "{isa:?}");
+        assert_eq!(f, gathered, "{isa:?}: scatter kernel");
     }
 }

@@ -379,10 +379,26 @@ fn bond_blocks<
                 dilation[l] = cube_root_near_one(x);
             }
             if far {
+                // The second range of `cube_root` in every lane, kept
+                // where a lane lies in it: a select the compiler can
+                // vectorise, instead of a branch per lane that a squeeze
+                // of a percent or more mispredicts.
+                let mut beyond = false;
                 for l in 0..LANES {
                     let q = b.vsum[l] * b.inv_v0sum[l];
-                    if (q - 1.0).abs() > CLOSE_TO_ONE {
-                        dilation[l] = cube_root(q);
+                    let x = q - 1.0;
+                    let stepped = halley_cbrt_step(series_to_degree_7(x), q);
+                    if x.abs() > CLOSE_TO_ONE {
+                        dilation[l] = stepped;
+                    }
+                    beyond |= x.abs() > SERIES_AND_STEP_UP_TO;
+                }
+                if beyond {
+                    for l in 0..LANES {
+                        let q = b.vsum[l] * b.inv_v0sum[l];
+                        if (q - 1.0).abs() > SERIES_AND_STEP_UP_TO {
+                            dilation[l] = cube_root(q);
+                        }
                     }
                 }
             }
