@@ -21,19 +21,18 @@ fn main() {
             (None, None) => usage(),
         }
     };
-    let (scale, reps, jitter) = (
-        number(0, None),
-        number(1, None) as usize,
-        number(2, Some(0.0)),
-    );
+    let reps: usize = args
+        .get(1)
+        .and_then(|text| text.parse().ok())
+        .unwrap_or_else(|| usage());
+    let (scale, jitter) = (number(0, None), number(2, Some(0.0)));
     let (n, side) = (1500, 10.0);
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(1);
     let mut x: Vec<[f64; 3]> = (0..n)
         .map(|_| [(); 3].map(|_| rng.gen::<f64>() * side))
         .collect();
-    x.sort_by(|a, b| {
-        (a[2] as i64, a[1] as i64, a[0]).total_cmp_key(&(b[2] as i64, b[1] as i64, b[0]))
-    });
+    let cell = |p: &[f64; 3]| (p[2] as i64, p[1] as i64);
+    x.sort_by(|a, b| cell(a).cmp(&cell(b)).then(a[0].total_cmp(&b[0])));
     let mut rows_in = Vec::new();
     for i in 0..n {
         for j in i + 1..n {
@@ -128,17 +127,4 @@ fn main() {
 fn usage() -> ! {
     eprintln!("usage: cube_root_rows SCALE REPS [JITTER]");
     std::process::exit(2)
-}
-
-/// Orders positions by their (z cell, y cell, x) key, as the benchmark does.
-trait CellKey {
-    fn total_cmp_key(&self, other: &Self) -> std::cmp::Ordering;
-}
-
-impl CellKey for (i64, i64, f64) {
-    fn total_cmp_key(&self, other: &Self) -> std::cmp::Ordering {
-        (self.0, self.1)
-            .cmp(&(other.0, other.1))
-            .then(self.2.total_cmp(&other.2))
-    }
 }

@@ -887,12 +887,12 @@ fn bond_rows_report_a_collapsed_bond_and_refuse_bad_atoms() {
 #[test]
 fn row_kernel_cube_roots_match_the_scalar_routine_across_its_ranges() {
     let (x0, bonds, r0) = random_network(400, 5.0, 1.5, 51);
-    // Squeezed from nothing at x = 0 to 13% (linear) at x = 5: every
-    // range of the volume ratio, mixed along the rows.
+    // Untouched up to x = 2, then squeezed up to 13% (linear) at x = 5:
+    // every range of the volume ratio, alone and mixed along the rows.
     let x: Vec<[f64; 3]> = x0
         .iter()
         .map(|p| {
-            let s = 1.0 - 0.13 * p[0] / 5.0;
+            let s = 1.0 - 0.13 * ((p[0] - 2.0) / 3.0).max(0.0);
             [p[0] * s, p[1] * s, p[2] * s]
         })
         .collect();
@@ -938,6 +938,20 @@ fn row_kernel_cube_roots_match_the_scalar_routine_across_its_ranges() {
         .filter(|b| b.iter().any(|&k| k != b[0]))
         .count();
     assert!(mixed >= 20, "{mixed} blocks mix ranges");
+    // Each of the vector kernel's three ways through a block of four is
+    // taken: all near 1, some beyond 1/32 and none beyond 1/4, some
+    // beyond 1/4.
+    for (way, test) in [
+        (
+            "all near",
+            &(|b: &[u8]| b.iter().all(|&k| k == 0)) as &dyn Fn(&[u8]) -> bool,
+        ),
+        ("stepped", &|b: &[u8]| b.contains(&1) && !b.contains(&2)),
+        ("scalar", &|b: &[u8]| b.contains(&2)),
+    ] {
+        let blocks = class.chunks_exact(4).filter(|b| test(b)).count();
+        assert!(blocks >= 5, "{blocks} blocks of four take the {way} way");
+    }
     let inputs = RowInputs {
         x: &x,
         v: None,

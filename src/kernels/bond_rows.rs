@@ -822,7 +822,8 @@ mod avx2 {
     }
 
     /// [`cube_root`] of four ratios `q` (`xq = q - 1`), the same bits lane
-    /// by lane: the degree-9 series where `|xq| <= 1/32`, else the degree-7
+    /// by lane for every non-NaN `q` (a NaN lane takes the series and stays
+    /// NaN, as before, where the scalar routine returns its own NaN): the degree-9 series where `|xq| <= 1/32`, else the degree-7
     /// series and a Halley step where `|xq| <= 1/4` (a squeeze of a few
     /// percent puts a fraction of the bonds there, scattered over the
     /// blocks, so all four lanes take the step together rather than branch

@@ -29,6 +29,9 @@ pub const BED_FRACTION: f64 = 0.64;
 /// LIGGGHTS case).
 pub const BED_CLOSURE_GAMMA: f64 = 1.125;
 
+/// Largest bed built (spheres); copies give larger ones.
+pub const MAX_BED_SPHERES: usize = 20_000;
+
 /// Time step of the bed (tau): the compaction protocol's.
 const BED_DT: f64 = 0.1;
 
@@ -50,9 +53,11 @@ impl DemBedWorkload {
     /// Refuses, naming the option, what the builder would refuse only
     /// after the other cases have run.
     pub fn validate(&self) -> Result<(), BenchError> {
-        if self.spheres < 2 {
+        // The template builder and the contact count (every pair) grow
+        // faster than the bed: larger beds are copies (--dem-replicas).
+        if !(2..=MAX_BED_SPHERES).contains(&self.spheres) {
             return Err(BenchError::Options(format!(
-                "--dem-spheres must be 0 (skip) or at least 2, got {}",
+                "--dem-spheres must be 0 (skip) or 2 to {MAX_BED_SPHERES} (larger beds: --dem-replicas), got {}",
                 self.spheres
             )));
         }
@@ -69,7 +74,7 @@ pub struct DemBedBench {
     /// Spheres of the bed.
     pub spheres: usize,
     /// Spheres pressed together, per sphere (twice the overlapping pairs
-    /// over the spheres), on the bed as timed.
+    /// over the spheres), on the squeezed bed as its runs start.
     pub contacts_per_sphere: f64,
     /// Plain Hertz, per size and thread count.
     pub hertz: Vec<BenchCase>,
@@ -199,10 +204,11 @@ fn bed_case(
     }
 }
 
-/// Bytes a DEM step touches at least: positions, velocities, forces,
+/// Bytes a DEM step touches, roughly: positions, velocities, forces,
 /// angular velocities and torques (5 x 24), radius and mass (16), and
-/// about six contacts per sphere, each with its pair (8) and tangential
-/// history (24). The pair list and the closure's buffers come on top.
+/// six listed pairs per sphere (each pair once, within the cutoff and
+/// skin), each with its index and tangential history (8 + 24). The
+/// closure's buffers come on top.
 pub fn bed_working_set_bytes(spheres: usize) -> usize {
     spheres * (5 * 24 + 16 + 6 * (8 + 24))
 }
@@ -234,6 +240,8 @@ mod tests {
             seed: 1,
         };
         assert!(workload(1, 10, vec![1]).validate().is_err());
+        let e = workload(MAX_BED_SPHERES + 1, 10, vec![1]).validate();
+        assert!(e.unwrap_err().to_string().contains("--dem-replicas"));
         assert!(workload(8, 0, vec![1]).validate().is_err());
         assert!(workload(8, 10, vec![0]).validate().is_err());
         assert!(workload(8, 10, vec![1, 2]).validate().is_ok());

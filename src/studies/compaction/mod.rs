@@ -162,15 +162,17 @@ impl CompactionError {
 
 impl CompactOptions {
     /// What a study's checkpoint must have been written with to be resumed
-    /// by these options: everything but the moduli's. A resumed study
+    /// by these options: every option but the moduli's (the field is left
+    /// out, so no moduli value, default or not, enters it). A resumed study
     /// may measure other states, or by another protocol, taking the
     /// packings and runs from the checkpoint (each measurement is kept
     /// under its step and protocol).
-    pub fn checkpoint_identity(&self) -> Self {
-        Self {
-            moduli: ModuliOptions::default(),
-            ..self.clone()
+    pub fn checkpoint_identity(&self) -> serde_json::Value {
+        let mut identity = serde_json::to_value(self).unwrap_or_default();
+        if let Some(fields) = identity.as_object_mut() {
+            fields.remove("moduli");
         }
+        identity
     }
 
     /// Checks the options; the error names the one at fault.
@@ -1113,7 +1115,8 @@ pub fn run_compaction(
             };
             // Keyed by the protocol too: a study resumed with another
             // protocol measures anew (`checkpoint_identity`).
-            let key = format!("seed-{seed}/moduli-{}/{:?}", row.step, opts.moduli.protocol);
+            let protocol = serde_json::to_string(&opts.moduli.protocol).unwrap_or_default();
+            let key = format!("seed-{seed}/moduli-{}/{protocol}", row.step);
             let measured = runtime.part(&key, || {
                 Ok::<_, CompactionError>(moduli::measure_state(
                     &packing,

@@ -1,8 +1,9 @@
 //! Elastic moduli of a packing at states saved during its compaction
-//! (docs/protocols.md, "Compaction"). Each state is restarted three
-//! times with its velocities zeroed and relaxed at fixed box; then one run
-//! compresses (bulk modulus `K_P`), one shears (shear modulus `G_P`) and
-//! one holds the box (the control). Near jamming the packing still creeps
+//! (docs/protocols.md, "Compaction"). Each state is restarted with its
+//! velocities zeroed and relaxed at fixed box (natively once, the three
+//! loadings starting from the relaxed state; in LAMMPS in each of three
+//! runs); then one run compresses (bulk modulus `K_P`), one shears (shear
+//! modulus `G_P`) and one holds the box (the control). Near jamming the packing still creeps
 //! when the relaxation ends; the control creeps alike, so the loaded run's
 //! stress less the control's, row by row, is the response to the loading
 //! alone. The moduli are least-squares slopes of that response against the
@@ -79,7 +80,8 @@ pub struct PackingModuli {
     pub bulk_uncorrected: f64,
     /// The shear modulus without the control subtracted.
     pub shear_uncorrected: f64,
-    /// Wall-clock seconds of the three runs.
+    /// Wall-clock seconds of the measurement (natively one relaxation and
+    /// three loadings; in LAMMPS three full runs).
     pub seconds: f64,
 }
 
@@ -252,8 +254,9 @@ fn run_all(
 /// relaxation run once: each loading starts from the relaxed state, saved
 /// and restored whole. A run continued from a saved state is the run that
 /// did not stop, so the records are those of three full runs, bit for
-/// bit, for one relaxation's steps instead of three (the relaxation is
-/// most of a state's steps at the paper's 1e4 tau).
+/// bit, for one relaxation's steps instead of three (at a relaxation of
+/// 1e4 tau and the default --moduli-rate, 1.6e5 steps instead of 3.6e5;
+/// at the paper's slower rates, 7e5 instead of 9e5).
 pub fn relax_once_then_load(
     scenes: &[Scene; 3],
     threads: usize,
@@ -272,7 +275,7 @@ pub fn relax_once_then_load(
     }
     let opts = crate::scene::RunOptions::quiet(threads);
     let mut no_files = Recorders::default();
-    let stopped = |kind: &str, e: RunError| format!("the {kind} run stopped: {e}");
+    let stop_message = |kind: &str, e: RunError| format!("the {kind} run stopped: {e}");
     let mut sys = build_system(first, threads);
     let relaxation = run_stage(
         &mut sys,
@@ -282,7 +285,7 @@ pub fn relax_once_then_load(
         &opts,
         &mut no_files,
     )
-    .map_err(|e| stopped("relaxation", e))?;
+    .map_err(|e| stop_message("relaxation", e))?;
     let relaxed = sys.save_state().map_err(|e| e.to_string())?;
     drop(sys);
     let mut out: [Vec<StageOutput>; 3] = Default::default();
@@ -301,7 +304,7 @@ pub fn relax_once_then_load(
             &opts,
             &mut no_files,
         )
-        .map_err(|e| stopped(kind, e))?;
+        .map_err(|e| stop_message(kind, e))?;
         *runs = vec![relaxation.clone(), loading];
     }
     Ok(out)
