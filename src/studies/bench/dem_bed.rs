@@ -11,13 +11,12 @@
 //! held at fixed box: every step searches, measures and sums contacts as
 //! a compressed bed does.
 
-use super::{check_copies, faster_on_1_and_2, steps_on_copies, BenchCase, BenchError};
+use super::{check_copies, faster_on_1_and_2, scene_case, steps_on_copies, BenchCase, BenchError};
 use crate::engine::dem::MultiContact;
-use crate::engine::Stage;
 use crate::scene::builders::grain::GrainKind;
 use crate::scene::builders::packing::{build_sphere_packing, PackingParams};
 use crate::scene::builders::replicate::replicate;
-use crate::scene::{build_system, run_scene, RunOptions, Scene, StageSpec};
+use crate::scene::{Scene, StageSpec};
 use crate::studies::compaction::DemContact;
 use crate::studies::hertz::Moduli;
 use serde::Serialize;
@@ -177,31 +176,9 @@ fn bed_case(
     let mut hold = StageSpec::hold("hold", steps, BED_DT);
     hold.record.every = steps;
     scene.stages = vec![hold];
-    let mut sys = build_system(&scene, threads);
-    let (stages, error) = run_scene(&mut sys, &scene, &RunOptions::quiet(threads));
-    let seconds: f64 = stages.iter().map(|s| s.wall_seconds).sum();
-    let steps_run: u64 = stages.iter().map(|s| s.steps).sum();
-    let per = |secs: f64| secs * 1e9 / (steps_run.max(1) as f64 * sys.len() as f64);
-    BenchCase {
-        name: format!(
-            "{name} threads={threads}{}",
-            error.map_or(String::new(), |e| format!(" (stopped: {e})"))
-        ),
-        a_b: 0.0,
-        threads,
-        particles: sys.len(),
-        bonds: 0,
-        steps: steps_run,
-        ns_per_particle_step: per(seconds),
-        breakdown: Stage::ALL
-            .iter()
-            .map(|s| {
-                let secs: f64 = stages.iter().filter_map(|o| o.timers.get(s.name())).sum();
-                (s.name().to_string(), per(secs))
-            })
-            .collect(),
-        working_set_bytes: bed_working_set_bytes(sys.len()),
-    }
+    let name = format!("{name} threads={threads}");
+    let ws = bed_working_set_bytes(scene.particles.positions.len());
+    scene_case(&scene, name, 0.0, threads, ws)
 }
 
 /// Bytes a DEM step touches, roughly: positions, velocities, forces,

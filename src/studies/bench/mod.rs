@@ -23,7 +23,7 @@ use crate::file_error::FileError;
 use crate::kernels::Isa;
 use crate::scene::builders::bulk::{build_bulk, BulkParams};
 use crate::scene::builders::replicate::replicate;
-use crate::scene::{build_system, ForceField, Scene, StageSpec};
+use crate::scene::{build_system, run_scene, ForceField, RunOptions, Scene, StageSpec};
 use crate::studies::upstream::{speed, Configuration, LoopSections, ModernLammps};
 use crate::verify::liggghts::LiggghtsLaw;
 use crate::verify::single_point::SinglePointError;
@@ -1147,6 +1147,44 @@ pub(super) fn faster_on_1_and_2(
         log(&case.line());
     }
     best
+}
+
+/// Runs `scene` natively on `threads` threads and times it: ns per
+/// particle-step over all its stages (each stage's wall time, its set-up
+/// included) and per part of the step. `name` gains " (stopped: ...)"
+/// when the run fails.
+pub(super) fn scene_case(
+    scene: &Scene,
+    name: String,
+    a_b: f64,
+    threads: usize,
+    working_set_bytes: usize,
+) -> BenchCase {
+    let mut sys = build_system(scene, threads);
+    let (stages, error) = run_scene(&mut sys, scene, &RunOptions::quiet(threads));
+    let seconds: f64 = stages.iter().map(|s| s.wall_seconds).sum();
+    let steps_run: u64 = stages.iter().map(|s| s.steps).sum();
+    let per = |secs: f64| secs * 1e9 / (steps_run.max(1) as f64 * sys.len() as f64);
+    BenchCase {
+        name: match error {
+            Some(e) => format!("{name} (stopped: {e})"),
+            None => name,
+        },
+        a_b,
+        threads,
+        particles: sys.len(),
+        bonds: scene.bonds.pairs.len(),
+        steps: steps_run,
+        ns_per_particle_step: per(seconds),
+        breakdown: Stage::ALL
+            .iter()
+            .map(|s| {
+                let secs: f64 = stages.iter().filter_map(|o| o.timers.get(s.name())).sum();
+                (s.name().to_string(), per(secs))
+            })
+            .collect(),
+        working_set_bytes,
+    }
 }
 
 /// Steps per case on `k` copies per side of a system timed for `steps`:

@@ -10,15 +10,14 @@
 //! particle (grain surfaces): this is what the studies spend their time on.
 
 use super::{
-    check_copies, faster_on_1_and_2, steps_on_copies, upstream_speeds, BenchCase, BenchError,
-    UpstreamSpeed, BENCH_STRAIN,
+    check_copies, faster_on_1_and_2, scene_case, steps_on_copies, upstream_speeds, BenchCase,
+    BenchError, UpstreamSpeed, BENCH_STRAIN,
 };
-use crate::engine::Stage;
 use crate::scene::builders::grain::GrainKind;
 use crate::scene::builders::packing::{build_packing, PackingParams};
 use crate::scene::builders::replicate::replicate;
 use crate::scene::protocols::CompactionProtocol;
-use crate::scene::{build_system, run_scene, ForceField, RunOptions, Scene};
+use crate::scene::{ForceField, Scene};
 use serde::Serialize;
 
 /// Which packing the compaction workload times.
@@ -142,32 +141,9 @@ fn protocol_case(packing: &Scene, name: &str, a_b: f64, threads: usize, steps: u
     let mut scene = packing.clone();
     scene.force_field = ForceField::paper(a_b);
     scene.stages = workload_protocol(steps).stages();
-    let mut sys = build_system(&scene, threads);
-    let (stages, error) = run_scene(&mut sys, &scene, &RunOptions::quiet(threads));
-    let steps_run: u64 = stages.iter().map(|s| s.steps).sum();
-    let seconds: f64 = stages.iter().map(|s| s.wall_seconds).sum();
-    let per = |secs: f64| secs * 1e9 / (steps_run.max(1) as f64 * sys.len() as f64);
-    let bonds = scene.bonds.pairs.len();
-    BenchCase {
-        name: format!(
-            "{name} a_B={a_b} threads={threads}{}",
-            error.map_or(String::new(), |e| format!(" (stopped: {e})"))
-        ),
-        a_b,
-        threads,
-        particles: sys.len(),
-        bonds,
-        steps: steps_run,
-        ns_per_particle_step: per(seconds),
-        breakdown: Stage::ALL
-            .iter()
-            .map(|s| {
-                let secs: f64 = stages.iter().filter_map(|o| o.timers.get(s.name())).sum();
-                (s.name().to_string(), per(secs))
-            })
-            .collect(),
-        working_set_bytes: super::working_set_bytes(sys.len(), bonds),
-    }
+    let name = format!("{name} a_B={a_b} threads={threads}");
+    let ws = super::working_set_bytes(scene.particles.positions.len(), scene.bonds.pairs.len());
+    scene_case(&scene, name, a_b, threads, ws)
 }
 
 #[cfg(test)]
