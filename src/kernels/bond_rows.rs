@@ -823,11 +823,12 @@ mod avx2 {
 
     /// [`cube_root`] of four ratios `q` (`xq = q - 1`), the same bits lane
     /// by lane for every non-NaN `q` (a NaN lane takes the series and stays
-    /// NaN, as before, where the scalar routine returns its own NaN): the degree-9 series where `|xq| <= 1/32`, else the degree-7
-    /// series and a Halley step where `|xq| <= 1/4` (a squeeze of a few
-    /// percent puts a fraction of the bonds there, scattered over the
-    /// blocks, so all four lanes take the step together rather than branch
-    /// lane by lane), and the scalar routine for the rare rest.
+    /// NaN, as before, where the scalar routine returns its own NaN): the
+    /// degree-9 series where `|xq| <= 1/32`, else the degree-7 series and a
+    /// Halley step where `|xq| <= 1/4` (a squeeze of a few percent puts a
+    /// fraction of the bonds there, scattered over the blocks, so all four
+    /// lanes take the step together rather than branch lane by lane), and
+    /// the scalar routine for the rare rest.
     #[target_feature(enable = "avx2")]
     #[inline]
     unsafe fn cube_roots(q: __m256d, xq: __m256d) -> __m256d {

@@ -3,12 +3,13 @@
 //! velocities zeroed and relaxed at fixed box (natively once, the three
 //! loadings starting from the relaxed state; in LAMMPS in each of three
 //! runs); then one run compresses (bulk modulus `K_P`), one shears (shear
-//! modulus `G_P`) and one holds the box (the control). Near jamming the packing still creeps
-//! when the relaxation ends; the control creeps alike, so the loaded run's
-//! stress less the control's, row by row, is the response to the loading
-//! alone. The moduli are least-squares slopes of that response against the
-//! strain, with their standard errors; the plain slopes (the control not
-//! subtracted, as the source study fits) are kept beside them.
+//! modulus `G_P`) and one holds the box (the control). Near jamming the
+//! packing still creeps when the relaxation ends; the control creeps
+//! alike, so the loaded run's stress less the control's, row by row, is
+//! the response to the loading alone. The moduli are least-squares slopes
+//! of that response against the strain, with their standard errors; the
+//! plain slopes (the control not subtracted, as the source study fits) are
+//! kept beside them.
 
 use super::{is_jammed, run_engine, CompactionEngine, StateRow};
 use crate::analysis::fit::{fit_line, LineFit};
@@ -18,7 +19,7 @@ use crate::analysis::moduli::{
 use crate::scene::load::reference_lengths;
 use crate::scene::protocols::PackingModuliProtocol;
 use crate::scene::run::{run_stage, Checkpoint, Recorders, RunError};
-use crate::scene::{build_system, Scene, StageOutput};
+use crate::scene::{build_system, RunOptions, Scene, StageOutput};
 use serde::{Deserialize, Serialize};
 use std::path::Path;
 
@@ -273,7 +274,7 @@ pub fn relax_once_then_load(
     if !scenes.iter().all(same_start) {
         return Err("the moduli's scenes must differ only in their second (loading) stage".into());
     }
-    let opts = crate::scene::RunOptions::quiet(threads);
+    let opts = RunOptions::quiet(threads);
     let mut no_files = Recorders::default();
     let stop_message = |kind: &str, e: RunError| format!("the {kind} run stopped: {e}");
     let mut sys = build_system(first, threads);
