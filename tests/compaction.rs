@@ -862,13 +862,24 @@ fn a_compaction_study_stopped_twice_resumes_to_the_same_report() {
 fn the_moduli_loadings_branch_from_one_relaxation_as_three_full_runs() {
     use bpm::scene::protocols::PackingModuliProtocol;
     use bpm::scene::{build_system, run_scene, RunOptions};
-    use bpm::studies::compaction::moduli::relax_once_then_load;
-    let mut base = small_compaction(3).unwrap();
-    // Jostled, so the relaxation has something to relax.
-    let jostle = common::random_rows(base.particles.positions.len(), 0.03, 11);
-    for (x, dx) in base.particles.positions.iter_mut().zip(&jostle) {
-        (0..3).for_each(|k| x[k] += dx[k]);
-    }
+    use bpm::studies::compaction::moduli::{moduli_scenes, relax_once_then_load};
+    let packing = small_compaction(3).unwrap();
+    // A saved state of the packing, jostled, so the relaxation has
+    // something to relax.
+    let jostle = common::random_rows(packing.particles.positions.len(), 0.03, 11);
+    let b = &packing.simbox;
+    let state = bpm::scene::Checkpoint {
+        step: 0,
+        simbox: [b.lo, b.lengths, b.tilt],
+        positions: packing
+            .particles
+            .positions
+            .iter()
+            .zip(&jostle)
+            .map(|(x, dx)| [0, 1, 2].map(|k| x[k] + dx[k]))
+            .collect(),
+        images: Vec::new(),
+    };
     let protocol = PackingModuliProtocol {
         dt: 0.05,
         relax_time: 15.0,
@@ -877,16 +888,7 @@ fn the_moduli_loadings_branch_from_one_relaxation_as_three_full_runs() {
         rows: 8,
         ..PackingModuliProtocol::paper()
     };
-    let scenes = [
-        protocol.compression_stages(),
-        protocol.shear_stages(),
-        protocol.control_stages(),
-    ]
-    .map(|stages| {
-        let mut scene = base.clone();
-        scene.stages = stages;
-        scene
-    });
+    let scenes = moduli_scenes(&packing, &state, &protocol);
     for threads in [1, 2] {
         let branched = relax_once_then_load(&scenes, threads).unwrap();
         for (scene, runs) in scenes.iter().zip(&branched) {

@@ -186,7 +186,7 @@ fn bed_case(
 /// six listed pairs per sphere (each pair once, within the cutoff and
 /// skin), each with its index and tangential history (8 + 24). The
 /// closure's buffers come on top.
-pub fn bed_working_set_bytes(spheres: usize) -> usize {
+fn bed_working_set_bytes(spheres: usize) -> usize {
     spheres * (5 * 24 + 16 + 6 * (8 + 24))
 }
 

@@ -643,25 +643,22 @@ fn sizes_goal(workload: &str, timed: &[usize], units: &str) -> Goal {
     }
 }
 
-/// ns per sphere-step of the DEM bed's `cases` at `spheres` and `threads`.
-fn bed_ns(cases: &[BenchCase], spheres: usize, threads: usize) -> f64 {
-    cases
-        .iter()
-        .find(|c| c.particles == spheres && c.threads == threads)
-        .map_or(f64::NAN, |c| c.ns_per_particle_step)
-}
-
 /// One line per size of the DEM bed: working set and the cache it fits
 /// in, the closure's cost over Hertz's and the 2-thread speed-ups.
 fn bed_size_lines(bed: &DemBedBench, caches: &CacheSizes) -> Vec<String> {
     let mut sizes: Vec<usize> = bed.hertz.iter().map(|c| c.particles).collect();
     sizes.sort_unstable();
     sizes.dedup();
+    // The bed's cases are all at a_B = 0 (spheres have no bonds).
+    let (h, c) = (&bed.hertz, &bed.closure);
+    let bed_ns = |cases: &[BenchCase], n: usize, threads: usize| case_ns(cases, n, 0.0, threads);
     sizes
         .iter()
         .map(|&n| {
-            let ws = dem_bed::bed_working_set_bytes(n);
-            let (h, c) = (&bed.hertz, &bed.closure);
+            let ws = h
+                .iter()
+                .find(|case| case.particles == n)
+                .map_or(0, |case| case.working_set_bytes);
             format!(
                 "DEM bed  {n:>8} spheres   (working set {:.1} MB, {}): closure cost / Hertz's (1 thread) {:.2}x   2-thread speed-up {:.2}x (Hertz), {:.2}x (closure)",
                 ws as f64 / 1e6,
