@@ -533,3 +533,142 @@ fn walls_keep_their_friction_springs_across_stages_only_when_asked() {
         "{restarted:e} vs {before:e}"
     );
 }
+
+/// The contact pass and the multi-contact closure share their work among
+/// threads: one step from the same state on 1, 2 and 3 threads gives the
+/// same contact histories and closure corrections bit for bit (each
+/// contact is formed once, from the same half-step velocities, and each
+/// sphere's contacts are corrected in the same order), and the same
+/// forces and torques up to the order of their sums; the same thread
+/// count twice gives the same bits.
+#[test]
+fn threads_share_the_contact_pass_and_the_closure() {
+    use bpm::engine::{DemModel, ExternalTerms, MultiContact, StageDrivers};
+    use bpm::verify::{dem_trajectory, DemLoading};
+    let closures = [
+        None,
+        Some(MultiContact::standard(1.5)),
+        Some(MultiContact::advanced(1.5, 1e-3)),
+    ];
+    for loading in [
+        DemLoading::Compress,
+        DemLoading::LeesEdwards,
+        DemLoading::Walls,
+    ] {
+        for closure in closures {
+            let case = format!("{loading:?} {closure:?}");
+            let mut scene = dem_trajectory(3, false, loading, 400);
+            scene.force_field.multicontact = closure;
+            let mut sys = bpm::scene::build_system(&scene, 1);
+            let (_, error) =
+                bpm::scene::run_scene(&mut sys, &scene, &bpm::scene::RunOptions::quiet(1));
+            assert!(error.is_none(), "{case}: {error:?}");
+            let spec = &scene.stages[0];
+            let drivers = StageDrivers {
+                dt: spec.dt,
+                external: ExternalTerms {
+                    granular_walls: spec.granular_walls.clone(),
+                    ..Default::default()
+                },
+                deformation: spec.deformation.clone(),
+                tally_every: 1,
+                ..Default::default()
+            };
+            let (particles, list, state) = (
+                sys.particles.clone(),
+                sys.neighbours.clone(),
+                sys.model.save_state().unwrap(),
+            );
+            let start = sys.simbox.clone();
+            let (box_now, step) = (sys.simbox.clone(), sys.step);
+            let mut one_step = |threads: usize| {
+                sys.particles = particles.clone();
+                sys.neighbours = list.clone();
+                sys.simbox = box_now.clone();
+                sys.model.restore_state(state.clone()).unwrap();
+                sys.threads = threads;
+                sys.step(&drivers, step + 1, &start).unwrap();
+                let dem = sys.model_as::<DemModel>().unwrap();
+                let histories: Vec<u64> = dem
+                    .contacts()
+                    .history
+                    .iter()
+                    .flat_map(|h| h.tangential.iter().chain([&h.normal_force]))
+                    .map(|v| v.to_bits())
+                    .collect();
+                let corrections: Vec<u64> = dem.closure_pass().map_or(Vec::new(), |c| {
+                    let walls = (0..dem.walls().len()).flat_map(|w| c.wall_corrections(w));
+                    let pairs = c.pair_corrections().iter().flatten();
+                    pairs.chain(walls).map(|v| v.to_bits()).collect()
+                });
+                let report = dem.report().clone();
+                let rotation = sys.particles.rotation.as_ref().unwrap();
+                let torques = rotation.torque.clone();
+                (
+                    sys.particles.f.clone(),
+                    torques,
+                    histories,
+                    corrections,
+                    report,
+                    sys.pressure_tensor(),
+                )
+            };
+            let serial = one_step(1);
+            let touching = serial.2.chunks(4).filter(|h| h[3] != 0).count();
+            assert!(touching > 20, "{case}: {touching} touching pairs");
+            if closure.is_some() {
+                // The advanced closure's small ratio switches most off.
+                let corrected = serial.3.iter().filter(|&&b| f64::from_bits(b) != 0.0);
+                let switched_off = serial.4.closure.unwrap().switched_off;
+                assert!(
+                    corrected.count() + switched_off > 20,
+                    "{case}: too few corrections"
+                );
+            }
+            let largest = |v: &[[f64; 3]]| v.iter().flatten().fold(0.0f64, |m, x| m.max(x.abs()));
+            let (force_scale, torque_scale) = (largest(&serial.0), largest(&serial.1));
+            assert!(force_scale > 0.0 && torque_scale > 0.0, "{case}");
+            for threads in [2, 3] {
+                let shared = one_step(threads);
+                assert!(
+                    shared.2 == serial.2,
+                    "{case}, {threads} threads: histories differ"
+                );
+                assert!(
+                    shared.3 == serial.3,
+                    "{case}, {threads} threads: corrections differ"
+                );
+                assert_eq!(
+                    shared.4, serial.4,
+                    "{case}, {threads} threads: reports differ"
+                );
+                for (what, got, want, scale) in [
+                    ("force", &shared.0, &serial.0, force_scale),
+                    ("torque", &shared.1, &serial.1, torque_scale),
+                ] {
+                    let worst = got
+                        .iter()
+                        .flatten()
+                        .zip(want.iter().flatten())
+                        .fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
+                    assert!(
+                        worst <= 1e-13 * scale,
+                        "{case}, {threads} threads: {what}s differ by {worst:e} of {scale:e}"
+                    );
+                }
+                let stress_scale = serial.5.iter().fold(0.0f64, |m, s| m.max(s.abs()));
+                for (a, b) in shared.5.iter().zip(&serial.5) {
+                    assert!((a - b).abs() <= 1e-12 * stress_scale, "{case}: stress");
+                }
+                let again = one_step(threads);
+                let bits = |v: &[[f64; 3]]| -> Vec<u64> {
+                    v.iter().flatten().map(|x| x.to_bits()).collect()
+                };
+                assert!(
+                    bits(&again.0) == bits(&shared.0) && bits(&again.1) == bits(&shared.1),
+                    "{case}, {threads} threads: not reproducible"
+                );
+            }
+        }
+    }
+}

@@ -8,6 +8,7 @@
 //! outside a periodic box (round-off at its faces) are binned where their
 //! wrapped selves are.
 
+use super::parallel::balanced_range;
 use super::simbox::SimBox;
 use super::team::{chunk_range, Team};
 use crate::kernels::{MinimumImage, Separation};
@@ -243,6 +244,15 @@ impl NeighbourList {
     /// Iterator over `(i, neighbours of i)` for atoms in `range`.
     pub fn rows(&self, range: std::ops::Range<usize>) -> impl Iterator<Item = (usize, &[i32])> {
         range.map(move |i| (i, self.of(i)))
+    }
+
+    /// The rows of the `c`-th of `chunks` parts of the list with nearly
+    /// equal numbers of entries. A half list (`j > i`) holds more entries
+    /// in its first rows than in its last, the more so the less the
+    /// particles' order follows space: equal numbers of rows would give
+    /// the first chunk up to three quarters of the pairs.
+    pub fn balanced_rows(&self, chunks: usize, c: usize) -> std::ops::Range<usize> {
+        balanced_range(&self.offsets, chunks, c)
     }
 
     /// Whether an atom may have moved into range of one not listed: twice the

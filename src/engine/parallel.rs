@@ -9,12 +9,30 @@ use crate::kernels::ForcePass;
 
 pub use super::team::chunk_range;
 
+/// The rows of the `c`-th of `chunks` parts of compressed rows (row `i`
+/// holds entries `offsets[i]..offsets[i + 1]`, from `offsets[0] = 0`) with
+/// nearly equal numbers of entries: consecutive, disjoint, and together
+/// every row.
+pub fn balanced_range(offsets: &[usize], chunks: usize, c: usize) -> std::ops::Range<usize> {
+    let rows = offsets.len().saturating_sub(1);
+    let total = offsets.last().copied().unwrap_or(0);
+    let boundary = |c: usize| {
+        if c >= chunks {
+            rows
+        } else {
+            let target = total * c / chunks;
+            offsets[..rows].partition_point(|&o| o < target)
+        }
+    };
+    boundary(c)..boundary(c + 1)
+}
+
 /// Per-thread scratch buffers, kept between steps so no step allocates.
 #[derive(Debug, Default)]
 pub struct Scratch<T> {
-    /// One per chunk; chunk 0's stays empty (it writes into the output).
+    /// `K` per chunk, chunk `c`'s `k`-th at `c K + k`; chunk 0's stay
+    /// empty (it writes into the outputs).
     buffers: Vec<Vec<T>>,
-    passes: Vec<ForcePass>,
 }
 
 impl<T: Copy + Default + Send + Sync + std::ops::AddAssign> Scratch<T> {
@@ -36,50 +54,82 @@ impl<T: Copy + Default + Send + Sync + std::ops::AddAssign> Scratch<T> {
     where
         F: Fn(usize, &mut [T]) -> ForcePass + Sync,
     {
+        self.scatter_many(
+            team,
+            [out],
+            lowest,
+            ForcePass::default(),
+            |c, [out]| work(c, out),
+            |a, b| a.merged(&b),
+        )
+    }
+
+    /// [`Scratch::scatter`] into `K` arrays at once (forces and torques),
+    /// each chunk's result folded with `merge` from `init` in chunk order.
+    /// One thread runs `work(0, outs)` alone and returns its result as it
+    /// is. Every array follows the same `lowest`; an array may be empty.
+    pub fn scatter_many<const K: usize, R, F, M>(
+        &mut self,
+        team: &Team,
+        outs: [&mut [T]; K],
+        lowest: impl Fn(usize) -> usize + Sync,
+        init: R,
+        work: F,
+        merge: M,
+    ) -> R
+    where
+        R: Send + Copy,
+        F: Fn(usize, [&mut [T]; K]) -> R + Sync,
+        M: Fn(R, R) -> R,
+    {
         let chunks = team.threads();
         if chunks <= 1 {
-            return work(0, out);
+            return work(0, outs);
         }
-        self.buffers.resize_with(chunks, Vec::new);
-        let len = out.len();
-        self.passes.clear();
-        self.passes.resize(chunks, ForcePass::default());
-        {
-            let out = SharedSlice::new(out);
+        self.buffers.resize_with(chunks * K, Vec::new);
+        let outs = outs.map(SharedSlice::new);
+        let result = {
             let buffers = SharedSlice::new(&mut self.buffers);
-            let passes = SharedSlice::new(&mut self.passes);
-            team.run(|c| {
-                // SAFETY: chunk c alone touches passes[c] and buffers[c];
-                // chunk 0 alone touches `out`.
-                let target: &mut [T] = unsafe {
-                    if c == 0 {
-                        out.range(0..out.len())
-                    } else {
-                        // Each chunk clears its own copy, on its own thread.
-                        // Below `lowest(c)` nothing is written or read.
-                        let buf = buffers.get(c);
-                        buf.resize(len, T::default());
-                        buf[lowest(c).min(len)..].fill(T::default());
-                        buf
+            team.reduce_chunks(
+                init,
+                |c| {
+                    // SAFETY: chunk c alone touches buffers[c K..c K + K];
+                    // chunk 0 alone touches the outputs.
+                    let targets = std::array::from_fn(|k| unsafe {
+                        if c == 0 {
+                            outs[k].range(0..outs[k].len())
+                        } else {
+                            // Each chunk clears its own copy, on its own
+                            // thread. Below `lowest(c)` nothing is written
+                            // or read.
+                            let (buf, len) = (buffers.get(c * K + k), outs[k].len());
+                            buf.resize(len, T::default());
+                            buf[lowest(c).min(len)..].fill(T::default());
+                            &mut buf[..]
+                        }
+                    });
+                    work(c, targets)
+                },
+                merge,
+            )
+        };
+        let buffers = &self.buffers;
+        team.run(|c| {
+            for (k, out) in outs.iter().enumerate() {
+                let range = chunk_range(out.len(), chunks, c);
+                // SAFETY: the chunks' ranges are disjoint.
+                let part = unsafe { out.range(range.clone()) };
+                for b in 1..chunks {
+                    let buf = &buffers[b * K + k];
+                    let from = lowest(b).clamp(range.start, range.end);
+                    let skip = from - range.start;
+                    for (o, v) in part[skip..].iter_mut().zip(&buf[from..range.end]) {
+                        *o += *v;
                     }
-                };
-                let pass = work(c, target);
-                unsafe { *passes.get(c) = pass };
-            });
-        }
-        let buffers = &self.buffers[1..];
-        team.run_split(out, |_, range, part| {
-            for (c, buf) in (1..).zip(buffers) {
-                let from = lowest(c).clamp(range.start, range.end);
-                let skip = from - range.start;
-                for (o, b) in part[skip..].iter_mut().zip(&buf[from..range.end]) {
-                    *o += *b;
                 }
             }
         });
-        self.passes
-            .iter()
-            .fold(ForcePass::default(), |acc, t| acc.merged(t))
+        result
     }
 }
 
@@ -142,6 +192,43 @@ mod tests {
             });
         }
         out.iter().map(|s| s.0).collect()
+    }
+
+    /// A half list's rows (row i of n holding about n - i entries, some
+    /// empty) split into parts of nearly equal entries: consecutive
+    /// parts that cover every row, each within one row of an equal share.
+    #[test]
+    fn balanced_parts_share_the_entries_not_the_rows() {
+        let n = 101;
+        let mut offsets = vec![0];
+        for i in 0..n {
+            let entries = if i % 7 == 3 { 0 } else { n - i };
+            offsets.push(offsets[i] + entries);
+        }
+        let total = offsets[n];
+        for chunks in [1, 2, 3, 8] {
+            let mut next = 0;
+            for c in 0..chunks {
+                let rows = balanced_range(&offsets, chunks, c);
+                assert_eq!(
+                    rows.start, next,
+                    "{chunks} chunks: part {c} starts elsewhere"
+                );
+                next = rows.end;
+                let entries = offsets[rows.end] - offsets[rows.start];
+                let share = total as f64 / chunks as f64;
+                assert!(
+                    (entries as f64 - share).abs() <= n as f64,
+                    "{chunks} chunks: part {c} has {entries} of {total} entries"
+                );
+            }
+            assert_eq!(next, n, "{chunks} chunks do not reach the last row");
+        }
+        // Equal numbers of rows would give the first of two parts three
+        // quarters of the entries.
+        let halves = chunk_range(n, 2, 0);
+        assert!(offsets[halves.end] > total * 2 / 3);
+        assert_eq!(balanced_range(&[0], 2, 1), 0..0, "no rows");
     }
 
     #[test]

@@ -247,8 +247,20 @@ impl Team {
         M: Fn(R, R) -> R,
     {
         let chunks = self.threads();
+        self.reduce_chunks(init, |c| job(chunk_range(len, chunks, c)), merge)
+    }
+
+    /// The results of `job(c)` for every chunk `c`, in chunk order, folded
+    /// with `merge` from `init`.
+    pub fn reduce_chunks<R, F, M>(&self, init: R, job: F, merge: M) -> R
+    where
+        R: Send + Copy,
+        F: Fn(usize) -> R + Sync,
+        M: Fn(R, R) -> R,
+    {
+        let chunks = self.threads();
         if chunks == 1 {
-            return merge(init, job(0..len));
+            return merge(init, job(0));
         }
         // On the stack for teams of up to 64, so a step allocates nothing.
         let mut on_stack = [init; 64];
@@ -259,7 +271,7 @@ impl Team {
             on_heap.resize(chunks, init);
             &mut on_heap[..]
         };
-        self.run_on(results, |c, r| *r = job(chunk_range(len, chunks, c)));
+        self.run_on(results, |c, r| *r = job(c));
         results.iter().fold(init, |acc, &r| merge(acc, r))
     }
 

@@ -13,7 +13,7 @@ pub use topology::BondTopology;
 
 use super::model::{EnergyTerm, ForceInput, ForceOutput, ModelTally, ParticleModel};
 use super::neighbor::Exclusions;
-use super::parallel::{as_rows, as_vec3, chunk_range, Scratch, Vec3};
+use super::parallel::{as_rows, as_vec3, Scratch, Vec3};
 use super::simbox::SimBox;
 use super::timers::Stage;
 use super::EngineError;
@@ -333,12 +333,12 @@ impl BpmModel {
                     special: [1.0; 4],
                     tally,
                 };
-                // A half list (`j > i`) split by `i`: chunk c writes from
-                // its first `i` on.
-                let first = |c| chunk_range(n, chunks, c).start;
+                // A half list (`j > i`) split by `i` into parts of about
+                // as many pairs: chunk c writes from its first `i` on.
+                let first = |c| neighbours.balanced_rows(chunks, c).start;
                 self.force_scratch
                     .scatter(team, as_vec3(f), first, |c, out| {
-                        let rows = neighbours.rows(chunk_range(n, chunks, c));
+                        let rows = neighbours.rows(neighbours.balanced_rows(chunks, c));
                         pair_forces(&sep, &inputs, rows, own, as_rows(out))
                     })
             }

@@ -10,6 +10,7 @@
 //! model: its recorded observables are the stress (the virial of the
 //! contact forces) and the kinetic energies.
 
+mod contact_pass;
 mod contacts;
 mod multicontact;
 mod wall;
@@ -21,13 +22,12 @@ pub use wall::ActiveGranularWall;
 use super::external::{GranularWall, WallContact, WallSide};
 use super::model::{EnergyTerm, ForceInput, ForceOutput, ModelTally, ParticleModel};
 use super::neighbor::Exclusions;
+use super::parallel::{Scratch, Vec3};
 use super::simbox::MinimumImage;
 use super::timers::Stage;
 use super::EngineError;
-use crate::kernels::{
-    corrected_granular_contact, hertz_mindlin_block, ContactBlock, ContactForce, ContactHistory,
-    GranularCoeffs, GranularMaterial, Isa, Sphere, Tally, CONTACT_LANES,
-};
+use crate::kernels::{ContactHistory, GranularCoeffs, GranularMaterial, Isa, Tally};
+use contact_pass::{contact_forces, ContactPass};
 
 /// DEM spheres of one material.
 #[derive(Debug)]
@@ -55,6 +55,8 @@ pub struct DemModel {
     /// Whether Hertz-Mindlin contacts are formed four at a time (the
     /// default; rolling or twisting resistance is always one at a time).
     contact_blocks: bool,
+    /// The contact pass's per-thread force and torque buffers.
+    force_scratch: Scratch<Vec3>,
 }
 
 /// What a step or a stage changes in the model: the current force field,
@@ -103,6 +105,7 @@ impl DemModel {
             report: DemReport::default(),
             isa: Isa::detect(),
             contact_blocks: true,
+            force_scratch: Scratch::default(),
         }
     }
 
@@ -120,6 +123,12 @@ impl DemModel {
     /// The material.
     pub fn material(&self) -> &GranularMaterial {
         &self.material
+    }
+
+    /// The multi-contact closure's pass (its last corrections), if it is
+    /// on.
+    pub fn closure_pass(&self) -> Option<&ClosurePass> {
+        self.closure.as_ref()
     }
 
     /// The multi-contact closure's settings, if it is on.
@@ -152,6 +161,8 @@ impl DemModel {
         &self.contacts
     }
 
+    /// The contact forces of every listed pair, on the model's thread
+    /// team ([`contact_forces`]).
     fn forces(
         &mut self,
         sep: &MinimumImage,
@@ -159,254 +170,21 @@ impl DemModel {
         f: &mut [[f64; 3]],
         torque: Option<&mut [[f64; 3]]>,
     ) -> Tally {
-        if !self.coeffs.lanes_cover() || !self.contact_blocks {
-            self.forces_one_by_one(sep, input, f, torque)
-        } else {
-            self.forces_in_blocks(sep, input, f, torque)
-        }
-    }
-
-    /// The contact forces of Hertz-Mindlin without rolling or twisting,
-    /// touching pairs gathered four at a time into
-    /// [`hertz_mindlin_block`]: the same forces, torques and histories as
-    /// one pair at a time, bit for bit, added in the same order.
-    fn forces_in_blocks(
-        &mut self,
-        sep: &MinimumImage,
-        input: &ForceInput<'_>,
-        f: &mut [[f64; 3]],
-        torque: Option<&mut [[f64; 3]]>,
-    ) -> Tally {
-        let omega = input.omega.unwrap_or(&[]);
-        let (v, radius, mass) = (input.v, input.radius, input.mass);
-        let corrections = self.closure.as_ref().map(|c| c.pair_corrections());
-        let (dt, update) = input.history_step();
-        let history = &mut self.contacts.history;
-        let mut tally = Tally::default();
-        let mut block = ContactBlock::default();
-        // Each lane's pair (i, j) and list entry.
-        let mut pairs = [(0usize, 0usize, 0usize); CONTACT_LANES];
-        let mut filled = 0;
-        let mut sink = BlockSink {
-            isa: self.isa,
+        let pass = ContactPass {
             coeffs: &self.coeffs,
-            dt,
-            update,
+            isa: self.isa,
+            blocks: self.coeffs.lanes_cover() && self.contact_blocks,
+            sep,
+            input,
+            corrections: self.closure.as_ref().map(|c| c.pair_corrections()),
+        };
+        contact_forces(
+            &pass,
+            &mut self.contacts.history,
+            &mut self.force_scratch,
             f,
             torque,
-            tally: input.tally.then_some(&mut tally),
-        };
-        let spin = |i: usize| omega.get(i).copied().unwrap_or([0.0; 3]);
-        touching_pairs(sep, input, corrections, history, |pair, history| {
-            let TouchingPair {
-                i,
-                j,
-                entry,
-                del,
-                partner_velocity,
-                moved,
-            } = pair;
-            let (l, wi, wj, h) = (filled, spin(i), spin(j), history[entry].tangential);
-            for d in 0..3 {
-                block.del[d][l] = del[d];
-                block.v[0][d][l] = v[i][d];
-                block.v[1][d][l] = partner_velocity[d];
-                block.omega[0][d][l] = wi[d];
-                block.omega[1][d][l] = wj[d];
-                block.tangential[d][l] = h[d];
-            }
-            for (side, sphere) in [i, j].into_iter().enumerate() {
-                block.radius[side][l] = radius[sphere];
-                block.mass[side][l] = mass[sphere];
-                block.moved[side][l] = moved[side];
-            }
-            pairs[l] = (i, j, entry);
-            filled += 1;
-            if filled == CONTACT_LANES {
-                sink.flush(&mut block, &pairs, history);
-                filled = 0;
-            }
-        });
-        if filled > 0 {
-            // The spare lanes repeat the first contact and are not read.
-            block.fill_from_first(filled);
-            sink.flush(&mut block, &pairs[..filled], history);
-        }
-        tally
-    }
-
-    /// The contact forces one pair at a time: the law with rolling or
-    /// twisting resistance.
-    fn forces_one_by_one(
-        &mut self,
-        sep: &MinimumImage,
-        input: &ForceInput<'_>,
-        f: &mut [[f64; 3]],
-        mut torque: Option<&mut [[f64; 3]]>,
-    ) -> Tally {
-        // The engine gives rotational models angular velocities; without
-        // them (a caller's choice) spheres count as not spinning.
-        let omega = input.omega.unwrap_or(&[]);
-        let (v, radius, mass) = (input.v, input.radius, input.mass);
-        let corrections = self.closure.as_ref().map(|c| c.pair_corrections());
-        let (dt, update) = input.history_step();
-        let mut tally = Tally::default();
-        let sphere = |i: usize| Sphere {
-            v: v[i],
-            omega: omega.get(i).copied().unwrap_or([0.0; 3]),
-            radius: radius[i],
-            mass: mass[i],
-        };
-        let history = &mut self.contacts.history;
-        touching_pairs(sep, input, corrections, history, |pair, history| {
-            let TouchingPair {
-                i,
-                j,
-                entry,
-                del,
-                partner_velocity,
-                moved,
-            } = pair;
-            let sj = Sphere {
-                v: partner_velocity,
-                ..sphere(j)
-            };
-            let ContactForce {
-                force,
-                torque_i,
-                torque_j,
-            } = corrected_granular_contact(
-                &self.coeffs,
-                &del,
-                &sphere(i),
-                &sj,
-                moved,
-                &mut history[entry],
-                dt,
-                update,
-            );
-            for d in 0..3 {
-                f[i][d] += force[d];
-                f[j][d] -= force[d];
-            }
-            if let Some(t) = torque.as_deref_mut() {
-                for d in 0..3 {
-                    t[i][d] += torque_i[d];
-                    t[j][d] += torque_j[d];
-                }
-            }
-            if input.tally {
-                tally.add_vector(1.0, &del, &force);
-            }
-        });
-        tally
-    }
-}
-
-/// A listed pair whose surfaces overlap.
-struct TouchingPair {
-    i: usize,
-    j: usize,
-    /// Its pair-list entry (and contact history).
-    entry: usize,
-    /// `x_i - x_j`, the minimum image.
-    del: [f64; 3],
-    /// `j`'s velocity, or its image's across a Lees-Edwards face.
-    partner_velocity: [f64; 3],
-    /// The closure's corrections of the two surfaces (0 without it).
-    moved: [f64; 2],
-}
-
-/// Calls `touch` for every listed pair whose surfaces (moved by the
-/// closure's `corrections`) overlap, in list order, with the histories;
-/// clears the history of every other pair.
-#[inline(always)]
-fn touching_pairs(
-    sep: &MinimumImage,
-    input: &ForceInput<'_>,
-    corrections: Option<&[[f64; 2]]>,
-    history: &mut [ContactHistory],
-    mut touch: impl FnMut(TouchingPair, &mut [ContactHistory]),
-) {
-    let (x, v, radius, list) = (input.x, input.v, input.radius, input.neighbours);
-    for i in 0..x.len() {
-        let xi = x[i];
-        for k in list.offsets[i]..list.offsets[i + 1] {
-            let j = list.neighbours[k] as usize;
-            let (del, image) = sep.delta_image(&xi, &x[j]);
-            let rsq = del[0] * del[0] + del[1] * del[1] + del[2] * del[2];
-            let moved = corrections.map_or([0.0; 2], |c| c[k]);
-            let radsum = (radius[i] + moved[0]) + (radius[j] + moved[1]);
-            // A surface moved past its centre (radsum <= 0) is caught by
-            // the closure's report; it is no contact here.
-            if radsum <= 0.0 || rsq >= radsum * radsum {
-                history[k] = Default::default();
-                continue;
-            }
-            let mut partner_velocity = v[j];
-            // A partner across a Lees-Edwards face is an image moving with
-            // the boundary.
-            if let (Some(le), true) = (&input.lees_edwards, image != [0.0; 3]) {
-                for (v, w) in partner_velocity.iter_mut().zip(le.image_velocity(&image)) {
-                    *v += w;
-                }
-            }
-            let pair = TouchingPair {
-                i,
-                j,
-                entry: k,
-                del,
-                partner_velocity,
-                moved,
-            };
-            touch(pair, history);
-        }
-    }
-}
-
-/// Where a block of contacts goes: the forces, torques and virial of the
-/// pass. (Components are added `for d in 0..3` over several arrays.)
-struct BlockSink<'a> {
-    isa: Isa,
-    coeffs: &'a GranularCoeffs,
-    dt: f64,
-    update: bool,
-    f: &'a mut [[f64; 3]],
-    torque: Option<&'a mut [[f64; 3]]>,
-    tally: Option<&'a mut Tally>,
-}
-
-#[allow(clippy::needless_range_loop)]
-impl BlockSink<'_> {
-    /// Forms `block` and adds the contacts of its first `pairs.len()`
-    /// lanes (each `(i, j, list entry)`), in lane order.
-    fn flush(
-        &mut self,
-        block: &mut ContactBlock,
-        pairs: &[(usize, usize, usize)],
-        history: &mut [ContactHistory],
-    ) {
-        let out = hertz_mindlin_block(self.isa, self.coeffs, block, self.dt, self.update);
-        for (l, &(i, j, k)) in pairs.iter().enumerate() {
-            let h = &mut history[k];
-            h.tangential = std::array::from_fn(|d| block.tangential[d][l]);
-            h.normal_force = out.normal_force[l];
-            let force: [f64; 3] = std::array::from_fn(|d| out.force[d][l]);
-            for d in 0..3 {
-                self.f[i][d] += force[d];
-                self.f[j][d] -= force[d];
-            }
-            if let Some(t) = self.torque.as_deref_mut() {
-                for d in 0..3 {
-                    t[i][d] += out.torque[0][d][l];
-                    t[j][d] += out.torque[1][d][l];
-                }
-            }
-            if let Some(tally) = self.tally.as_deref_mut() {
-                let del = std::array::from_fn(|d| block.del[d][l]);
-                tally.add_vector(1.0, &del, &force);
-            }
-        }
+        )
     }
 }
 

@@ -16,7 +16,9 @@
 
 use super::super::model::ForceInput;
 use super::super::neighbor::NeighbourList;
+use super::super::parallel::balanced_range;
 use super::super::simbox::MinimumImage;
+use super::super::team::{SharedSlice, Team};
 use super::wall::ActiveGranularWall;
 use crate::kernels::{
     pair_contact_points, Closure, ContactHistory, ContactPoint, GranularMaterial, HalfSpace,
@@ -118,6 +120,20 @@ pub struct ClosureReport {
     pub collapsed: Option<(usize, f64)>,
 }
 
+impl ClosureReport {
+    /// The report of two runs of spheres, `self`'s before `later`'s (the
+    /// first collapse in sphere order; no contact beyond reach yet).
+    fn merged(self, later: Self) -> Self {
+        Self {
+            largest: self.largest.max(later.largest),
+            smallest: self.smallest.min(later.smallest),
+            switched_off: self.switched_off + later.switched_off,
+            beyond_reach: None,
+            collapsed: self.collapsed.or(later.collapsed),
+        }
+    }
+}
+
 /// A contact whose corrections exceed the closure's reach.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct BeyondReach {
@@ -152,14 +168,26 @@ pub struct ClosurePass {
     /// Where each contact's correction goes, grouped by sphere.
     sides: Vec<Side>,
     points: Vec<ContactPoint>,
-    /// Each sphere's next free slot while the contacts are placed.
-    cursor: Vec<usize>,
+    /// Per chunk of the list's rows, per sphere: the chunk's pairs within
+    /// reach of the sphere, then the sphere's next free slot for them.
+    cursors: Vec<Vec<usize>>,
+    /// Each chunk's first row.
+    lowest: Vec<usize>,
+    /// Each sphere's next free slot for its walls.
+    wall_cursor: Vec<usize>,
+    /// Prefix sums of the spheres' estimated correction costs, to share
+    /// them out among the threads.
+    work: Vec<usize>,
     deltas: Vec<f64>,
-    lanes: SurfaceCorrections,
+    /// One kernel (with its buffers) per thread.
+    lanes: Vec<SurfaceCorrections>,
     /// Per pair-list entry, the corrections of its two sides.
     pair: Vec<[f64; 2]>,
-    /// Per wall, per sphere, the sphere's correction at the wall.
-    wall: Vec<Vec<f64>>,
+    /// Per wall, per sphere, the sphere's correction at the wall: wall
+    /// `w`'s from `w spheres` on.
+    wall: Vec<f64>,
+    /// Spheres at the last pass.
+    spheres: usize,
     /// What the last pass found.
     report: ClosureReport,
 }
@@ -181,11 +209,15 @@ impl ClosurePass {
             offsets: Vec::new(),
             sides: Vec::new(),
             points: Vec::new(),
-            cursor: Vec::new(),
+            cursors: Vec::new(),
+            lowest: Vec::new(),
+            wall_cursor: Vec::new(),
+            work: Vec::new(),
             deltas: Vec::new(),
-            lanes: SurfaceCorrections::default(),
+            lanes: Vec::new(),
             pair: Vec::new(),
             wall: Vec::new(),
+            spheres: 0,
             report: ClosureReport::default(),
         }
     }
@@ -203,7 +235,7 @@ impl ClosurePass {
 
     /// Per sphere, its correction at wall `w`, from the last pass.
     pub fn wall_corrections(&self, w: usize) -> &[f64] {
-        &self.wall[w]
+        &self.wall[w * self.spheres..(w + 1) * self.spheres]
     }
 
     /// What the last pass found.
@@ -212,7 +244,11 @@ impl ClosurePass {
     }
 
     /// Computes every correction for the state in `input` from the normal
-    /// forces stored in the pair and wall histories.
+    /// forces stored in the pair and wall histories, on the input's team:
+    /// the pairs are measured and placed in parallel over the list's rows,
+    /// the spheres corrected in parallel over spheres. Each sphere's
+    /// contacts take the same slots, in the same order, on any number of
+    /// threads, so the corrections are the same bits.
     pub fn update(
         &mut self,
         sep: &MinimumImage,
@@ -221,93 +257,116 @@ impl ClosurePass {
         walls: &[ActiveGranularWall],
         wall_history: &[Vec<ContactHistory>],
     ) {
-        let (x, radius) = (input.x, input.radius);
-        let n = x.len();
-        let reach_factor = 1.0 + self.settings.reach;
+        let (radius, list, team) = (input.radius, input.neighbours, input.team);
+        let n = input.x.len();
         let mut planes = std::mem::take(&mut self.planes);
         planes.clear();
         planes.extend(walls.iter().map(|w| w.plane(input.elapsed)));
-        self.count(sep, input.neighbours, x, radius, &planes, reach_factor);
-        self.place(
-            input.neighbours,
-            radius,
-            pair_history,
-            &planes,
-            wall_history,
-        );
+        self.measure(sep, input);
+        self.count(input, &planes);
+        self.place(list, radius, pair_history, team);
+        self.place_walls(radius, &planes, wall_history);
         self.planes = planes;
-        self.pair.clear();
-        self.pair
-            .resize(input.neighbours.neighbours.len(), [0.0; 2]);
-        self.wall.resize(walls.len(), Vec::new());
-        for w in &mut self.wall {
-            w.clear();
-            w.resize(n, 0.0);
-        }
-        let mut report = ClosureReport::default();
-        for i in 0..n {
-            let range = self.offsets[i]..self.offsets[i + 1];
-            // A sphere with one contact, or none that pressed, has nothing
-            // to correct.
-            if range.len() < 2 || self.points[range.clone()].iter().all(|p| p.force == 0.0) {
-                continue;
-            }
-            report.switched_off += self.lanes.compute(
-                &self.half_space,
-                &self.closure,
-                radius[i],
-                &self.points[range.clone()],
-                &mut self.deltas[range.clone()],
-            );
-            for (side, &delta) in self.sides[range.clone()].iter().zip(&self.deltas[range]) {
-                match *side {
-                    Side::Pair { entry, side } => self.pair[entry as usize][side as usize] = delta,
-                    Side::Wall(w) => self.wall[w as usize][i] = delta,
-                }
-                // The extremes over every contact: those of spheres with
-                // nothing to correct are 0 and change neither.
-                let ratio = delta / radius[i];
-                report.largest = report.largest.max(ratio);
-                report.smallest = report.smallest.min(ratio);
-                if ratio <= -1.0 && report.collapsed.is_none() {
-                    report.collapsed = Some((i, ratio));
-                }
-            }
-        }
-        report.beyond_reach = self.beyond_reach(input.neighbours, radius, report.largest);
+        self.spheres = n;
+        self.wall.clear();
+        self.wall.resize(walls.len() * n, 0.0);
+        let chunks = team.threads();
+        self.lanes.resize_with(chunks, SurfaceCorrections::default);
+        let lanes = SharedSlice::new(&mut self.lanes);
+        let deltas = SharedSlice::new(&mut self.deltas);
+        // One entry per side: a pair's two sides may be two threads'.
+        let pair = SharedSlice::new(self.pair.as_flattened_mut());
+        let wall = SharedSlice::new(&mut self.wall);
+        let corrected = CorrectedSpheres {
+            half_space: &self.half_space,
+            closure: &self.closure,
+            radius,
+            offsets: &self.offsets,
+            points: &self.points,
+            sides: &self.sides,
+        };
+        let mut report = team.reduce_chunks(
+            ClosureReport::default(),
+            |c| {
+                let spheres = balanced_range(&self.work, chunks, c);
+                let contacts = self.offsets[spheres.start]..self.offsets[spheres.end];
+                // SAFETY: chunk c alone uses lanes[c]; the chunks' spheres,
+                // and so their contacts, are disjoint, and each side of a
+                // pair and each sphere at a wall is one sphere's contact.
+                let target = CorrectionTarget {
+                    lanes: unsafe { lanes.get(c) },
+                    first: contacts.start,
+                    deltas: unsafe { deltas.range(contacts) },
+                    pair: &pair,
+                    wall: &wall,
+                    spheres: n,
+                };
+                unsafe { corrected.correct(spheres, target) }
+            },
+            ClosureReport::merged,
+        );
+        report.beyond_reach = self.beyond_reach(list, radius, report.largest);
         self.report = report;
     }
 
-    /// Measures every listed pair and each sphere's distance from every
-    /// wall, and counts each sphere's contacts within reach into
-    /// `offsets`.
-    fn count(
-        &mut self,
-        sep: &MinimumImage,
-        list: &NeighbourList,
-        x: &[[f64; 3]],
-        radius: &[f64],
-        planes: &[WallPlane],
-        reach_factor: f64,
-    ) {
-        let n = x.len();
-        self.offsets.clear();
-        self.offsets.resize(n + 1, 0);
-        self.separation.clear();
-        self.separation
-            .resize(list.neighbours.len(), ([0.0; 3], f64::NAN));
-        for i in 0..n {
-            for k in list.offsets[i]..list.offsets[i + 1] {
-                let j = list.neighbours[k] as usize;
-                let (del, _) = sep.delta_image(&x[i], &x[j]);
-                let r = (del[0] * del[0] + del[1] * del[1] + del[2] * del[2]).sqrt();
-                if r < reach_factor * (radius[i] + radius[j]) {
-                    self.separation[k] = (del, r);
-                    self.offsets[i + 1] += 1;
-                    self.offsets[j + 1] += 1;
+    /// Measures every listed pair within reach into `separation` (NaN
+    /// lengths for the others), clears its corrections, and counts per
+    /// chunk of the list's rows each sphere's pairs within reach in that
+    /// chunk (into `cursors`, from the chunk's first row on: a half list
+    /// reaches no lower sphere); in parallel over the rows.
+    fn measure(&mut self, sep: &MinimumImage, input: &ForceInput<'_>) {
+        let (x, radius, list, team) = (input.x, input.radius, input.neighbours, input.team);
+        let (n, entries) = (x.len(), list.neighbours.len());
+        let reach_factor = 1.0 + self.settings.reach;
+        self.separation.resize(entries, ([0.0; 3], f64::NAN));
+        self.pair.resize(entries, [0.0; 2]);
+        let chunks = team.threads();
+        self.cursors.resize_with(chunks, Vec::new);
+        let separation = SharedSlice::new(&mut self.separation);
+        let pair = SharedSlice::new(&mut self.pair);
+        let cursors = SharedSlice::new(&mut self.cursors);
+        team.run(|c| {
+            let rows = list.balanced_rows(chunks, c);
+            let section = list.offsets[rows.start]..list.offsets[rows.end];
+            let first = section.start;
+            // SAFETY: the chunks' rows, and so their list entries, are
+            // disjoint, and chunk c alone uses cursors[c].
+            let (out, pair, counts) = unsafe {
+                (
+                    separation.range(section.clone()),
+                    pair.range(section),
+                    cursors.get(c),
+                )
+            };
+            pair.fill([0.0; 2]);
+            counts.resize(n, 0);
+            counts[rows.start..].fill(0);
+            for i in rows {
+                for k in list.offsets[i]..list.offsets[i + 1] {
+                    let j = list.neighbours[k] as usize;
+                    let (del, _) = sep.delta_image(&x[i], &x[j]);
+                    let r = (del[0] * del[0] + del[1] * del[1] + del[2] * del[2]).sqrt();
+                    out[k - first] = if r < reach_factor * (radius[i] + radius[j]) {
+                        counts[i] += 1;
+                        counts[j] += 1;
+                        (del, r)
+                    } else {
+                        ([0.0; 3], f64::NAN)
+                    };
                 }
             }
-        }
+        });
+    }
+
+    /// Gives each sphere its slots (`offsets`: its pairs within reach, then
+    /// its walls within reach), turns each chunk's counts into the chunk's
+    /// first slot per sphere (`cursors`) and each sphere's first wall slot
+    /// (`wall_cursor`), measures each sphere's distance from every wall,
+    /// and weighs each sphere's correction (`work`).
+    fn count(&mut self, input: &ForceInput<'_>, planes: &[WallPlane]) {
+        let (x, radius, list) = (input.x, input.radius, input.neighbours);
+        let n = x.len();
+        let reach_factor = 1.0 + self.settings.reach;
         self.wall_distance.resize(planes.len(), Vec::new());
         for (plane, distances) in planes.iter().zip(&mut self.wall_distance) {
             distances.clear();
@@ -319,61 +378,102 @@ impl ClosurePass {
                     distance
                 }
             }));
-            for (i, d) in distances.iter().enumerate() {
-                self.offsets[i + 1] += usize::from(!d.is_nan());
-            }
         }
+        let chunks = self.cursors.len();
+        self.lowest.clear();
+        self.lowest
+            .extend((0..chunks).map(|c| list.balanced_rows(chunks, c).start));
+        self.offsets.clear();
+        self.offsets.resize(n + 1, 0);
+        self.wall_cursor.clear();
+        self.wall_cursor.resize(n, 0);
+        self.work.clear();
+        self.work.resize(n + 1, 0);
         for i in 0..n {
-            self.offsets[i + 1] += self.offsets[i];
+            let mut slot = self.offsets[i];
+            for (counts, &lowest) in self.cursors.iter_mut().zip(&self.lowest) {
+                // Below its first row a chunk reaches no sphere.
+                let count = if i < lowest { 0 } else { counts[i] };
+                if i >= lowest {
+                    counts[i] = slot;
+                }
+                slot += count;
+            }
+            self.wall_cursor[i] = slot;
+            let walls = self.wall_distance.iter().filter(|d| !d[i].is_nan()).count();
+            self.offsets[i + 1] = slot + walls;
+            // A sphere's correction costs about its receiver blocks times
+            // its contacts.
+            let m = self.offsets[i + 1] - self.offsets[i];
+            self.work[i + 1] = self.work[i] + m.div_ceil(4) * m;
         }
     }
 
-    /// Places every contact within reach in its sphere's slots: the pairs
-    /// in list order, each as its row sphere's then its neighbour's
-    /// contact, then the walls in order. Each sphere's contacts keep that
-    /// order.
+    /// Places every pair within reach in its spheres' slots, in parallel
+    /// over the list's rows: the pairs in list order, each as its row
+    /// sphere's then its neighbour's contact (chunk c's slots of a sphere
+    /// follow those of the chunks before it).
     fn place(
         &mut self,
         list: &NeighbourList,
         radius: &[f64],
         history: &[ContactHistory],
-        planes: &[WallPlane],
-        wall_history: &[Vec<ContactHistory>],
+        team: &Team,
     ) {
         let total = self.offsets[radius.len()];
         self.points.resize(total, ContactPoint::default());
         self.sides.resize(total, Side::Wall(0));
         self.deltas.resize(total, 0.0);
-        self.cursor.clear();
-        self.cursor.extend_from_slice(&self.offsets[..radius.len()]);
-        for i in 0..radius.len() {
-            for k in list.offsets[i]..list.offsets[i + 1] {
-                let (del, r) = self.separation[k];
-                if r.is_nan() {
-                    continue;
-                }
-                let j = list.neighbours[k] as usize;
-                let points =
-                    pair_contact_points(&del, r, radius[i], radius[j], history[k].normal_force);
-                for (side, (sphere, point)) in [i, j].into_iter().zip(points).enumerate() {
-                    let slot = self.cursor[sphere];
-                    self.cursor[sphere] += 1;
-                    self.points[slot] = point;
-                    self.sides[slot] = Side::Pair {
-                        entry: k as u32,
-                        side: side as u8,
-                    };
+        let chunks = team.threads();
+        let separation = &self.separation;
+        let points = SharedSlice::new(&mut self.points);
+        let sides = SharedSlice::new(&mut self.sides);
+        let cursors = SharedSlice::new(&mut self.cursors);
+        team.run(|c| {
+            // SAFETY: chunk c alone uses cursors[c]; the slots it hands out
+            // are its own (`count`), so no two chunks write one slot.
+            let cursor = unsafe { cursors.get(c) };
+            for i in list.balanced_rows(chunks, c) {
+                for k in list.offsets[i]..list.offsets[i + 1] {
+                    let (del, r) = separation[k];
+                    if r.is_nan() {
+                        continue;
+                    }
+                    let j = list.neighbours[k] as usize;
+                    let pair_points =
+                        pair_contact_points(&del, r, radius[i], radius[j], history[k].normal_force);
+                    for (side, (sphere, point)) in [i, j].into_iter().zip(pair_points).enumerate() {
+                        let slot = cursor[sphere];
+                        cursor[sphere] += 1;
+                        unsafe {
+                            *points.get(slot) = point;
+                            *sides.get(slot) = Side::Pair {
+                                entry: k as u32,
+                                side: side as u8,
+                            };
+                        }
+                    }
                 }
             }
-        }
+        });
+    }
+
+    /// Places every wall within reach in its sphere's last slots, the
+    /// walls in order.
+    fn place_walls(
+        &mut self,
+        radius: &[f64],
+        planes: &[WallPlane],
+        wall_history: &[Vec<ContactHistory>],
+    ) {
         let walls = planes.iter().zip(&self.wall_distance).zip(wall_history);
         for (w, ((plane, distances), history)) in walls.enumerate() {
             for (i, &distance) in distances.iter().enumerate() {
                 if distance.is_nan() {
                     continue;
                 }
-                let slot = self.cursor[i];
-                self.cursor[i] += 1;
+                let slot = self.wall_cursor[i];
+                self.wall_cursor[i] += 1;
                 // On the wall's plane: a rigid wall does not give way.
                 let point = plane.contact_point(distance);
                 self.points[slot] = ContactPoint::new(point, history[i].normal_force, radius[i]);
@@ -381,7 +481,7 @@ impl ClosurePass {
             }
         }
         debug_assert!(
-            (0..radius.len()).all(|i| self.cursor[i] == self.offsets[i + 1]),
+            (0..radius.len()).all(|i| self.wall_cursor[i] == self.offsets[i + 1]),
             "every sphere fills the slots it counted"
         );
     }
@@ -415,8 +515,10 @@ impl ClosurePass {
                 }
             }
         }
-        self.wall.iter().enumerate().find_map(|(w, deltas)| {
-            let i = (0..deltas.len()).find(|&i| deltas[i] > reach * radius[i])?;
+        let n = radius.len();
+        (0..self.wall.len() / n.max(1)).find_map(|w| {
+            let deltas = self.wall_corrections(w);
+            let i = (0..n).find(|&i| deltas[i] > reach * radius[i])?;
             Some(BeyondReach {
                 sphere: i,
                 partner: w,
@@ -424,5 +526,78 @@ impl ClosurePass {
                 ratio: deltas[i] / radius[i],
             })
         })
+    }
+}
+
+/// What the correction of a run of spheres reads: the closure and every
+/// sphere's contacts, placed.
+struct CorrectedSpheres<'a> {
+    half_space: &'a HalfSpace,
+    closure: &'a Closure,
+    radius: &'a [f64],
+    offsets: &'a [usize],
+    points: &'a [ContactPoint],
+    sides: &'a [Side],
+}
+
+/// Where the correction of a run of spheres goes.
+struct CorrectionTarget<'a> {
+    lanes: &'a mut SurfaceCorrections,
+    /// The run's first contact, and its contacts' corrections.
+    first: usize,
+    deltas: &'a mut [f64],
+    /// Per pair-list entry, the corrections of its two sides, flat.
+    pair: &'a SharedSlice<f64>,
+    /// Per wall, per sphere, the sphere's correction at the wall.
+    wall: &'a SharedSlice<f64>,
+    spheres: usize,
+}
+
+impl CorrectedSpheres<'_> {
+    /// Corrects every contact of `spheres` into `target` and reports the
+    /// extremes in sphere order.
+    ///
+    /// # Safety
+    /// No other thread writes the pair sides and wall entries of these
+    /// spheres' contacts meanwhile.
+    unsafe fn correct(
+        &self,
+        spheres: std::ops::Range<usize>,
+        target: CorrectionTarget<'_>,
+    ) -> ClosureReport {
+        let mut report = ClosureReport::default();
+        for i in spheres {
+            let range = self.offsets[i]..self.offsets[i + 1];
+            // A sphere with one contact, or none that pressed, has nothing
+            // to correct.
+            if range.len() < 2 || self.points[range.clone()].iter().all(|p| p.force == 0.0) {
+                continue;
+            }
+            let deltas = &mut target.deltas[range.start - target.first..range.end - target.first];
+            report.switched_off += target.lanes.compute(
+                self.half_space,
+                self.closure,
+                self.radius[i],
+                &self.points[range.clone()],
+                deltas,
+            );
+            for (side, &delta) in self.sides[range].iter().zip(&*deltas) {
+                match *side {
+                    Side::Pair { entry, side } => {
+                        *target.pair.get(2 * entry as usize + side as usize) = delta;
+                    }
+                    Side::Wall(w) => *target.wall.get(w as usize * target.spheres + i) = delta,
+                }
+                // The extremes over every contact: those of spheres with
+                // nothing to correct are 0 and change neither.
+                let ratio = delta / self.radius[i];
+                report.largest = report.largest.max(ratio);
+                report.smallest = report.smallest.min(ratio);
+                if ratio <= -1.0 && report.collapsed.is_none() {
+                    report.collapsed = Some((i, ratio));
+                }
+            }
+        }
+        report
     }
 }
