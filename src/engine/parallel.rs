@@ -194,6 +194,64 @@ mod tests {
         out.iter().map(|s| s.0).collect()
     }
 
+    /// Two arrays at once (forces and torques), the second empty or not,
+    /// on 1 to 3 threads: every chunk's contributions reach both, and
+    /// the chunks' results fold in chunk order.
+    #[test]
+    fn several_arrays_are_scattered_at_once() {
+        let n = 29;
+        let pairs = |c: usize, chunks: usize| {
+            chunk_range(n, chunks, c).flat_map(move |i| (i + 1..n.min(i + 5)).map(move |j| (i, j)))
+        };
+        let mut serial = None;
+        for threads in [1, 2, 3] {
+            let team = Team::new(threads);
+            let chunks = team.threads();
+            let mut scratch = Scratch::<Vec3>::default();
+            for torques in [true, false] {
+                let mut f = vec![Vec3::default(); n];
+                let mut t = vec![Vec3::default(); if torques { n } else { 0 }];
+                let first = |c| chunk_range(n, chunks, c).start;
+                let order = scratch.scatter_many(
+                    &team,
+                    [&mut f[..], &mut t[..]],
+                    first,
+                    0usize,
+                    |c, [f, t]| {
+                        for (i, j) in pairs(c, chunks) {
+                            let w = 1.0 / (1 + i * n + j) as f64;
+                            f[i].0[0] += w;
+                            f[j].0[0] -= w;
+                            if let (Some(ti), Some(tj)) = (t.get(i), t.get(j)) {
+                                let (ti, tj) = (ti.0[1] + w, tj.0[1] + 2.0 * w);
+                                t[i].0[1] = ti;
+                                t[j].0[1] = tj;
+                            }
+                        }
+                        c + 1
+                    },
+                    |acc, c| 10 * acc + c,
+                );
+                // One thread returns its chunk's result as it is.
+                let expected_order = (1..=chunks).fold(0, |acc, c| 10 * acc + c);
+                assert_eq!(order, expected_order, "{threads} threads");
+                assert_eq!(t.len(), if torques { n } else { 0 });
+                let sums: Vec<[f64; 2]> = (0..n)
+                    .map(|i| [f[i].0[0], t.get(i).map_or(0.0, |t| t.0[1])])
+                    .collect();
+                if torques {
+                    let serial = serial.get_or_insert_with(|| sums.clone());
+                    for (got, want) in sums.iter().zip(serial.iter()) {
+                        for d in 0..2 {
+                            assert!((got[d] - want[d]).abs() <= 1e-15, "{threads} threads");
+                        }
+                    }
+                    assert!(sums.iter().all(|s| s[0] != 0.0 && s[1] != 0.0));
+                }
+            }
+        }
+    }
+
     /// A half list's rows (row i of n holding about n - i entries, some
     /// empty) split into parts of nearly equal entries: consecutive
     /// parts that cover every row, each within one row of an equal share.
