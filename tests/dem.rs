@@ -95,6 +95,17 @@ fn contact_history_survives_pair_list_rebuilds() {
     );
 }
 
+/// Plain Hertz, the standard closure and the advanced closure (whose
+/// small ratio switches most contacts off).
+fn closures() -> [Option<bpm::engine::MultiContact>; 3] {
+    use bpm::engine::MultiContact;
+    [
+        None,
+        Some(MultiContact::standard(1.5)),
+        Some(MultiContact::advanced(1.5, 1e-3)),
+    ]
+}
+
 /// Contacts formed four at a time give the one-at-a-time path's
 /// trajectory bit for bit: sliding spheres under compression, affine
 /// shear, Lees-Edwards shear (partners' image velocities) and between
@@ -104,7 +115,6 @@ fn contact_history_survives_pair_list_rebuilds() {
 /// history must be identical.
 #[test]
 fn contact_blocks_follow_the_one_contact_path_bit_for_bit() {
-    use bpm::engine::MultiContact;
     use bpm::verify::{dem_trajectory, DemLoading};
     fn bits(v: &[[f64; 3]]) -> Vec<[u64; 3]> {
         v.iter().map(|x| x.map(f64::to_bits)).collect()
@@ -138,18 +148,13 @@ fn contact_blocks_follow_the_one_contact_path_bit_for_bit() {
         let spins = &sys.particles.rotation.as_ref().unwrap().omega;
         (bits(&sys.particles.x), bits(spins), rows, histories)
     };
-    let closures = [
-        None,
-        Some(MultiContact::standard(1.5)),
-        Some(MultiContact::advanced(1.5, 1e-3)),
-    ];
     for loading in [
         DemLoading::Compress,
         DemLoading::Shear,
         DemLoading::LeesEdwards,
         DemLoading::Walls,
     ] {
-        for closure in closures {
+        for closure in closures() {
             let mut scene = dem_trajectory(3, false, loading, 1000);
             scene.force_field.multicontact = closure;
             let case = format!("{loading:?} {closure:?}");
@@ -534,32 +539,87 @@ fn walls_keep_their_friction_springs_across_stages_only_when_asked() {
     );
 }
 
+/// What a DEM evaluation leaves: the contact histories and the closure's
+/// corrections (bits), and the forces, torques, report and stress.
+struct Evaluation {
+    forces: Vec<[f64; 3]>,
+    torques: Vec<[f64; 3]>,
+    histories: Vec<u64>,
+    corrections: Vec<u64>,
+    report: bpm::engine::DemReport,
+    stress: [f64; 6],
+}
+
+/// Values per contact history in [`Evaluation::histories`].
+const HISTORY_VALUES: usize = 8;
+
+fn evaluation(sys: &bpm::engine::System) -> Evaluation {
+    let dem = sys.model_as::<bpm::engine::DemModel>().unwrap();
+    let histories = dem
+        .contacts()
+        .history
+        .iter()
+        .flat_map(|h| {
+            let springs = h.tangential.iter().chain(&h.rolling);
+            springs.chain([&h.twist, &h.normal_force])
+        })
+        .map(|v| v.to_bits())
+        .collect();
+    let corrections = dem.closure_pass().map_or(Vec::new(), |c| {
+        let walls = (0..dem.walls().len()).flat_map(|w| c.wall_corrections(w));
+        let pairs = c.pair_corrections().iter().flatten();
+        pairs.chain(walls).map(|v| v.to_bits()).collect()
+    });
+    Evaluation {
+        forces: sys.particles.f.clone(),
+        torques: sys.particles.rotation.as_ref().unwrap().torque.clone(),
+        histories,
+        corrections,
+        report: dem.report().clone(),
+        stress: sys.pressure_tensor(),
+    }
+}
+
+fn bits(v: &[[f64; 3]]) -> Vec<u64> {
+    v.iter().flatten().map(|x| x.to_bits()).collect()
+}
+
+/// Largest difference between two sets of rows, and their largest value.
+fn difference(got: &[[f64; 3]], want: &[[f64; 3]]) -> (f64, f64) {
+    let pairs = got.iter().flatten().zip(want.iter().flatten());
+    let worst = pairs.fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
+    let scale = want.iter().flatten().fold(0.0f64, |m, x| m.max(x.abs()));
+    (worst, scale)
+}
+
 /// The contact pass and the multi-contact closure share their work among
 /// threads: one step from the same state on 1, 2 and 3 threads gives the
 /// same contact histories and closure corrections bit for bit (each
 /// contact is formed once, from the same half-step velocities, and each
 /// sphere's contacts are corrected in the same order), and the same
 /// forces and torques up to the order of their sums; the same thread
-/// count twice gives the same bits.
+/// count twice gives the same bits. Evaluations in a row on a team that
+/// grows and shrinks (each from the histories the last one left, on the
+/// buffers it left) give the one-thread sequence's histories and
+/// corrections bit for bit. With Hertz contacts formed four at a time, and
+/// one at a time (rolling and twisting friction).
 #[test]
 fn threads_share_the_contact_pass_and_the_closure() {
-    use bpm::engine::{DemModel, ExternalTerms, MultiContact, StageDrivers};
+    use bpm::engine::{ExternalTerms, StageDrivers};
     use bpm::verify::{dem_trajectory, DemLoading};
-    let closures = [
-        None,
-        Some(MultiContact::standard(1.5)),
-        Some(MultiContact::advanced(1.5, 1e-3)),
+    let cases = [
+        (DemLoading::Compress, false),
+        (DemLoading::LeesEdwards, false),
+        (DemLoading::Walls, false),
+        (DemLoading::Compress, true),
     ];
-    for loading in [
-        DemLoading::Compress,
-        DemLoading::LeesEdwards,
-        DemLoading::Walls,
-    ] {
-        for closure in closures {
-            let case = format!("{loading:?} {closure:?}");
-            let mut scene = dem_trajectory(3, false, loading, 400);
+    for (loading, rolling_twisting) in cases {
+        for closure in closures() {
+            let case = format!("{loading:?} rolling {rolling_twisting} {closure:?}");
+            let mut scene = dem_trajectory(3, rolling_twisting, loading, 400);
             scene.force_field.multicontact = closure;
             let mut sys = bpm::scene::build_system(&scene, 1);
+            let stage_start = sys.simbox.clone();
             let (_, error) =
                 bpm::scene::run_scene(&mut sys, &scene, &bpm::scene::RunOptions::quiet(1));
             assert!(error.is_none(), "{case}: {error:?}");
@@ -574,101 +634,95 @@ fn threads_share_the_contact_pass_and_the_closure() {
                 tally_every: 1,
                 ..Default::default()
             };
-            let (particles, list, state) = (
+            let saved = (
                 sys.particles.clone(),
                 sys.neighbours.clone(),
+                sys.simbox.clone(),
                 sys.model.save_state().unwrap(),
             );
-            let start = sys.simbox.clone();
-            let (box_now, step) = (sys.simbox.clone(), sys.step);
+            let step = sys.step;
+            let restore = |sys: &mut bpm::engine::System| {
+                sys.particles = saved.0.clone();
+                sys.neighbours = saved.1.clone();
+                sys.simbox = saved.2.clone();
+                sys.model.restore_state(saved.3.clone()).unwrap();
+            };
             let mut one_step = |threads: usize| {
-                sys.particles = particles.clone();
-                sys.neighbours = list.clone();
-                sys.simbox = box_now.clone();
-                sys.model.restore_state(state.clone()).unwrap();
+                restore(&mut sys);
                 sys.threads = threads;
-                sys.step(&drivers, step + 1, &start).unwrap();
-                let dem = sys.model_as::<DemModel>().unwrap();
-                let histories: Vec<u64> = dem
-                    .contacts()
-                    .history
-                    .iter()
-                    .flat_map(|h| h.tangential.iter().chain([&h.normal_force]))
-                    .map(|v| v.to_bits())
-                    .collect();
-                let corrections: Vec<u64> = dem.closure_pass().map_or(Vec::new(), |c| {
-                    let walls = (0..dem.walls().len()).flat_map(|w| c.wall_corrections(w));
-                    let pairs = c.pair_corrections().iter().flatten();
-                    pairs.chain(walls).map(|v| v.to_bits()).collect()
-                });
-                let report = dem.report().clone();
-                let rotation = sys.particles.rotation.as_ref().unwrap();
-                let torques = rotation.torque.clone();
-                (
-                    sys.particles.f.clone(),
-                    torques,
-                    histories,
-                    corrections,
-                    report,
-                    sys.pressure_tensor(),
-                )
+                sys.step(&drivers, step + 1, &stage_start).unwrap();
+                evaluation(&sys)
             };
             let serial = one_step(1);
-            let touching = serial.2.chunks(4).filter(|h| h[3] != 0).count();
+            let touching = serial
+                .histories
+                .chunks(HISTORY_VALUES)
+                .filter(|h| h[HISTORY_VALUES - 1] != 0)
+                .count();
             assert!(touching > 20, "{case}: {touching} touching pairs");
             if closure.is_some() {
                 // The advanced closure's small ratio switches most off.
-                let corrected = serial.3.iter().filter(|&&b| f64::from_bits(b) != 0.0);
-                let switched_off = serial.4.closure.unwrap().switched_off;
+                let corrected = serial
+                    .corrections
+                    .iter()
+                    .filter(|&&b| f64::from_bits(b) != 0.0);
+                let switched_off = serial.report.closure.unwrap().switched_off;
                 assert!(
                     corrected.count() + switched_off > 20,
                     "{case}: too few corrections"
                 );
             }
-            let largest = |v: &[[f64; 3]]| v.iter().flatten().fold(0.0f64, |m, x| m.max(x.abs()));
-            let (force_scale, torque_scale) = (largest(&serial.0), largest(&serial.1));
-            assert!(force_scale > 0.0 && torque_scale > 0.0, "{case}");
             for threads in [2, 3] {
                 let shared = one_step(threads);
+                let on = format!("{case}, {threads} threads");
                 assert!(
-                    shared.2 == serial.2,
-                    "{case}, {threads} threads: histories differ"
+                    shared.histories == serial.histories,
+                    "{on}: histories differ"
                 );
                 assert!(
-                    shared.3 == serial.3,
-                    "{case}, {threads} threads: corrections differ"
+                    shared.corrections == serial.corrections,
+                    "{on}: corrections differ"
                 );
-                assert_eq!(
-                    shared.4, serial.4,
-                    "{case}, {threads} threads: reports differ"
-                );
-                for (what, got, want, scale) in [
-                    ("force", &shared.0, &serial.0, force_scale),
-                    ("torque", &shared.1, &serial.1, torque_scale),
+                assert_eq!(shared.report, serial.report, "{on}: reports differ");
+                for (what, got, want) in [
+                    ("force", &shared.forces, &serial.forces),
+                    ("torque", &shared.torques, &serial.torques),
                 ] {
-                    let worst = got
-                        .iter()
-                        .flatten()
-                        .zip(want.iter().flatten())
-                        .fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
+                    let (worst, scale) = difference(got, want);
+                    assert!(scale > 0.0, "{on}: no {what}s");
                     assert!(
                         worst <= 1e-13 * scale,
-                        "{case}, {threads} threads: {what}s differ by {worst:e} of {scale:e}"
+                        "{on}: {what}s differ by {worst:e} of {scale:e}"
                     );
                 }
-                let stress_scale = serial.5.iter().fold(0.0f64, |m, s| m.max(s.abs()));
-                for (a, b) in shared.5.iter().zip(&serial.5) {
-                    assert!((a - b).abs() <= 1e-12 * stress_scale, "{case}: stress");
+                let stress_scale = serial.stress.iter().fold(0.0f64, |m, s| m.max(s.abs()));
+                for (a, b) in shared.stress.iter().zip(&serial.stress) {
+                    assert!((a - b).abs() <= 1e-12 * stress_scale, "{on}: stress");
                 }
                 let again = one_step(threads);
-                let bits = |v: &[[f64; 3]]| -> Vec<u64> {
-                    v.iter().flatten().map(|x| x.to_bits()).collect()
-                };
                 assert!(
-                    bits(&again.0) == bits(&shared.0) && bits(&again.1) == bits(&shared.1),
-                    "{case}, {threads} threads: not reproducible"
+                    bits(&again.forces) == bits(&shared.forces)
+                        && bits(&again.torques) == bits(&shared.torques),
+                    "{on}: not reproducible"
                 );
             }
+            let elapsed = spec.steps as f64 * spec.dt;
+            let mut in_a_row = |teams: &[usize]| -> Vec<(Vec<u64>, Vec<u64>)> {
+                restore(&mut sys);
+                teams
+                    .iter()
+                    .map(|&threads| {
+                        sys.threads = threads;
+                        sys.compute_forces(&drivers, elapsed, true);
+                        let e = evaluation(&sys);
+                        (e.histories, e.corrections)
+                    })
+                    .collect()
+            };
+            assert!(
+                in_a_row(&[3, 2, 1, 3, 2]) == in_a_row(&[1; 5]),
+                "{case}: evaluations in a row on changing teams differ"
+            );
         }
     }
 }

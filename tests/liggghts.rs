@@ -8,10 +8,10 @@ use bpm::verify::liggghts::{
     lid_cross_check, lid_cross_check_with, tutorial_options, write_tutorial_bed, LiggghtsLaw,
 };
 
-// One thread: the DEM bed's contact passes run on one thread anyway. (A run
-// of this test on two threads, beside the other test on two more, once hung
-// in the thread team: a worker woken late parked again unannounced. That is
-// fixed and tested in `engine::team`.)
+// One thread: the cross-check compares forces, not speed, and the suite
+// runs tests side by side. (A run of this test on two threads, beside the
+// other test on two more, once hung in the thread team: a worker woken late
+// parked again unannounced. That is fixed and tested in `engine::team`.)
 
 fn work(name: &str) -> std::path::PathBuf {
     std::env::temp_dir().join(format!("bpm-liggghts-{name}-{}", std::process::id()))

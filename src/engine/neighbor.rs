@@ -241,6 +241,12 @@ impl NeighbourList {
         &self.neighbours[self.offsets[i]..self.offsets[i + 1]]
     }
 
+    /// The list entries of the rows `rows` (none before the first build).
+    pub fn entries(&self, rows: std::ops::Range<usize>) -> std::ops::Range<usize> {
+        let at = |i: usize| self.offsets.get(i).copied().unwrap_or(0);
+        at(rows.start)..at(rows.end)
+    }
+
     /// Iterator over `(i, neighbours of i)` for atoms in `range`.
     pub fn rows(&self, range: std::ops::Range<usize>) -> impl Iterator<Item = (usize, &[i32])> {
         range.map(move |i| (i, self.of(i)))

@@ -67,7 +67,8 @@ impl<T: Copy + Default + Send + Sync + std::ops::AddAssign> Scratch<T> {
     /// [`Scratch::scatter`] into `K` arrays at once (forces and torques),
     /// each chunk's result folded with `merge` from `init` in chunk order.
     /// One thread runs `work(0, outs)` alone and returns its result as it
-    /// is. Every array follows the same `lowest`; an array may be empty.
+    /// is, unmerged: `init` must be `merge`'s identity for the two to
+    /// agree. Every array follows the same `lowest`; an array may be empty.
     pub fn scatter_many<const K: usize, R, F, M>(
         &mut self,
         team: &Team,
@@ -208,7 +209,9 @@ mod tests {
             let team = Team::new(threads);
             let chunks = team.threads();
             let mut scratch = Scratch::<Vec3>::default();
-            for torques in [true, false] {
+            // Each layout twice on the same buffers: a buffer must not
+            // carry a pass's sums into the next.
+            for torques in [true, true, false, false] {
                 let mut f = vec![Vec3::default(); n];
                 let mut t = vec![Vec3::default(); if torques { n } else { 0 }];
                 let first = |c| chunk_range(n, chunks, c).start;
@@ -239,15 +242,15 @@ mod tests {
                 let sums: Vec<[f64; 2]> = (0..n)
                     .map(|i| [f[i].0[0], t.get(i).map_or(0.0, |t| t.0[1])])
                     .collect();
-                if torques {
-                    let serial = serial.get_or_insert_with(|| sums.clone());
-                    for (got, want) in sums.iter().zip(serial.iter()) {
-                        for d in 0..2 {
-                            assert!((got[d] - want[d]).abs() <= 1e-15, "{threads} threads");
-                        }
+                let serial: &Vec<[f64; 2]> = serial.get_or_insert_with(|| sums.clone());
+                // Without torques the forces are the same, the torques 0.
+                let dims = if torques { 2 } else { 1 };
+                for (got, want) in sums.iter().zip(serial.iter()) {
+                    for d in 0..dims {
+                        assert!((got[d] - want[d]).abs() <= 1e-15, "{threads} threads");
                     }
-                    assert!(sums.iter().all(|s| s[0] != 0.0 && s[1] != 0.0));
                 }
+                assert!(sums.iter().all(|s| s[0] != 0.0 && (s[1] != 0.0) == torques));
             }
         }
     }

@@ -2,11 +2,11 @@
 //!
 //! The half pair list (`j > i`) is split by its rows `i` into the team's
 //! chunks, each with about as many list entries
-//! ([`NeighbourList::balanced_rows`]). A chunk forms the contacts of its rows, advances their
-//! histories (the list entries of its rows: disjoint from every other
-//! chunk's) and adds forces and torques into its own buffers, from its
-//! first row on ([`Scratch::scatter_many`]); the buffers are then summed in
-//! chunk order. One thread adds straight into the outputs in list order;
+//! ([`NeighbourList::balanced_rows`]). A chunk forms the contacts of its
+//! rows, advances their histories (the list entries of its rows: disjoint
+//! from every other chunk's) and adds forces and torques into its own
+//! buffers, from its first row on ([`Scratch::scatter_many`]); the buffers
+//! are then summed in chunk order. One thread adds straight into the outputs in list order;
 //! for a fixed number of threads every run gives the same bits.
 
 use super::super::model::ForceInput;
@@ -61,7 +61,7 @@ pub(super) fn contact_forces(
         Tally::default(),
         |c, [f, torque]| {
             let rows = list.balanced_rows(chunks, c);
-            let entries = list.offsets[rows.start]..list.offsets[rows.end];
+            let entries = list.entries(rows.clone());
             // SAFETY: the chunks' rows, and so their list entries, are
             // disjoint.
             let history = Section {
@@ -183,16 +183,9 @@ impl ContactPass<'_> {
             mass: mass[i],
         };
         self.touching_pairs(rows, &mut history, |pair, history| {
-            let TouchingPair {
-                i,
-                j,
-                entry,
-                del,
-                partner_velocity,
-                moved,
-            } = pair;
+            let (i, j) = (pair.i, pair.j);
             let sj = Sphere {
-                v: partner_velocity,
+                v: pair.partner_velocity,
                 ..sphere(j)
             };
             let ContactForce {
@@ -201,11 +194,11 @@ impl ContactPass<'_> {
                 torque_j,
             } = corrected_granular_contact(
                 self.coeffs,
-                &del,
+                &pair.del,
                 &sphere(i),
                 &sj,
-                moved,
-                history.entry(entry),
+                pair.moved,
+                history.entry(pair.entry),
                 dt,
                 update,
             );
@@ -220,7 +213,7 @@ impl ContactPass<'_> {
                 }
             }
             if input.tally {
-                tally.add_vector(1.0, &del, &force);
+                tally.add_vector(1.0, &pair.del, &force);
             }
         });
         tally

@@ -179,8 +179,8 @@ pub struct ClosurePass {
     /// them out among the threads.
     work: Vec<usize>,
     deltas: Vec<f64>,
-    /// One kernel (with its buffers) per thread.
-    lanes: Vec<SurfaceCorrections>,
+    /// One correction kernel (with its buffers) per thread.
+    kernels: Vec<SurfaceCorrections>,
     /// Per pair-list entry, the corrections of its two sides.
     pair: Vec<[f64; 2]>,
     /// Per wall, per sphere, the sphere's correction at the wall: wall
@@ -214,7 +214,7 @@ impl ClosurePass {
             wall_cursor: Vec::new(),
             work: Vec::new(),
             deltas: Vec::new(),
-            lanes: Vec::new(),
+            kernels: Vec::new(),
             pair: Vec::new(),
             wall: Vec::new(),
             spheres: 0,
@@ -271,8 +271,9 @@ impl ClosurePass {
         self.wall.clear();
         self.wall.resize(walls.len() * n, 0.0);
         let chunks = team.threads();
-        self.lanes.resize_with(chunks, SurfaceCorrections::default);
-        let lanes = SharedSlice::new(&mut self.lanes);
+        self.kernels
+            .resize_with(chunks, SurfaceCorrections::default);
+        let kernels = SharedSlice::new(&mut self.kernels);
         let deltas = SharedSlice::new(&mut self.deltas);
         // One entry per side: a pair's two sides may be two threads'.
         let pair = SharedSlice::new(self.pair.as_flattened_mut());
@@ -290,11 +291,11 @@ impl ClosurePass {
             |c| {
                 let spheres = balanced_range(&self.work, chunks, c);
                 let contacts = self.offsets[spheres.start]..self.offsets[spheres.end];
-                // SAFETY: chunk c alone uses lanes[c]; the chunks' spheres,
+                // SAFETY: chunk c alone uses kernels[c]; the chunks' spheres,
                 // and so their contacts, are disjoint, and each side of a
                 // pair and each sphere at a wall is one sphere's contact.
                 let target = CorrectionTarget {
-                    lanes: unsafe { lanes.get(c) },
+                    kernel: unsafe { kernels.get(c) },
                     first: contacts.start,
                     deltas: unsafe { deltas.range(contacts) },
                     pair: &pair,
@@ -327,7 +328,7 @@ impl ClosurePass {
         let cursors = SharedSlice::new(&mut self.cursors);
         team.run(|c| {
             let rows = list.balanced_rows(chunks, c);
-            let section = list.offsets[rows.start]..list.offsets[rows.end];
+            let section = list.entries(rows.clone());
             let first = section.start;
             // SAFETY: the chunks' rows, and so their list entries, are
             // disjoint, and chunk c alone uses cursors[c].
@@ -344,6 +345,10 @@ impl ClosurePass {
             for i in rows {
                 for k in list.offsets[i]..list.offsets[i + 1] {
                     let j = list.neighbours[k] as usize;
+                    // `place` hands out slots safely only on a half list:
+                    // a pair is counted and placed by its lower sphere's
+                    // chunk alone.
+                    assert!(j > i, "pair list entry {k} ({i}, {j}) is not j > i");
                     let (del, _) = sep.delta_image(&x[i], &x[j]);
                     let r = (del[0] * del[0] + del[1] * del[1] + del[2] * del[2]).sqrt();
                     out[k - first] = if r < reach_factor * (radius[i] + radius[j]) {
@@ -392,12 +397,13 @@ impl ClosurePass {
         for i in 0..n {
             let mut slot = self.offsets[i];
             for (counts, &lowest) in self.cursors.iter_mut().zip(&self.lowest) {
-                // Below its first row a chunk reaches no sphere.
-                let count = if i < lowest { 0 } else { counts[i] };
+                // Below its first row a chunk reaches no sphere (its pairs
+                // have j > i): its count there is stale, and never read.
                 if i >= lowest {
+                    let count = counts[i];
                     counts[i] = slot;
+                    slot += count;
                 }
-                slot += count;
             }
             self.wall_cursor[i] = slot;
             let walls = self.wall_distance.iter().filter(|d| !d[i].is_nan()).count();
@@ -542,7 +548,7 @@ struct CorrectedSpheres<'a> {
 
 /// Where the correction of a run of spheres goes.
 struct CorrectionTarget<'a> {
-    lanes: &'a mut SurfaceCorrections,
+    kernel: &'a mut SurfaceCorrections,
     /// The run's first contact, and its contacts' corrections.
     first: usize,
     deltas: &'a mut [f64],
@@ -574,7 +580,7 @@ impl CorrectedSpheres<'_> {
                 continue;
             }
             let deltas = &mut target.deltas[range.start - target.first..range.end - target.first];
-            report.switched_off += target.lanes.compute(
+            report.switched_off += target.kernel.compute(
                 self.half_space,
                 self.closure,
                 self.radius[i],
