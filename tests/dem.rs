@@ -116,9 +116,6 @@ fn closures() -> [Option<bpm::engine::MultiContact>; 3] {
 #[test]
 fn contact_blocks_follow_the_one_contact_path_bit_for_bit() {
     use bpm::verify::{dem_trajectory, DemLoading};
-    fn bits(v: &[[f64; 3]]) -> Vec<[u64; 3]> {
-        v.iter().map(|x| x.map(f64::to_bits)).collect()
-    }
     let run = |scene: &bpm::scene::Scene, blocks: bool| {
         let mut sys = bpm::scene::build_system(scene, 1);
         sys.model_as_mut::<bpm::engine::DemModel>()
@@ -127,19 +124,7 @@ fn contact_blocks_follow_the_one_contact_path_bit_for_bit() {
         let (stages, error) =
             bpm::scene::run_scene(&mut sys, scene, &bpm::scene::RunOptions::quiet(1));
         assert!(error.is_none(), "{error:?}");
-        let dem = sys.model_as::<bpm::engine::DemModel>().unwrap();
-        let histories: Vec<Vec<u64>> = dem
-            .contacts()
-            .history
-            .iter()
-            .map(|h| {
-                let values = h.tangential.iter().chain(&h.rolling);
-                values
-                    .chain([&h.twist, &h.normal_force])
-                    .map(|v| v.to_bits())
-                    .collect()
-            })
-            .collect();
+        let histories = history_bits(sys.model_as::<bpm::engine::DemModel>().unwrap());
         let rows: Vec<Vec<u64>> = stages
             .iter()
             .flat_map(|s| &s.rows)
@@ -159,7 +144,7 @@ fn contact_blocks_follow_the_one_contact_path_bit_for_bit() {
             scene.force_field.multicontact = closure;
             let case = format!("{loading:?} {closure:?}");
             let blocks = run(&scene, true);
-            let touching = blocks.3.iter().filter(|h| h[7] != 0).count();
+            let touching = touching(&blocks.3);
             assert!(touching > 20, "{case}: {touching} touching pairs");
             let one = run(&scene, false);
             assert!(blocks.0 == one.0, "{case}: positions differ");
@@ -550,21 +535,31 @@ struct Evaluation {
     stress: [f64; 6],
 }
 
-/// Values per contact history in [`Evaluation::histories`].
+/// Values per contact history in [`history_bits`].
 const HISTORY_VALUES: usize = 8;
+
+/// Every contact history's values (tangential, rolling, twist, normal
+/// force), as bits, contact after contact.
+fn history_bits(dem: &bpm::engine::DemModel) -> Vec<u64> {
+    let values = dem.contacts().history.iter().flat_map(|h| {
+        let springs = h.tangential.iter().chain(&h.rolling);
+        springs.chain([&h.twist, &h.normal_force])
+    });
+    values.map(|v| v.to_bits()).collect()
+}
+
+/// Contacts whose recorded normal force is not 0 in `histories`
+/// ([`history_bits`]).
+fn touching(histories: &[u64]) -> usize {
+    let normal_forces = histories
+        .chunks(HISTORY_VALUES)
+        .map(|h| h[HISTORY_VALUES - 1]);
+    normal_forces.filter(|&f| f != 0).count()
+}
 
 fn evaluation(sys: &bpm::engine::System) -> Evaluation {
     let dem = sys.model_as::<bpm::engine::DemModel>().unwrap();
-    let histories = dem
-        .contacts()
-        .history
-        .iter()
-        .flat_map(|h| {
-            let springs = h.tangential.iter().chain(&h.rolling);
-            springs.chain([&h.twist, &h.normal_force])
-        })
-        .map(|v| v.to_bits())
-        .collect();
+    let histories = history_bits(dem);
     let corrections = dem.closure_pass().map_or(Vec::new(), |c| {
         let walls = (0..dem.walls().len()).flat_map(|w| c.wall_corrections(w));
         let pairs = c.pair_corrections().iter().flatten();
@@ -654,11 +649,7 @@ fn threads_share_the_contact_pass_and_the_closure() {
                 evaluation(&sys)
             };
             let serial = one_step(1);
-            let touching = serial
-                .histories
-                .chunks(HISTORY_VALUES)
-                .filter(|h| h[HISTORY_VALUES - 1] != 0)
-                .count();
+            let touching = touching(&serial.histories);
             assert!(touching > 20, "{case}: {touching} touching pairs");
             if closure.is_some() {
                 // The advanced closure's small ratio switches most off.
