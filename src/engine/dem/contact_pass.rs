@@ -23,13 +23,16 @@ use std::ops::Range;
 
 /// What every chunk of a contact pass reads.
 pub(super) struct ContactPass<'a> {
+    /// The contact law's coefficients.
     pub coeffs: &'a GranularCoeffs,
     /// The instruction set of the contact blocks.
     pub isa: Isa,
     /// Whether contacts are formed four at a time ([`hertz_mindlin_block`]:
     /// Hertz-Mindlin without rolling or twisting) or one at a time.
     pub blocks: bool,
+    /// The box's minimum image.
     pub sep: &'a MinimumImage,
+    /// The state the forces are evaluated for.
     pub input: &'a ForceInput<'a>,
     /// The closure's corrections of each list entry's two surfaces.
     pub corrections: Option<&'a [[f64; 2]]>,
