@@ -532,3 +532,82 @@ fn a_replicated_solid_has_the_same_bonds_and_stress() {
     }
     assert!(replicate(&base, [0, 1, 1]).is_err());
 }
+
+/// The bond pass in windows (each thread's rows computed into a small ring
+/// and gathered block by block) against the full-size array of rows, on
+/// the same system: forces and positions equal bit for bit on 1, 2 and 3
+/// threads; and on one thread the same virial, so that a barostat, which
+/// reads it every step, moves the box the same way to the last bit. With
+/// the multibody term and without; the solid's bonds cross the periodic
+/// faces, so the boundary rows take part.
+#[test]
+fn the_windowed_bond_pass_changes_no_bit() {
+    use bpm::engine::{BondWindow, BpmModel};
+    let solid = build_bulk(&BulkParams::shortened(12.0, 4, 0.0), 2, false)
+        .expect("bulk build")
+        .0;
+    let solid_with = |ff: ForceField, stages: Vec<StageSpec>| Scene {
+        force_field: ff,
+        stages,
+        ..solid.clone()
+    };
+    let run = |scene: &Scene, threads, mode| {
+        let mut sys = build_system(scene, threads);
+        let model = sys.model_as_mut::<BpmModel>().expect("a bonded model");
+        model.set_bond_window(mode);
+        let (_, err) = run_scene(&mut sys, scene, &opts(threads));
+        assert!(err.is_none(), "{err:?}");
+        let model = sys.model_as::<BpmModel>().expect("a bonded model");
+        match model.bond_window() {
+            // The ring wraps (on one thread, whose part has every row).
+            Some((ring, _)) => assert!(
+                threads > 1 || ring < model.bonds().len(),
+                "ring {ring}, {} bonds",
+                model.bonds().len()
+            ),
+            None => assert_eq!(mode, BondWindow::Never),
+        }
+        (sys.particles.x, sys.particles.f, sys.simbox.lengths)
+    };
+    // The first particle whose position or force differs, if any.
+    type Run = (Vec<[f64; 3]>, Vec<[f64; 3]>, [f64; 3]);
+    let first_difference = |a: &Run, b: &Run| {
+        assert_eq!(a.2, b.2, "box lengths");
+        (0..a.0.len()).find(|&p| a.0[p] != b.0[p] || a.1[p] != b.1[p])
+    };
+    for a_b in [0.0, -0.5] {
+        let mut hold = StageSpec::hold("md", 60, 0.1);
+        hold.set_velocities = Some(bpm::scene::VelocityInit { rms_speed: 0.05 });
+        let scene = solid_with(ForceField::paper(a_b), vec![hold.clone()]);
+        for threads in [1, 2, 3] {
+            let full = run(&scene, threads, BondWindow::Never);
+            assert!(full.1.iter().flatten().any(|&f| f != 0.0));
+            let windowed = run(&scene, threads, BondWindow::Always);
+            let differ = first_difference(&windowed, &full);
+            assert!(
+                differ.is_none(),
+                "a_B = {a_b}, {threads} thread(s): particle {differ:?}"
+            );
+        }
+        let mut baro = hold;
+        baro.barostat = Some(Barostat {
+            target_pressure: -1e-3,
+            gain: 0.05,
+        });
+        let scene = solid_with(ForceField::paper(a_b), vec![baro]);
+        let full = run(&scene, 1, BondWindow::Never);
+        assert_ne!(full.2, scene.simbox.lengths, "the barostat moved the box");
+        let differ = first_difference(&run(&scene, 1, BondWindow::Always), &full);
+        assert!(
+            differ.is_none(),
+            "a_B = {a_b}, barostat: particle {differ:?}"
+        );
+    }
+    // The default leaves a solid this small to the full-size array.
+    let scene = solid_with(ForceField::paper(0.0), vec![StageSpec::hold("md", 2, 0.1)]);
+    let mut sys = build_system(&scene, 1);
+    let (_, err) = run_scene(&mut sys, &scene, &opts(1));
+    assert!(err.is_none());
+    let model = sys.model_as::<BpmModel>().expect("a bonded model");
+    assert_eq!(model.bond_window(), None);
+}

@@ -1008,3 +1008,174 @@ fn row_kernel_cube_roots_match_the_scalar_routine_across_its_ranges() {
         assert_eq!(f, gathered, "{isa:?}: scatter kernel");
     }
 }
+
+/// The windowed bond pass (each part's interior rows computed into a ring
+/// a block at a time and gathered as soon as a particle's rows are done)
+/// against the full-size pass of [`bond_rows_give_the_scatter_kernels_forces_bit_for_bit`],
+/// on the periodic network renumbered along x (partners close in the
+/// numbering, as in a cell-sorted solid) so that small rings wrap many
+/// times: forces equal bit for bit for every split into parts, block size
+/// and instruction set; one part sums energy and virial bit for bit as the
+/// full-size pass does, several to round-off. A ring too small for the
+/// numbering's span is refused.
+#[test]
+fn windowed_bond_pass_gives_the_full_size_forces_bit_for_bit() {
+    let (simbox, x0, bonds0, r0_0, v0) = periodic_network(52);
+    let sep = simbox.minimum_image();
+    let n = x0.len();
+    let mut order: Vec<usize> = (0..n).collect();
+    order.sort_by(|&a, &b| x0[a][0].total_cmp(&x0[b][0]));
+    let mut new_index = vec![0; n];
+    for (k, &p) in order.iter().enumerate() {
+        new_index[p] = k;
+    }
+    let x: Vec<[f64; 3]> = order.iter().map(|&p| x0[p]).collect();
+    let v: Vec<[f64; 3]> = order.iter().map(|&p| v0[p]).collect();
+    let mut renumbered: Vec<(usize, usize, f64)> = bonds0
+        .iter()
+        .zip(&r0_0)
+        .map(|(b, &r0)| {
+            let (i, j) = (new_index[b.i as usize], new_index[b.j as usize]);
+            (i.min(j), i.max(j), r0)
+        })
+        .collect();
+    renumbered.sort_by_key(|b| (b.0, b.1));
+    let bonds: Vec<BondEntry> = renumbered
+        .iter()
+        .map(|&(i, j, _)| BondEntry {
+            i: i as i32,
+            j: j as i32,
+            ty: 1,
+        })
+        .collect();
+    let r0: Vec<f64> = renumbered.iter().map(|b| b.2).collect();
+    let plain = |b: &BondEntry| {
+        let (xi, xj) = (&x[b.i as usize], &x[b.j as usize]);
+        sep.delta(xi, xj) == Unwrapped.delta(xi, xj)
+    };
+    let (interior, boundary): (Vec<usize>, Vec<usize>) =
+        (0..bonds.len()).partition(|&b| plain(&bonds[b]));
+    let ni = interior.len();
+    assert!(boundary.len() > 20, "{} boundary rows", boundary.len());
+    let all = Ownership::all(n);
+    let mut vol0 = vec![0.0; n];
+    accumulate_reference_volumes(&bonds, &r0, all, &mut vol0);
+    let layout: Vec<usize> = interior.iter().chain(&boundary).copied().collect();
+    let rows = BondRows::new(
+        n,
+        layout
+            .iter()
+            .map(|&b| (bonds[b].i as usize, bonds[b].j as usize, r0[b], b)),
+        Some(&vol0),
+    )
+    .unwrap();
+    let mut lengths = vec![[0.0; 2]; rows.len()];
+    let (a, b) = lengths.split_at_mut(ni);
+    row_volumes(&Unwrapped, &rows, 0..ni, &x, a);
+    row_volumes(&sep, &rows, ni..rows.len(), &x, b);
+    let mut vol = vec![0.0; n];
+    gather_volumes(&rows, 0..n, &lengths, &mut vol);
+    let coeffs = BondCoeffs {
+        k: 1.3,
+        a: -0.55,
+        gamma: 0.8,
+    };
+    // Empty parts first, in the middle and last; parts of one particle.
+    let splits: [&[usize]; 6] = [
+        &[0, n],
+        &[0, n / 3, n],
+        &[0, 0, n / 2, n],
+        &[0, 7, 90, 91, n],
+        &[0, 100, 100, n],
+        &[0, n - 1, n, n],
+    ];
+    for (multibody, damped, tally) in [
+        (true, true, true),
+        (false, true, false),
+        (false, false, true),
+    ] {
+        let inputs = RowInputs {
+            x: &x,
+            v: damped.then_some(&v[..]),
+            coeffs,
+            multibody: multibody.then_some((&vol[..], &lengths[..])),
+            tally,
+        };
+        for isa in [Isa::Portable, Isa::Avx2]
+            .into_iter()
+            .filter(|i| i.available())
+        {
+            let mut full_rows = vec![[f64::NAN; 4]; rows.len()];
+            let (a, b) = full_rows.split_at_mut(ni);
+            let interior_pass = row_forces_on(isa, &Unwrapped, &rows, 0..ni, &inputs, a);
+            let boundary_pass = row_forces_on(isa, &sep, &rows, ni..rows.len(), &inputs, b);
+            let full_pass = interior_pass.merged(&boundary_pass);
+            let mut expected = vec![[0.0; 3]; n];
+            gather_forces_on(isa, &rows, 0..n, &full_rows, &mut expected);
+            for split in splits {
+                let parts: Vec<_> = split.windows(2).map(|w| w[0]..w[1]).collect();
+                for block in [4, 12, 64] {
+                    let case = format!(
+                        "{isa:?}, multibody {multibody}, damped {damped}, tally {tally}, \
+                         parts {parts:?}, blocks of {block}"
+                    );
+                    let window = RowWindow::plan(&rows, ni, &parts, block, 1 << 20)
+                        .unwrap_or_else(|| panic!("{case}: no window"));
+                    assert!(
+                        window.ring() < ni / 2,
+                        "{case}: a ring of {} for {ni} rows does not wrap",
+                        window.ring()
+                    );
+                    let refused = RowWindow::plan(&rows, ni, &parts, block, window.ring() / 2);
+                    assert!(refused.is_none(), "{case}: a ring too small was planned");
+                    let mut f = vec![[0.0; 3]; n];
+                    let mut tally_sum = Tally::default();
+                    for (c, part) in parts.iter().enumerate() {
+                        let mut buffer = vec![[f64::NAN; 4]; window.buffer_len()];
+                        let pass = window_forces_on(
+                            isa,
+                            &rows,
+                            &window,
+                            c,
+                            &inputs,
+                            &full_rows[ni..],
+                            &mut buffer,
+                            &mut f[part.clone()],
+                        );
+                        assert!(pass.fault.is_none(), "{case}");
+                        tally_sum = tally_sum.merged(&pass.tally);
+                    }
+                    let differ = (0..n).find(|&p| f[p] != expected[p]);
+                    assert!(
+                        differ.is_none(),
+                        "{case}: forces differ first at {differ:?}"
+                    );
+                    let total = tally_sum.merged(&boundary_pass.tally);
+                    if parts.len() == 1 {
+                        assert_eq!(total, full_pass.tally, "{case}: one part's sums");
+                    } else {
+                        let want = full_pass.tally;
+                        let scale = want
+                            .virial
+                            .iter()
+                            .fold(want.energy.abs(), |m, v| m.max(v.abs()));
+                        let deviation = total
+                            .virial
+                            .iter()
+                            .zip(&want.virial)
+                            .map(|(a, b)| (a - b).abs())
+                            .fold((total.energy - want.energy).abs(), f64::max);
+                        assert!(
+                            deviation <= 1e-13 * scale,
+                            "{case}: {total:?} against {want:?}"
+                        );
+                    }
+                    assert!(
+                        !tally || full_pass.tally.energy > 0.0,
+                        "{case}: nothing tallied"
+                    );
+                }
+            }
+        }
+    }
+}

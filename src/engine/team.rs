@@ -219,6 +219,41 @@ impl Team {
         });
     }
 
+    /// Runs `job(c, &mut data[ranges[c]], &mut items[c])` for every chunk
+    /// `c`; the ranges must lie in `data` in chunk order without overlap,
+    /// and `ranges` and `items` must have one entry per thread.
+    pub fn run_parts<T, I, F>(
+        &self,
+        data: &mut [T],
+        ranges: &[std::ops::Range<usize>],
+        items: &mut [I],
+        job: F,
+    ) where
+        T: Send,
+        I: Send,
+        F: Fn(usize, &mut [T], &mut I) + Sync,
+    {
+        assert_eq!(items.len(), self.threads(), "one item per thread");
+        assert_eq!(ranges.len(), self.threads(), "one range per thread");
+        let mut end = 0;
+        for (c, range) in ranges.iter().enumerate() {
+            assert!(
+                end <= range.start && range.start <= range.end && range.end <= data.len(),
+                "part {c}, {range:?}, overlaps the one before (to {end}) or leaves {} items",
+                data.len()
+            );
+            end = range.end;
+        }
+        let (data, items) = (SharedSlice::new(data), SharedSlice::new(items));
+        self.run(|c| {
+            // SAFETY: the ranges are disjoint (checked above, and the
+            // slice cannot change meanwhile), and chunk c alone takes
+            // items[c].
+            let (part, item) = unsafe { (data.range(ranges[c].clone()), items.get(c)) };
+            job(c, part, item)
+        });
+    }
+
     /// [`Team::run_split`] over two slices of one length at once.
     pub fn run_split2<A, B, F>(&self, a: &mut [A], b: &mut [B], job: F)
     where

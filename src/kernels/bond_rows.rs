@@ -24,7 +24,7 @@ use super::Separation;
 use std::ops::Range;
 
 /// The sign bit of an incidence entry: the particle is the row's `j`.
-const AS_J: u32 = 1 << 31;
+pub(super) const AS_J: u32 = 1 << 31;
 
 /// The most rows, and particles, the 31 bits of an entry index.
 const MAX_INDEX: usize = (AS_J - 1) as usize;
@@ -174,7 +174,23 @@ impl BondRows {
     /// Particle `p`'s incidence entries, in row order.
     #[inline(always)]
     fn entries(&self, p: usize) -> &[u32] {
-        &self.incidence[self.offsets[p]..self.offsets[p + 1]]
+        self.incidence().of(p)
+    }
+
+    /// Every particle's entries.
+    #[inline(always)]
+    pub(super) fn incidence(&self) -> Incidence<'_> {
+        Incidence {
+            offsets: &self.offsets,
+            entries: &self.incidence,
+        }
+    }
+
+    /// `offsets[p]..offsets[p + 1]` are particle `p`'s entries: with
+    /// [`crate::engine`]'s balanced ranges, parts of the particles with
+    /// about as many bond ends each.
+    pub(crate) fn offsets(&self) -> &[usize] {
+        &self.offsets
     }
 
     fn check_range(&self, range: &Range<usize>, out: usize) {
@@ -187,6 +203,23 @@ impl BondRows {
 
     fn check_particles(&self, what: &str, len: usize) {
         assert_eq!(len, self.particles, "{what} of {len} particles");
+    }
+}
+
+/// Each particle's entries, compressed: particle `p`'s at
+/// `offsets[p]..offsets[p + 1]`, each a row (or a slot holding it) with
+/// [`AS_J`] set where the particle is the row's `j`, in row order.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct Incidence<'a> {
+    pub(super) offsets: &'a [usize],
+    pub(super) entries: &'a [u32],
+}
+
+impl<'a> Incidence<'a> {
+    /// Particle `p`'s entries.
+    #[inline(always)]
+    pub(super) fn of(&self, p: usize) -> &'a [u32] {
+        &self.entries[self.offsets[p]..self.offsets[p + 1]]
     }
 }
 
@@ -277,8 +310,35 @@ pub fn row_forces_on<S: Separation>(
     inputs: &RowInputs,
     out: &mut [[f64; 4]],
 ) -> ForcePass {
+    let mut lanes = LaneTally::default();
+    row_forces_carried(isa, sep, rows, range, inputs, out, &mut lanes, true)
+}
+
+/// [`row_forces_on`] as one piece of a longer range: rows in blocks of four
+/// add their energy and virial to `lanes` (row `k` of `range` into lane
+/// `k % 4`), carried from the pieces before. The last piece (`last`) adds
+/// the lanes up into the returned tally and then its own last rows (fewer
+/// than four) one by one; every other piece must hold whole blocks of four
+/// and returns no tally. Consecutive pieces then sum what one call over
+/// their whole range sums, bit for bit.
+#[allow(clippy::too_many_arguments)]
+pub(super) fn row_forces_carried<S: Separation>(
+    isa: Isa,
+    sep: &S,
+    rows: &BondRows,
+    range: Range<usize>,
+    inputs: &RowInputs,
+    out: &mut [[f64; 4]],
+    lanes: &mut LaneTally,
+    last: bool,
+) -> ForcePass {
     rows.check_range(&range, out.len());
     rows.check_particles("positions", inputs.x.len());
+    assert!(
+        last || range.len() % 4 == 0,
+        "a piece of {} rows before the last",
+        range.len()
+    );
     if let Some(v) = inputs.v {
         rows.check_particles("velocities", v.len());
     }
@@ -296,7 +356,7 @@ pub fn row_forces_on<S: Separation>(
         ($($mb:literal, $damped:literal, $tally:literal);*) => {
             match flags {
                 $(($mb, $damped, $tally) => forces_on::<S, $mb, $damped, $tally>(
-                    isa, sep, rows, range, inputs, out,
+                    isa, sep, rows, range, inputs, out, lanes, last,
                 ),)*
             }
         };
@@ -307,6 +367,7 @@ pub fn row_forces_on<S: Separation>(
     )
 }
 
+#[allow(clippy::too_many_arguments)]
 #[inline(always)]
 fn forces_on<S: Separation, const MB: bool, const DAMPED: bool, const TALLY: bool>(
     isa: Isa,
@@ -315,24 +376,24 @@ fn forces_on<S: Separation, const MB: bool, const DAMPED: bool, const TALLY: boo
     range: Range<usize>,
     inputs: &RowInputs,
     out: &mut [[f64; 4]],
+    lanes: &mut LaneTally,
+    last: bool,
 ) -> ForcePass {
-    #[cfg(target_arch = "x86_64")]
-    if isa == Isa::Avx2 && Isa::Avx2.available() {
-        // SAFETY: the processor has AVX2; indices were checked by the
-        // layout and lengths by the caller.
-        return unsafe { avx2::row_forces::<S, MB, DAMPED, TALLY>(sep, rows, range, inputs, out) };
-    }
-    let _ = isa;
-    let mut pass = ForcePass::default();
     let full = range.len() / 4 * 4;
-    let mut lanes = LaneTally::default();
-    for (k, out) in out[..full].iter_mut().enumerate() {
-        let row = range.start + k;
-        let force = scalar_row::<S, MB, DAMPED>(sep, rows, row, inputs);
-        settle_row::<false>(rows, row, &force, &mut pass, out);
-        if TALLY {
-            lanes.add(k % 4, &force);
-        }
+    let mut pass = ForcePass {
+        fault: blocks_of_four::<S, MB, DAMPED, TALLY>(
+            isa,
+            sep,
+            rows,
+            range.start..range.start + full,
+            inputs,
+            &mut out[..full],
+            lanes,
+        ),
+        ..ForcePass::default()
+    };
+    if !last {
+        return pass;
     }
     if TALLY {
         pass.tally = lanes.total();
@@ -345,14 +406,47 @@ fn forces_on<S: Separation, const MB: bool, const DAMPED: bool, const TALLY: boo
     pass
 }
 
+/// Rows `range` (whole blocks of four) into `out`, their energy and virial
+/// added to `lanes` (`TALLY`); returns the first row out of range.
+#[inline(always)]
+fn blocks_of_four<S: Separation, const MB: bool, const DAMPED: bool, const TALLY: bool>(
+    isa: Isa,
+    sep: &S,
+    rows: &BondRows,
+    range: Range<usize>,
+    inputs: &RowInputs,
+    out: &mut [[f64; 4]],
+    lanes: &mut LaneTally,
+) -> Option<Fault> {
+    #[cfg(target_arch = "x86_64")]
+    if isa == Isa::Avx2 && Isa::Avx2.available() {
+        // SAFETY: the processor has AVX2; indices were checked by the
+        // layout and lengths by the caller.
+        return unsafe {
+            avx2::row_forces::<S, MB, DAMPED, TALLY>(sep, rows, range, inputs, out, lanes)
+        };
+    }
+    let _ = isa;
+    let mut pass = ForcePass::default();
+    for (k, out) in out.iter_mut().enumerate() {
+        let row = range.start + k;
+        let force = scalar_row::<S, MB, DAMPED>(sep, rows, row, inputs);
+        settle_row::<false>(rows, row, &force, &mut pass, out);
+        if TALLY {
+            lanes.add(k % 4, &force);
+        }
+    }
+    pass.fault
+}
+
 /// Energy and virial of the rows in blocks of four, summed per lane (row
 /// `k` of a range into lane `k % 4`) and the lanes added at the end: four
 /// independent chains of additions where one would wait on each result.
 /// The vector build keeps the same lanes in registers, so both give the
 /// same sums; a range's last rows (fewer than four) are added after, one by
 /// one.
-#[derive(Default)]
-struct LaneTally {
+#[derive(Clone, Debug, Default)]
+pub(super) struct LaneTally {
     /// Energy, then the virial `[xx, yy, zz, xy, xz, yz]`, per lane.
     sums: [[f64; 4]; 7],
 }
@@ -477,8 +571,8 @@ const CHAINS: usize = 2;
 /// sum is one chain of dependent additions, and one chain alone waits on the
 /// adder's latency at every entry, where several keep it busy.
 #[inline(always)]
-fn interleaved_entries(rows: &BondRows, first: usize, mut take: impl FnMut(usize, u32)) {
-    let lists: [&[u32]; CHAINS] = std::array::from_fn(|c| rows.entries(first + c));
+fn interleaved_entries(incidence: Incidence, first: usize, mut take: impl FnMut(usize, u32)) {
+    let lists: [&[u32]; CHAINS] = std::array::from_fn(|c| incidence.of(first + c));
     let common = lists.iter().map(|l| l.len()).min().unwrap_or(0);
     for m in 0..common {
         for (c, list) in lists.iter().enumerate() {
@@ -536,16 +630,34 @@ pub fn gather_forces_on(
     f: &mut [[f64; 3]],
 ) {
     check_gather(rows, &particles, forces.len(), f.len());
+    // SAFETY: incidence entries index rows (checked by the layout), and
+    // `forces` has one per row (checked above).
+    unsafe { gather_rows_on(isa, rows.incidence(), particles, forces, f) }
+}
+
+/// Adds to `f[p]` for each particle `p` of `particles` (`f` holds exactly
+/// those) the rows of `forces` its `incidence` entries name, `+row` where
+/// it is the bond's `i` and `-row` where it is the `j`, in entry order.
+///
+/// # Safety
+/// Every entry of the particles names a row of `forces`.
+#[inline(always)]
+pub(super) unsafe fn gather_rows_on(
+    isa: Isa,
+    incidence: Incidence,
+    particles: Range<usize>,
+    forces: &[[f64; 4]],
+    f: &mut [[f64; 3]],
+) {
     #[cfg(target_arch = "x86_64")]
     if isa == Isa::Avx2 && Isa::Avx2.available() {
-        // SAFETY: the processor has AVX2; incidence entries index rows
-        // (checked by the layout), and `forces` has one per row.
-        return unsafe { avx2::gather_forces(rows, particles, forces, f) };
+        // SAFETY: the processor has AVX2; the slots, the caller's contract.
+        return avx2::gather_forces(incidence, particles, forces, f);
     }
     let _ = isa;
     for (p, fp) in particles.zip(f.iter_mut()) {
-        for &e in rows.entries(p) {
-            let row = &forces[(e & !AS_J) as usize];
+        for &e in incidence.of(p) {
+            let row = forces.get_unchecked((e & !AS_J) as usize);
             if e & AS_J == 0 {
                 fp[0] += row[0];
                 fp[1] += row[1];
@@ -577,7 +689,7 @@ pub fn gather_volumes(
         vol,
         |first, out| {
             let mut sums = [0.0; CHAINS];
-            interleaved_entries(rows, first, |c, e| sums[c] += term(e));
+            interleaved_entries(rows.incidence(), first, |c, e| sums[c] += term(e));
             *out = sums;
         },
         |p, out| *out = rows.entries(p).iter().fold(0.0, |s, &e| s + term(e)),
@@ -870,7 +982,8 @@ mod avx2 {
         range: Range<usize>,
         inputs: &RowInputs,
         out: &mut [[f64; 4]],
-    ) -> ForcePass {
+        lanes: &mut LaneTally,
+    ) -> Option<Fault> {
         let c = &inputs.coeffs;
         let (neg_k, a, gamma, half_k) = (
             _mm256_set1_pd(-c.k),
@@ -886,9 +999,14 @@ mod avx2 {
         let infinity = _mm256_set1_pd(f64::INFINITY);
         let magnitude = _mm256_castsi256_pd(_mm256_set1_epi64x(i64::MAX));
         let image = sep.minimum_image().map(|m| LaneImage::new(m));
-        let mut pass = ForcePass::default();
-        let full = range.len() / 4 * 4;
+        let mut fault = None;
+        let full = range.len();
         let mut sums = [_mm256_setzero_pd(); 7];
+        if TALLY {
+            for (sum, lane) in sums.iter_mut().zip(&lanes.sums) {
+                *sum = _mm256_loadu_pd(lane.as_ptr());
+            }
+        }
         for k in (0..full).step_by(4) {
             let row = range.start + k;
             let (i, j) = (&rows.i[row..row + 4], &rows.j[row..row + 4]);
@@ -957,37 +1075,30 @@ mod avx2 {
                 ),
                 _mm256_cmp_pd::<_CMP_LT_OQ>(_mm256_and_pd(fpair, magnitude), infinity),
             );
-            if _mm256_movemask_pd(in_range) != 0b1111 && pass.fault.is_none() {
+            if _mm256_movemask_pd(in_range) != 0b1111 && fault.is_none() {
                 for l in 0..4 {
                     let force = scalar_row::<S, MB, DAMPED>(sep, rows, row + l, inputs);
                     let mut scratch = [0.0; 4];
                     let mut probe = ForcePass::default();
                     settle_row::<false>(rows, row + l, &force, &mut probe, &mut scratch);
                     if probe.fault.is_some() {
-                        pass.fault = probe.fault;
+                        fault = probe.fault;
                         break;
                     }
                 }
             }
         }
         if TALLY {
-            let mut lanes = LaneTally::default();
             for (sum, lane) in sums.iter().zip(lanes.sums.iter_mut()) {
                 _mm256_storeu_pd(lane.as_mut_ptr(), *sum);
             }
-            pass.tally = lanes.total();
         }
-        for k in full..range.len() {
-            let row = range.start + k;
-            let force = scalar_row::<S, MB, DAMPED>(sep, rows, row, inputs);
-            settle_row::<TALLY>(rows, row, &force, &mut pass, &mut out[k]);
-        }
-        pass
+        fault
     }
 
     #[target_feature(enable = "avx2")]
     pub(super) unsafe fn gather_forces(
-        rows: &BondRows,
+        incidence: Incidence,
         particles: Range<usize>,
         forces: &[[f64; 4]],
         f: &mut [[f64; 3]],
@@ -1013,7 +1124,7 @@ mod avx2 {
             f,
             |first, out| {
                 let mut sums = out.each_ref().map(&load);
-                interleaved_entries(rows, first, |c, e| {
+                interleaved_entries(incidence, first, |c, e| {
                     sums[c] = _mm256_add_pd(sums[c], term(e));
                 });
                 for (fp, sum) in out.iter_mut().zip(sums) {
@@ -1021,8 +1132,8 @@ mod avx2 {
                 }
             },
             |p, fp| {
-                let sum = rows
-                    .entries(p)
+                let sum = incidence
+                    .of(p)
                     .iter()
                     .fold(load(fp), |sum, &e| _mm256_add_pd(sum, term(e)));
                 store(fp, sum);

@@ -21,6 +21,7 @@ mod granular_list;
 mod isa;
 mod multicontact;
 mod pair;
+mod row_window;
 mod tally;
 mod volume;
 mod zero_net;
@@ -56,6 +57,7 @@ pub use multicontact::{
     MprSwitch, MprTest, COINCIDENT_POINTS, NEGLIGIBLE, POINT_FLOOR,
 };
 pub use pair::{pair_energy, pair_force_magnitude, pair_forces, PairCoeffs, PairInputs};
+pub use row_window::{window_forces, window_forces_on, RowWindow};
 pub use tally::{Ownership, Tally};
 pub use volume::{accumulate_reference_volumes, accumulate_volumes, accumulate_volumes_on};
 pub use zero_net::{accumulate_multibody_sums, balance_multibody, MultibodyInputs, MultibodySum};

@@ -13,15 +13,15 @@ pub use topology::BondTopology;
 
 use super::model::{EnergyTerm, ForceInput, ForceOutput, ModelTally, ParticleModel};
 use super::neighbor::Exclusions;
-use super::parallel::{as_rows, as_vec3, Scratch, Vec3};
+use super::parallel::{as_rows, as_vec3, balanced_range, Scratch, Vec3};
 use super::simbox::SimBox;
 use super::timers::Stage;
 use super::EngineError;
 use crate::kernels::{
     accumulate_multibody_sums, accumulate_reference_volumes, balance_multibody, gather_forces,
-    gather_volumes, pair_forces, row_forces, row_volumes, BondCoeffs, BondEntry, BondRows, Fault,
-    ForcePass, MultibodyInputs, MultibodySum, Ownership, PairCoeffs, PairInputs, RowInputs,
-    Separation, Tally, Unwrapped,
+    gather_volumes, pair_forces, row_forces, row_volumes, window_forces, BondCoeffs, BondEntry,
+    BondRows, Fault, ForcePass, MultibodyInputs, MultibodySum, Ownership, PairCoeffs, PairInputs,
+    RowInputs, RowWindow, Separation, Tally, Unwrapped,
 };
 
 /// Index of the bond term in [`ModelTally::terms`].
@@ -124,7 +124,50 @@ struct BondLayout {
     lengths: Vec<[f64; 2]>,
     /// Each thread's share of the row pass.
     passes: Vec<ForcePass>,
+    /// The windowed pass's plan for the current rows and team size, when
+    /// the rows outgrow the cache ([`WINDOW_FROM_ROWS`]) and bonded
+    /// partners lie close enough in the numbering; planned on first use.
+    window: Option<RowWindow>,
+    /// Whether `window` was planned for the current rows, and for how many
+    /// threads.
+    window_planned_for: Option<usize>,
+    /// Each thread's part of the particles in the window's plan.
+    window_parts: Vec<std::ops::Range<usize>>,
+    /// Each thread's buffer of rows (its ring, then the boundary rows) and
+    /// what its part found.
+    buffers: Vec<(Vec<[f64; 4]>, ForcePass)>,
+    /// When to run the bond pass in windows.
+    mode: BondWindow,
 }
+
+/// When the bond pass runs in windows ([`RowWindow`]): both ways give the
+/// same forces bit for bit, and on one thread the same energy and virial.
+/// On more threads those two sums differ in their last bits (the threads
+/// split the rows differently), so a run that reads them (a barostat)
+/// follows the full-size pass only to round-off.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum BondWindow {
+    /// From [`WINDOW_FROM_ROWS`] rows on, where bonded partners lie close
+    /// enough in the numbering.
+    #[default]
+    Auto,
+    /// Whenever bonded partners lie close enough (tests, benchmarks).
+    Always,
+    /// Never: the full-size array of rows (tests, benchmarks).
+    Never,
+}
+
+/// Rows from which the bond pass runs in windows ([`RowWindow`]): 8 MiB
+/// of rows (32 bytes each). Below, the full-size array mostly stays in the
+/// last-level cache and the windows gain nothing measurable (the 35,456-
+/// particle packing, 193,664 rows: bond pass 0.91x on one thread, 1.02x and
+/// 1.04x on two; `results/bench/issue33-bond-window/`).
+const WINDOW_FROM_ROWS: usize = 1 << 18;
+/// Rows a windowed part computes between two gathers.
+const WINDOW_BLOCK: usize = 512;
+/// The largest ring a window may use: 16,384 rows of 32 bytes, half a
+/// core's 1 MiB L2 on the machines this is tuned on.
+const WINDOW_MAX_RING: usize = 1 << 14;
 
 impl BondLayout {
     fn rebuild<S: Separation>(
@@ -151,6 +194,42 @@ impl BondLayout {
             .expect("the topology's bonds join distinct particles of the system");
         self.force.resize(self.rows.len(), [0.0; 4]);
         self.generation = Some(generation);
+        self.window = None;
+        self.window_planned_for = None;
+    }
+
+    /// Plans the window for a team of `threads` if the rows or the team
+    /// changed since the last plan; none when the rows are few or their
+    /// partners too far apart.
+    fn plan_window(&mut self, threads: usize) {
+        if self.window_planned_for != Some(threads) {
+            let wanted = match self.mode {
+                BondWindow::Auto => self.rows.len() >= WINDOW_FROM_ROWS,
+                BondWindow::Always => true,
+                BondWindow::Never => false,
+            };
+            self.window = wanted
+                .then(|| {
+                    let offsets = self.rows.offsets();
+                    self.window_parts = (0..threads)
+                        .map(|c| balanced_range(offsets, threads, c))
+                        .collect();
+                    RowWindow::plan(
+                        &self.rows,
+                        self.interior,
+                        &self.window_parts,
+                        WINDOW_BLOCK,
+                        WINDOW_MAX_RING,
+                    )
+                })
+                .flatten();
+            self.window_planned_for = Some(threads);
+            let buffer_len = self.window.as_ref().map_or(0, RowWindow::buffer_len);
+            self.buffers.resize_with(threads, Default::default);
+            for (buffer, _) in &mut self.buffers {
+                buffer.resize(buffer_len, [0.0; 4]);
+            }
+        }
     }
 }
 
@@ -194,6 +273,24 @@ impl BpmModel {
         self.zero_net_variant = zero_net;
         self.terms = BpmTerms::of(&bond, pair.as_ref(), zero_net, self.bonds.is_empty());
         self.update_reference_volumes(n);
+    }
+
+    /// Chooses when the bond pass runs in windows; the default,
+    /// [`BondWindow::Auto`], is the fastest measured.
+    pub fn set_bond_window(&mut self, mode: BondWindow) {
+        self.layout.mode = mode;
+        self.layout.window = None;
+        self.layout.window_planned_for = None;
+    }
+
+    /// The windowed pass's ring size in rows and its halo fraction
+    /// ([`RowWindow::halo_fraction`]) for the last step, if it ran in
+    /// windows.
+    pub fn bond_window(&self) -> Option<(usize, f64)> {
+        self.layout
+            .window
+            .as_ref()
+            .map(|w| (w.ring(), w.halo_fraction()))
     }
 
     /// Bond coefficients.
@@ -265,6 +362,7 @@ impl BpmModel {
             let reference = self.terms.multibody.then_some(&self.reference_volume[..]);
             self.layout.rebuild(&sep, x, &self.bonds, reference, wraps);
         }
+        self.layout.plan_window(chunks);
         let layout = &mut self.layout;
         layout.passes.resize(chunks, ForcePass::default());
         let rows = &layout.rows;
@@ -298,21 +396,47 @@ impl BpmModel {
                     .then_some((&self.volume[..], &layout.lengths[..])),
                 tally,
             };
-            team.run_sections(
-                &mut layout.force,
-                layout.interior,
-                &mut layout.passes,
-                |_, [(ri, interior), (rb, boundary)]| {
-                    row_forces(&Unwrapped, rows, ri, &inputs, interior)
-                        .merged(&row_forces(&sep, rows, rb, &inputs, boundary))
-                },
-            );
-            let forces = &layout.force;
-            team.run_split(f, |_, range, part| gather_forces(rows, range, forces, part));
-            layout
-                .passes
-                .iter()
-                .fold(ForcePass::default(), |acc, p| acc.merged(p))
+            if let Some(window) = &layout.window {
+                // Boundary rows first, into the full-size array's tail;
+                // then each thread's part, its interior rows in its ring.
+                team.run_sections(
+                    &mut layout.force,
+                    layout.interior,
+                    &mut layout.passes,
+                    |_, [_, (rb, boundary)]| row_forces(&sep, rows, rb, &inputs, boundary),
+                );
+                let boundary = &layout.force[layout.interior..];
+                team.run_parts(
+                    f,
+                    &layout.window_parts,
+                    &mut layout.buffers,
+                    |c, part, (buffer, pass)| {
+                        *pass = window_forces(rows, window, c, &inputs, boundary, buffer, part)
+                    },
+                );
+                layout
+                    .buffers
+                    .iter()
+                    .map(|(_, pass)| pass)
+                    .chain(&layout.passes)
+                    .fold(ForcePass::default(), |acc, p| acc.merged(p))
+            } else {
+                team.run_sections(
+                    &mut layout.force,
+                    layout.interior,
+                    &mut layout.passes,
+                    |_, [(ri, interior), (rb, boundary)]| {
+                        row_forces(&Unwrapped, rows, ri, &inputs, interior)
+                            .merged(&row_forces(&sep, rows, rb, &inputs, boundary))
+                    },
+                );
+                let forces = &layout.force;
+                team.run_split(f, |_, range, part| gather_forces(rows, range, forces, part));
+                layout
+                    .passes
+                    .iter()
+                    .fold(ForcePass::default(), |acc, p| acc.merged(p))
+            }
         };
         let balance = if self.terms.zero_net {
             let _t = timers.start(Stage::Bonds);
