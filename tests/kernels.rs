@@ -670,6 +670,22 @@ fn periodic_network(seed: u64) -> Network {
     (simbox, x, bonds, r0, v)
 }
 
+/// The largest difference between two tallies' energy and virial
+/// components, and the largest magnitude among `want`'s.
+fn tally_deviation(got: &Tally, want: &Tally) -> (f64, f64) {
+    let scale = want
+        .virial
+        .iter()
+        .fold(want.energy.abs(), |m, v| m.max(v.abs()));
+    let deviation = got
+        .virial
+        .iter()
+        .zip(&want.virial)
+        .map(|(a, b)| (a - b).abs())
+        .fold((got.energy - want.energy).abs(), f64::max);
+    (deviation, scale)
+}
+
 /// The two-step bond pass (rows, then each particle's sum) against the
 /// scatter kernel on the same bonds, split as the native engine splits
 /// them: bonds whose plain difference is the minimum image first, the rest
@@ -800,16 +816,7 @@ fn bond_rows_give_the_scatter_kernels_forces_bit_for_bit() {
             // The rows sum energy and virial in four lanes, the scatter
             // bond by bond: the same terms, added in another order.
             let (got, want) = (pass.tally, expected_pass.tally);
-            let scale = want
-                .virial
-                .iter()
-                .fold(want.energy.abs(), |m, v| m.max(v.abs()));
-            let deviation = got
-                .virial
-                .iter()
-                .zip(&want.virial)
-                .map(|(a, b)| (a - b).abs())
-                .fold((got.energy - want.energy).abs(), f64::max);
+            let (deviation, scale) = tally_deviation(&got, &want);
             assert!(
                 deviation <= 1e-13 * scale,
                 "{case}: tally {got:?} against {want:?}"
@@ -1155,16 +1162,7 @@ fn windowed_bond_pass_gives_the_full_size_forces_bit_for_bit() {
                         assert_eq!(total, full_pass.tally, "{case}: one part's sums");
                     } else {
                         let want = full_pass.tally;
-                        let scale = want
-                            .virial
-                            .iter()
-                            .fold(want.energy.abs(), |m, v| m.max(v.abs()));
-                        let deviation = total
-                            .virial
-                            .iter()
-                            .zip(&want.virial)
-                            .map(|(a, b)| (a - b).abs())
-                            .fold((total.energy - want.energy).abs(), f64::max);
+                        let (deviation, scale) = tally_deviation(&total, &want);
                         assert!(
                             deviation <= 1e-13 * scale,
                             "{case}: {total:?} against {want:?}"
