@@ -217,6 +217,7 @@ fn packing_moduli_of_a_compressed_solid_match_its_calibration_in_both_engines() 
         &dir,
         1,
         None,
+        None,
     )
     .unwrap();
     let lammps = measure_state(
@@ -227,6 +228,7 @@ fn packing_moduli_of_a_compressed_solid_match_its_calibration_in_both_engines() 
         &dir,
         1,
         Some(&bpm),
+        None,
     )
     .unwrap();
     let strain = 1.0 - scale.powi(3);
@@ -861,8 +863,9 @@ fn a_compaction_study_stopped_twice_resumes_to_the_same_report() {
 #[test]
 fn the_moduli_loadings_branch_from_one_relaxation_as_three_full_runs() {
     use bpm::scene::protocols::PackingModuliProtocol;
+    use bpm::scene::StopRequest;
     use bpm::scene::{build_system, run_scene, RunOptions};
-    use bpm::studies::compaction::moduli::{moduli_scenes, relax_once_then_load};
+    use bpm::studies::compaction::moduli::{moduli_scenes, relax_once_then_load, MeasureStop};
     let packing = small_compaction(3).unwrap();
     // A saved state of the packing, jostled, so the relaxation has
     // something to relax.
@@ -890,7 +893,7 @@ fn the_moduli_loadings_branch_from_one_relaxation_as_three_full_runs() {
     };
     let scenes = moduli_scenes(&packing, &state, &protocol);
     for threads in [1, 2] {
-        let branched = relax_once_then_load(&scenes, threads).unwrap();
+        let branched = relax_once_then_load(&scenes, threads, None).unwrap();
         for (scene, runs) in scenes.iter().zip(&branched) {
             let mut sys = build_system(scene, threads);
             let (full, error) = run_scene(&mut sys, scene, &RunOptions::quiet(threads));
@@ -912,6 +915,18 @@ fn the_moduli_loadings_branch_from_one_relaxation_as_three_full_runs() {
     // Scenes that differ before their loadings cannot share a relaxation.
     let mut other = scenes.clone();
     other[2].stages[0].dt = 0.04;
-    let e = relax_once_then_load(&other, 1).unwrap_err();
-    assert!(e.contains("differ only in their second"), "{e}");
+    let e = relax_once_then_load(&other, 1, None).unwrap_err();
+    assert!(matches!(e, MeasureStop::Failed(_)), "{e:?}");
+    assert!(e.to_string().contains("differ only in their second"), "{e}");
+    // A stop asked for (a signal's flag, here set before the start) ends
+    // the measurement after one step, naming the study's checkpoint, and
+    // is not taken for a failed measurement.
+    let stop = StopRequest {
+        flag: std::sync::Arc::new(std::sync::atomic::AtomicBool::new(true)),
+        resume_from: "study.ck".into(),
+    };
+    match relax_once_then_load(&scenes, 1, Some(&stop)) {
+        Err(MeasureStop::Interrupted(path)) => assert_eq!(path, PathBuf::from("study.ck")),
+        other => panic!("not stopped as asked: {:?}", other.map(|_| ())),
+    }
 }

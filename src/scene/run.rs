@@ -70,6 +70,21 @@ pub struct RunOptions {
     pub files: OutputFiles,
     /// Checkpoints to write, or to resume from.
     pub checkpoint: Option<CheckpointOptions>,
+    /// A stop asked for from outside, for a run that keeps no checkpoint
+    /// of its own (with a checkpoint, [`CheckpointOptions`] carries it).
+    pub stop: Option<StopRequest>,
+}
+
+/// A stop asked for from outside a run without a checkpoint of its own: a
+/// short run that is one part of a checkpointed study, which starts the
+/// part again when resumed. The run ends after the step in which it sees
+/// `flag` set, with [`RunError::Interrupted`] naming `resume_from`.
+#[derive(Clone, Debug)]
+pub struct StopRequest {
+    /// Set (by a signal handler) to stop.
+    pub flag: std::sync::Arc<std::sync::atomic::AtomicBool>,
+    /// The checkpoint that continues the work the run belongs to.
+    pub resume_from: PathBuf,
 }
 
 impl RunOptions {
@@ -80,6 +95,7 @@ impl RunOptions {
             progress: Progress::hidden(),
             files: OutputFiles::default(),
             checkpoint: None,
+            stop: None,
         }
     }
 }
@@ -528,6 +544,14 @@ fn run_stage_from(
             if k % 256 == 0 {
                 sys.check_finite()?;
                 bar.set(k);
+            }
+            if let Some(stop) = &opts.stop {
+                if stop.flag.load(std::sync::atomic::Ordering::Relaxed) {
+                    return Err(RunError::Interrupted {
+                        step: sys.step,
+                        checkpoint: stop.resume_from.clone(),
+                    });
+                }
             }
             if let Some(saving) = &mut saving {
                 let stop = saving.checkpointer.options().stop_requested(sys.step);

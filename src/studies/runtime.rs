@@ -103,6 +103,7 @@ impl StudyRuntime {
                 .checkpoint
                 .as_ref()
                 .map(|c| c.run_options(&format!("{}{key}", self.prefix))),
+            stop: None,
         }
     }
 }

@@ -32,9 +32,9 @@ use crate::scene::model::ModelKind;
 use crate::scene::protocols::{compaction_scene, CompactionProtocol};
 use crate::scene::run::Checkpoint;
 use crate::scene::validate::{simbox_of, SceneError};
-use crate::scene::{write_scene, ForceField, Scene, StageOutput};
+use crate::scene::{write_scene, ForceField, Scene, StageOutput, StopRequest};
 use crate::studies::hertz::Moduli;
-use crate::studies::StudyRuntime;
+use crate::studies::{StudyRuntime, StudyStop};
 use crate::verify::LammpsLauncher;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
@@ -1117,8 +1117,14 @@ pub fn run_compaction(
             // protocol measures anew (`checkpoint_identity`).
             let protocol = serde_json::to_string(&opts.moduli.protocol).unwrap_or_default();
             let key = format!("seed-{seed}/moduli-{}/{protocol}", row.step);
+            // A stop asked for during the state's runs ends the study at
+            // once; the state is measured again when it is resumed.
+            let stop = runtime.checkpoint.as_ref().map(|c| StopRequest {
+                flag: c.stop_flag(),
+                resume_from: c.path(),
+            });
             let measured = runtime.part(&key, || {
-                Ok::<_, CompactionError>(moduli::measure_state(
+                let measured = moduli::measure_state(
                     &packing,
                     checkpoint,
                     &opts.moduli.protocol,
@@ -1126,7 +1132,14 @@ pub fn run_compaction(
                     &folder,
                     threads,
                     bpm,
-                ))
+                    stop.as_ref(),
+                );
+                match measured {
+                    Err(moduli::MeasureStop::Interrupted(path)) => {
+                        Err(CompactionError::from(StudyStop::Interrupted(path)))
+                    }
+                    other => Ok(other.map_err(|e| e.to_string())),
+                }
             })?;
             match measured {
                 Ok(moduli) => {

@@ -19,9 +19,9 @@ use crate::analysis::moduli::{
 use crate::scene::load::reference_lengths;
 use crate::scene::protocols::PackingModuliProtocol;
 use crate::scene::run::{run_stage, Checkpoint, Recorders, RunError};
-use crate::scene::{build_system, RunOptions, Scene, StageOutput};
+use crate::scene::{build_system, RunOptions, Scene, StageOutput, StopRequest};
 use serde::{Deserialize, Serialize};
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 /// Which states get their moduli measured, and how.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -214,9 +214,10 @@ fn run_all(
     tag: &str,
     threads: usize,
     bpm: Option<&Path>,
-) -> Result<[Vec<StageOutput>; 3], String> {
+    stop: Option<&StopRequest>,
+) -> Result<[Vec<StageOutput>; 3], MeasureStop> {
     if *engine == CompactionEngine::Native {
-        return relax_once_then_load(scenes, threads);
+        return relax_once_then_load(scenes, threads, stop);
     }
     let mut out: [Vec<StageOutput>; 3] = Default::default();
     // The three short runs of a state are one part of a checkpointed
@@ -238,13 +239,10 @@ fn run_all(
         )
         .map_err(|e| e.to_string())?;
         if let Some(m) = stopped {
-            return Err(format!("the {kind} run stopped: {m}"));
+            return Err(format!("the {kind} run stopped: {m}").into());
         }
         if stages.len() != 2 {
-            return Err(format!(
-                "the {kind} run returned {} stages, not 2",
-                stages.len()
-            ));
+            return Err(format!("the {kind} run returned {} stages, not 2", stages.len()).into());
         }
         out[k] = stages;
     }
@@ -257,11 +255,13 @@ fn run_all(
 /// did not stop, so the records are those of three full runs, bit for
 /// bit, for one relaxation's steps instead of three (at a relaxation of
 /// 1e4 tau and the default --moduli-rate, 1.6e5 steps instead of 3.6e5;
-/// at the paper's slower rates, 7e5 instead of 9e5).
+/// at the paper's slower rates, 7e5 instead of 9e5). A stop asked for
+/// through `stop` ends whichever run is under way at its next step.
 pub fn relax_once_then_load(
     scenes: &[Scene; 3],
     threads: usize,
-) -> Result<[Vec<StageOutput>; 3], String> {
+    stop: Option<&StopRequest>,
+) -> Result<[Vec<StageOutput>; 3], MeasureStop> {
     let first = &scenes[0];
     // The scenes differ only in their loading stage (`moduli_scenes`).
     let same_start = |s: &Scene| {
@@ -272,11 +272,19 @@ pub fn relax_once_then_load(
         }
     };
     if !scenes.iter().all(same_start) {
-        return Err("the moduli's scenes must differ only in their second (loading) stage".into());
+        return Err(MeasureStop::Failed(
+            "the moduli's scenes must differ only in their second (loading) stage".into(),
+        ));
     }
-    let opts = RunOptions::quiet(threads);
+    let opts = RunOptions {
+        stop: stop.cloned(),
+        ..RunOptions::quiet(threads)
+    };
     let mut no_files = Recorders::default();
-    let stop_message = |kind: &str, e: RunError| format!("the {kind} run stopped: {e}");
+    let stopped = |kind: &str, e: RunError| match interrupted(&e) {
+        Some(checkpoint) => MeasureStop::Interrupted(checkpoint),
+        None => MeasureStop::Failed(format!("the {kind} run stopped: {e}")),
+    };
     let mut sys = build_system(first, threads);
     let relaxation = run_stage(
         &mut sys,
@@ -286,7 +294,7 @@ pub fn relax_once_then_load(
         &opts,
         &mut no_files,
     )
-    .map_err(|e| stop_message("relaxation", e))?;
+    .map_err(|e| stopped("relaxation", e))?;
     let relaxed = sys.save_state().map_err(|e| e.to_string())?;
     drop(sys);
     let mut out: [Vec<StageOutput>; 3] = Default::default();
@@ -305,10 +313,38 @@ pub fn relax_once_then_load(
             &opts,
             &mut no_files,
         )
-        .map_err(|e| stop_message(kind, e))?;
+        .map_err(|e| stopped(kind, e))?;
         *runs = vec![relaxation.clone(), loading];
     }
     Ok(out)
+}
+
+/// The checkpoint a run stopped as asked names, if it did.
+fn interrupted(e: &RunError) -> Option<PathBuf> {
+    match e {
+        RunError::Interrupted { checkpoint, .. } => Some(checkpoint.clone()),
+        RunError::Stopped { error, .. } => interrupted(error),
+        _ => None,
+    }
+}
+
+/// Why a state's moduli were not measured.
+#[derive(Debug, thiserror::Error)]
+pub enum MeasureStop {
+    /// A run failed, or the measurement could not be made: the state has
+    /// no moduli.
+    #[error("{0}")]
+    Failed(String),
+    /// A stop was asked for (a signal): the state is measured again from
+    /// its start when the study is resumed from this checkpoint.
+    #[error("stopped as asked; the checkpoint {} continues the study", .0.display())]
+    Interrupted(PathBuf),
+}
+
+impl From<String> for MeasureStop {
+    fn from(reason: String) -> Self {
+        MeasureStop::Failed(reason)
+    }
 }
 
 /// The response to a loading: `loaded - control` at each of the loaded
@@ -362,7 +398,9 @@ fn slope_fit(x: &[f64], y: &[f64], what: &str) -> Result<LineFit, String> {
 
 /// Measures the moduli of `state`, a checkpoint of the compaction of
 /// `packing`, in `engine`; LAMMPS runs write their files into
-/// `folder/moduli-STEP-{compress,shear,control}.*`.
+/// `folder/moduli-STEP-{compress,shear,control}.*`. `stop` ends the native
+/// runs at the next step when asked ([`MeasureStop::Interrupted`]).
+#[allow(clippy::too_many_arguments)]
 pub fn measure_state(
     packing: &Scene,
     state: &Checkpoint,
@@ -371,7 +409,8 @@ pub fn measure_state(
     folder: &Path,
     threads: usize,
     bpm: Option<&Path>,
-) -> Result<PackingModuli, String> {
+    stop: Option<&StopRequest>,
+) -> Result<PackingModuli, MeasureStop> {
     let start = std::time::Instant::now();
     let scenes = moduli_scenes(packing, state, protocol);
     let [compress, shear, control] = run_all(
@@ -381,6 +420,7 @@ pub fn measure_state(
         &format!("moduli-{}", state.step),
         threads,
         bpm,
+        stop,
     )?;
     let (volumetric, pressure) = compression_series(&compress[1]).map_err(|e| e.to_string())?;
     let (shear_strain, shear_stress) = shear_series(&shear[1]).map_err(|e| e.to_string())?;
