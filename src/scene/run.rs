@@ -78,7 +78,9 @@ pub struct RunOptions {
 /// A stop asked for from outside a run without a checkpoint of its own: a
 /// short run that is one part of a checkpointed study, which starts the
 /// part again when resumed. The run ends after the step in which it sees
-/// `flag` set, with [`RunError::Interrupted`] naming `resume_from`.
+/// `flag` set (unless that is its stage's last), with
+/// [`RunError::Interrupted`] naming `resume_from` ([`run_stage`] returns
+/// it inside [`RunError::Stopped`], with the stage's records so far).
 #[derive(Clone, Debug)]
 pub struct StopRequest {
     /// Set (by a signal handler) to stop.
@@ -112,7 +114,9 @@ pub enum RunError {
     /// A checkpoint could not be written, read or used.
     #[error(transparent)]
     Checkpoint(#[from] CheckpointError),
-    /// The run was asked to stop and wrote a checkpoint to continue from.
+    /// The run was asked to stop; the checkpoint continues it (one the run
+    /// wrote, or for a run without one ([`StopRequest`]), the checkpoint of
+    /// the study it belongs to).
     #[error("stopped at step {step} as asked; the checkpoint {} continues the run (the same command with --resume)", checkpoint.display())]
     Interrupted {
         /// The global step reached.
@@ -545,7 +549,9 @@ fn run_stage_from(
                 sys.check_finite()?;
                 bar.set(k);
             }
-            if let Some(stop) = &opts.stop {
+            // A run with a checkpoint stops through it (below), which saves
+            // first; a stop on the stage's last step lets the stage finish.
+            if let (Some(stop), None, true) = (&opts.stop, &saving, k < spec.steps) {
                 if stop.flag.load(std::sync::atomic::Ordering::Relaxed) {
                     return Err(RunError::Interrupted {
                         step: sys.step,

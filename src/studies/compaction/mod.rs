@@ -38,6 +38,7 @@ use crate::studies::{StudyRuntime, StudyStop};
 use crate::verify::LammpsLauncher;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
+use std::sync::atomic::Ordering;
 
 /// Where the packings come from.
 #[derive(Clone, Debug, Serialize, Deserialize)]
@@ -1117,8 +1118,9 @@ pub fn run_compaction(
             // protocol measures anew (`checkpoint_identity`).
             let protocol = serde_json::to_string(&opts.moduli.protocol).unwrap_or_default();
             let key = format!("seed-{seed}/moduli-{}/{protocol}", row.step);
-            // A stop asked for during the state's runs ends the study at
-            // once; the state is measured again when it is resumed.
+            // A stop asked for during the state's native runs ends the
+            // study at their next step; the state is measured again when
+            // the study is resumed.
             let stop = runtime.checkpoint.as_ref().map(|c| StopRequest {
                 flag: c.stop_flag(),
                 resume_from: c.path(),
@@ -1134,11 +1136,18 @@ pub fn run_compaction(
                     bpm,
                     stop.as_ref(),
                 );
-                match measured {
-                    Err(moduli::MeasureStop::Interrupted(path)) => {
+                // LAMMPS runs do not see the flag; one killed with the
+                // study fails, and is measured again too rather than kept
+                // as a failure (a real failure recurs on resume).
+                let asked = stop.as_ref().filter(|s| s.flag.load(Ordering::Relaxed));
+                match (measured, asked) {
+                    (Err(moduli::MeasureStop::Interrupted(path)), _) => {
                         Err(CompactionError::from(StudyStop::Interrupted(path)))
                     }
-                    other => Ok(other.map_err(|e| e.to_string())),
+                    (Err(_), Some(stop)) => Err(CompactionError::from(StudyStop::Interrupted(
+                        stop.resume_from.clone(),
+                    ))),
+                    (other, _) => Ok(other.map_err(|e| e.to_string())),
                 }
             })?;
             match measured {
