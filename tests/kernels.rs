@@ -670,6 +670,42 @@ fn periodic_network(seed: u64) -> Network {
     (simbox, x, bonds, r0, v)
 }
 
+/// Bonds as the native engine lays them out in rows: those whose plain
+/// difference is the minimum image ("interior") first, the rest after,
+/// each in bond order, built with the reference volumes `V0`.
+struct EngineRows {
+    rows: BondRows,
+    interior: Vec<usize>,
+    boundary: Vec<usize>,
+    vol0: Vec<f64>,
+}
+
+fn engine_rows(sep: &MinimumImage, x: &[[f64; 3]], bonds: &[BondEntry], r0: &[f64]) -> EngineRows {
+    let plain = |b: &BondEntry| {
+        let (xi, xj) = (&x[b.i as usize], &x[b.j as usize]);
+        sep.delta(xi, xj) == Unwrapped.delta(xi, xj)
+    };
+    let (interior, boundary): (Vec<usize>, Vec<usize>) =
+        (0..bonds.len()).partition(|&b| plain(&bonds[b]));
+    let mut vol0 = vec![0.0; x.len()];
+    accumulate_reference_volumes(bonds, r0, Ownership::all(x.len()), &mut vol0);
+    let order: Vec<usize> = interior.iter().chain(&boundary).copied().collect();
+    let rows = BondRows::new(
+        x.len(),
+        order
+            .iter()
+            .map(|&b| (bonds[b].i as usize, bonds[b].j as usize, r0[b], b)),
+        Some(&vol0),
+    )
+    .unwrap();
+    EngineRows {
+        rows,
+        interior,
+        boundary,
+        vol0,
+    }
+}
+
 /// The largest difference between two tallies' energy and virial
 /// components, and the largest magnitude among `want`'s.
 fn tally_deviation(got: &Tally, want: &Tally) -> (f64, f64) {
@@ -699,12 +735,12 @@ fn bond_rows_give_the_scatter_kernels_forces_bit_for_bit() {
     let (simbox, x, bonds, r0, v) = periodic_network(51);
     let sep = simbox.minimum_image();
     let n = x.len();
-    let plain = |b: &BondEntry| {
-        let (xi, xj) = (&x[b.i as usize], &x[b.j as usize]);
-        sep.delta(xi, xj) == Unwrapped.delta(xi, xj)
-    };
-    let (interior, boundary): (Vec<usize>, Vec<usize>) =
-        (0..bonds.len()).partition(|&b| plain(&bonds[b]));
+    let EngineRows {
+        rows,
+        interior,
+        boundary,
+        vol0,
+    } = engine_rows(&sep, &x, &bonds, &r0);
     assert!(
         boundary.len() > 20 && interior.len() % 4 != 0,
         "{} interior, {} boundary bonds",
@@ -722,16 +758,6 @@ fn bond_rows_give_the_scatter_kernels_forces_bit_for_bit() {
     let order: Vec<usize> = interior.iter().chain(&boundary).copied().collect();
     let ni = interior.len();
     let all = Ownership::all(n);
-    let mut vol0 = vec![0.0; n];
-    accumulate_reference_volumes(&bonds, &r0, all, &mut vol0);
-    let rows = BondRows::new(
-        n,
-        order
-            .iter()
-            .map(|&b| (bonds[b].i as usize, bonds[b].j as usize, r0[b], b)),
-        Some(&vol0),
-    )
-    .unwrap();
 
     // Volumes: the scatter's, and the rows' (whose lengths the force rows
     // then reuse).
@@ -1056,26 +1082,14 @@ fn windowed_bond_pass_gives_the_full_size_forces_bit_for_bit() {
         })
         .collect();
     let r0: Vec<f64> = renumbered.iter().map(|b| b.2).collect();
-    let plain = |b: &BondEntry| {
-        let (xi, xj) = (&x[b.i as usize], &x[b.j as usize]);
-        sep.delta(xi, xj) == Unwrapped.delta(xi, xj)
-    };
-    let (interior, boundary): (Vec<usize>, Vec<usize>) =
-        (0..bonds.len()).partition(|&b| plain(&bonds[b]));
+    let EngineRows {
+        rows,
+        interior,
+        boundary,
+        ..
+    } = engine_rows(&sep, &x, &bonds, &r0);
     let ni = interior.len();
     assert!(boundary.len() > 20, "{} boundary rows", boundary.len());
-    let all = Ownership::all(n);
-    let mut vol0 = vec![0.0; n];
-    accumulate_reference_volumes(&bonds, &r0, all, &mut vol0);
-    let layout: Vec<usize> = interior.iter().chain(&boundary).copied().collect();
-    let rows = BondRows::new(
-        n,
-        layout
-            .iter()
-            .map(|&b| (bonds[b].i as usize, bonds[b].j as usize, r0[b], b)),
-        Some(&vol0),
-    )
-    .unwrap();
     let mut lengths = vec![[0.0; 2]; rows.len()];
     let (a, b) = lengths.split_at_mut(ni);
     row_volumes(&Unwrapped, &rows, 0..ni, &x, a);

@@ -34,8 +34,6 @@ use std::ops::Range;
 /// Which rows a part computes and when it gathers.
 #[derive(Clone, Debug, Default, PartialEq, Eq)]
 struct WindowPart {
-    /// The particles whose forces the part sums.
-    particles: Range<usize>,
     /// The interior rows it computes: its halo (rows of earlier particles
     /// bonded to its own), then its own rows.
     rows: Range<usize>,
@@ -63,6 +61,8 @@ pub struct RowWindow {
     particles: usize,
     /// The layout's incidence, each row replaced by its slot.
     slots: Vec<u32>,
+    /// The particles whose forces each part sums.
+    particles_of: Vec<Range<usize>>,
     parts: Vec<WindowPart>,
 }
 
@@ -139,7 +139,6 @@ impl RowWindow {
             }
             debug_assert_eq!(gathered, part.end, "every particle's rows computed");
             planned.push(WindowPart {
-                particles: part.clone(),
                 rows: first_row.min(own.start)..own.end,
                 own: own.clone(),
                 steps,
@@ -152,9 +151,8 @@ impl RowWindow {
             return None;
         }
         let mut slots = vec![0; incidence.entries.len()];
-        for part in &planned {
-            let entries =
-                incidence.offsets[part.particles.start]..incidence.offsets[part.particles.end];
+        for (part, particles) in planned.iter().zip(parts) {
+            let entries = incidence.offsets[particles.start]..incidence.offsets[particles.end];
             for (slot, &e) in slots[entries.clone()]
                 .iter_mut()
                 .zip(&incidence.entries[entries])
@@ -174,6 +172,7 @@ impl RowWindow {
             rows: rows.len(),
             particles,
             slots,
+            particles_of: parts.to_vec(),
             parts: planned,
         })
     }
@@ -188,14 +187,9 @@ impl RowWindow {
         self.ring + self.rows - self.interior
     }
 
-    /// Number of parts.
-    pub fn parts(&self) -> usize {
-        self.parts.len()
-    }
-
-    /// The particles part `part` gathers.
-    pub fn particles(&self, part: usize) -> Range<usize> {
-        self.parts[part].particles.clone()
+    /// The particles each part gathers, in part order.
+    pub fn particle_parts(&self) -> &[Range<usize>] {
+        &self.particles_of
     }
 
     /// Interior rows computed by more than one part (the halos), as a
@@ -207,7 +201,7 @@ impl RowWindow {
 }
 
 /// Part `part` of the windowed bond pass: adds to `f` (the part's
-/// particles, [`RowWindow::particles`]) every bond force on them. `buffer`
+/// particles, [`RowWindow::particle_parts`]) every bond force on them. `buffer`
 /// ([`RowWindow::buffer_len`] rows) is the part's own: its ring, which
 /// takes the part's interior rows as they are computed, then a copy of
 /// `boundary` (the layout's rows from `interior` on, written by
@@ -268,7 +262,7 @@ pub fn window_forces_on(
     assert_eq!(buffer.len(), window.buffer_len(), "window buffer");
     assert_eq!(
         f.len(),
-        plan.particles.len(),
+        window.particles_of[part].len(),
         "forces of the part's particles"
     );
     buffer[window.ring..].copy_from_slice(boundary);
@@ -281,7 +275,7 @@ pub fn window_forces_on(
         ..*inputs
     };
     let mut lanes = LaneTally::default();
-    let first = plan.particles.start;
+    let first = window.particles_of[part].start;
     let (mut row, mut gathered) = (plan.rows.start, first);
     let mut pass = ForcePass::default();
     for &(rows_end, particles_end) in &plan.steps {

@@ -131,8 +131,6 @@ struct BondLayout {
     /// Whether `window` was planned for the current rows, and for how many
     /// threads.
     window_planned_for: Option<usize>,
-    /// Each thread's part of the particles in the window's plan.
-    window_parts: Vec<std::ops::Range<usize>>,
     /// Each thread's buffer of rows (its ring, then the boundary rows) and
     /// what its part found.
     buffers: Vec<(Vec<[f64; 4]>, ForcePass)>,
@@ -211,13 +209,13 @@ impl BondLayout {
             self.window = wanted
                 .then(|| {
                     let offsets = self.rows.offsets();
-                    self.window_parts = (0..threads)
+                    let parts: Vec<_> = (0..threads)
                         .map(|c| balanced_range(offsets, threads, c))
                         .collect();
                     RowWindow::plan(
                         &self.rows,
                         self.interior,
-                        &self.window_parts,
+                        &parts,
                         WINDOW_BLOCK,
                         WINDOW_MAX_RING,
                     )
@@ -408,7 +406,7 @@ impl BpmModel {
                 let boundary = &layout.force[layout.interior..];
                 team.run_parts(
                     f,
-                    &layout.window_parts,
+                    window.particle_parts(),
                     &mut layout.buffers,
                     |c, part, (buffer, pass)| {
                         *pass = window_forces(rows, window, c, &inputs, boundary, buffer, part)
