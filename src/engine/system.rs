@@ -466,10 +466,10 @@ impl System {
     /// Changes the box and maps positions affinely into it.
     pub fn remap_into(&mut self, new_box: SimBox) {
         let _t = self.timers.start(Stage::Integrate);
-        let old = &self.simbox;
+        let remap = self.simbox.remap_to(&new_box);
         self.team.run_split(&mut self.particles.x, |_, _, x| {
             for x in x {
-                new_box.remap_from(old, x);
+                remap.apply(x);
             }
         });
         self.simbox = new_box;
