@@ -110,9 +110,64 @@ impl Separation for MinimumImage {
     }
 }
 
+/// [`MinimumImage`] of a box without tilt: each dimension is imaged on its
+/// own, so the three roundings do not wait on one another. A contact pass
+/// in a jammed packing spent half its instructions on the minimum image,
+/// whose chain of roundings (z, then y, then x) the processor cannot
+/// overlap with the next pair when a branch on the distance is mispredicted.
+/// The separations are those of [`MinimumImage`] bit for bit, but for the
+/// sign of a component that is exactly zero: the tilt terms it subtracts
+/// are products with zero, and subtracting `-0.0` turns `-0.0` into `0.0`.
+#[derive(Clone, Copy, Debug)]
+pub struct OrthogonalImage {
+    lengths: [f64; 3],
+    inv: [f64; 3],
+}
+
+impl OrthogonalImage {
+    /// The convention of `image`, if its box has no tilt.
+    pub fn of(image: &MinimumImage) -> Option<Self> {
+        (image.tilt == [0.0; 3]).then_some(Self {
+            lengths: image.lengths,
+            inv: image.inv,
+        })
+    }
+}
+
+impl Separation for OrthogonalImage {
+    #[inline(always)]
+    fn delta(&self, xi: &[f64; 3], xj: &[f64; 3]) -> [f64; 3] {
+        std::array::from_fn(|d| {
+            let dd = xi[d] - xj[d];
+            dd - round_nearest(dd * self.inv[d]) * self.lengths[d]
+        })
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn orthogonal_image_gives_the_minimum_image_bit_for_bit() {
+        let periodic = [true, false, true];
+        let full = MinimumImage::new([7.0, 5.5, 3.25], [0.0; 3], periodic);
+        let split = OrthogonalImage::of(&full).expect("no tilt");
+        let tilted = MinimumImage::new([7.0, 5.5, 3.25], [0.5, 0.0, 0.0], periodic);
+        assert!(OrthogonalImage::of(&tilted).is_none());
+        let mut state = 0x9e37_79b9_7f4a_7c15u64;
+        let mut next = || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            (state >> 11) as f64 / (1u64 << 53) as f64 * 30.0 - 15.0
+        };
+        for _ in 0..10_000 {
+            let (xi, xj) = ([next(), next(), next()], [next(), next(), next()]);
+            let (a, b) = (full.delta(&xi, &xj), split.delta(&xi, &xj));
+            assert_eq!(a.map(f64::to_bits), b.map(f64::to_bits), "{xi:?} {xj:?}");
+        }
+    }
 
     #[test]
     fn branchless_rounding_matches_round_half_even() {
