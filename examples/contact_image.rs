@@ -2,7 +2,8 @@
 //! untilted box (`OrthogonalImage`), on one thread, on the same neighbour
 //! list in one process: rounds of `passes` passes, each image in turn
 //! (general first), printing ns per particle-pass, the listed pairs and
-//! the touching ones, and requiring the same forces bit for bit.
+//! the touching ones, and requiring the same forces bit for bit from each
+//! round's last pass.
 //!
 //! The system is a scene file, such as the state late in a compaction
 //! (`bpm run ... --final-scene`; results/bench/issue33-contact-image has
@@ -37,7 +38,10 @@ fn main() -> anyhow::Result<()> {
     scene.stages = vec![StageSpec::hold("contacts", 1, 0.1)];
     let mut sys = build_system(&scene, 1);
     let mut squeezed = sys.simbox.clone();
-    squeezed.resize_about_centre(sys.simbox.lengths.map(|l| l * (1.0 - squeeze)), [0.0; 3]);
+    squeezed.resize_about_centre(
+        sys.simbox.lengths.map(|l| l * (1.0 - squeeze)),
+        sys.simbox.tilt.map(|t| t * (1.0 - squeeze)),
+    );
     sys.remap_into(squeezed);
     let Some(coeffs) = scene.force_field.pair else {
         anyhow::bail!("the scene has no contacts");

@@ -146,10 +146,11 @@ impl SimBox {
 
 /// Positions mapped affinely from one box into another, through the
 /// inverse of the first box's matrix computed once: a deformed or
-/// barostatted box remaps every particle at every step, and three chained
-/// divisions per particle took longer than the rest of the step's
-/// integration (10.3 against 2.9 microseconds for 4,464 particles). LAMMPS
-/// maps into fractional coordinates the same way (`Domain::x2lamda`).
+/// barostatted box remaps every particle at every step, and with three
+/// chained divisions per particle the remap was the costliest of the
+/// integrator's passes (results/bench/issue33-contact-image, "whole
+/// runs"). LAMMPS maps into fractional coordinates the same way
+/// (`Domain::x2lamda`).
 #[derive(Clone, Debug)]
 pub struct AffineRemap {
     from_lo: [f64; 3],
@@ -160,7 +161,8 @@ pub struct AffineRemap {
 }
 
 impl AffineRemap {
-    /// Moves `x` to its fractional position in the target box.
+    /// Moves `x` to the point of the target box with the fractional
+    /// coordinates it had in the first.
     #[inline]
     pub fn apply(&self, x: &mut [f64; 3]) {
         let [ix, iy, iz, ixy, ixz, iyz] = self.inverse;
