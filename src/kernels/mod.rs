@@ -37,7 +37,7 @@ pub use bond_rows::{
 pub use closure_lanes::SurfaceCorrections;
 pub use diagnosis::{stable_timestep, verlet_limit, LIMIT_MARGIN, MULTIBODY_LIMIT, STIFFEST_MODE};
 pub use fault::{Fault, FaultKind, ForcePass, COLLAPSED_BELOW, DEEP_OVERLAP, OVERSTRETCHED_ABOVE};
-pub use geometry::{MinimumImage, OrthogonalImage, Separation, Unwrapped};
+pub use geometry::{BoxImage, MinimumImage, OrthogonalImage, Separation, Unwrapped};
 pub use granular::{
     corrected_granular_contact, granular_contact, granular_wall_contact, restitution_prefactor,
     tsuji_prefactor, ContactForce, ContactHistory, GranularCoeffs, GranularMaterial, NormalDamping,

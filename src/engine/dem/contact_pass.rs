@@ -13,11 +13,10 @@ use super::super::model::ForceInput;
 #[cfg(doc)]
 use super::super::neighbor::NeighbourList;
 use super::super::parallel::{as_rows, as_vec3, Scratch, Vec3};
-use super::super::simbox::MinimumImage;
 use super::super::team::SharedSlice;
 use crate::kernels::{
-    corrected_granular_contact, hertz_mindlin_block, ContactBlock, ContactForce, ContactHistory,
-    GranularCoeffs, Isa, Sphere, Tally, CONTACT_LANES,
+    corrected_granular_contact, hertz_mindlin_block, BoxImage, ContactBlock, ContactForce,
+    ContactHistory, GranularCoeffs, Isa, Sphere, Tally, CONTACT_LANES,
 };
 use std::ops::Range;
 
@@ -31,7 +30,7 @@ pub(super) struct ContactPass<'a> {
     /// Hertz-Mindlin without rolling or twisting) or one at a time.
     pub blocks: bool,
     /// The box's minimum image.
-    pub sep: &'a MinimumImage,
+    pub sep: &'a BoxImage,
     /// The state the forces are evaluated for.
     pub input: &'a ForceInput<'a>,
     /// The closure's corrections of each list entry's two surfaces.

@@ -23,10 +23,9 @@ use super::external::{GranularWall, WallContact, WallSide};
 use super::model::{EnergyTerm, ForceInput, ForceOutput, ModelTally, ParticleModel};
 use super::neighbor::Exclusions;
 use super::parallel::{Scratch, Vec3};
-use super::simbox::MinimumImage;
 use super::timers::Stage;
 use super::EngineError;
-use crate::kernels::{ContactHistory, GranularCoeffs, GranularMaterial, Isa, Tally};
+use crate::kernels::{BoxImage, ContactHistory, GranularCoeffs, GranularMaterial, Isa, Tally};
 use contact_pass::{contact_forces, ContactPass};
 
 /// DEM spheres of one material.
@@ -165,7 +164,7 @@ impl DemModel {
     /// team ([`contact_forces`]).
     fn forces(
         &mut self,
-        sep: &MinimumImage,
+        sep: &BoxImage,
         input: &ForceInput<'_>,
         f: &mut [[f64; 3]],
         torque: Option<&mut [[f64; 3]]>,
@@ -297,7 +296,7 @@ impl ParticleModel for DemModel {
 
     fn compute(&mut self, input: &ForceInput<'_>, out: &mut ForceOutput<'_>) -> ModelTally {
         let _t = out.timers.start(Stage::Pairs);
-        let sep = input.simbox.minimum_image();
+        let sep = BoxImage::of(&input.simbox.minimum_image());
         let n = input.x.len();
         if std::mem::take(&mut self.stage_start)
             || self.wall_histories.len() != self.walls.len()

@@ -17,12 +17,11 @@
 use super::super::model::ForceInput;
 use super::super::neighbor::NeighbourList;
 use super::super::parallel::balanced_range;
-use super::super::simbox::MinimumImage;
 use super::super::team::{SharedSlice, Team};
 use super::wall::ActiveGranularWall;
 use crate::kernels::{
-    pair_contact_points, Closure, ContactHistory, ContactPoint, GranularMaterial, HalfSpace,
-    MprSwitch, MprTest, SurfaceCorrections, WallPlane,
+    pair_contact_points, BoxImage, Closure, ContactHistory, ContactPoint, GranularMaterial,
+    HalfSpace, MprSwitch, MprTest, SurfaceCorrections, WallPlane,
 };
 use serde::{Deserialize, Serialize};
 
@@ -251,7 +250,7 @@ impl ClosurePass {
     /// threads, so the corrections are the same bits.
     pub fn update(
         &mut self,
-        sep: &MinimumImage,
+        sep: &BoxImage,
         input: &ForceInput<'_>,
         pair_history: &[ContactHistory],
         walls: &[ActiveGranularWall],
@@ -315,7 +314,7 @@ impl ClosurePass {
     /// chunk of the list's rows each sphere's pairs within reach in that
     /// chunk (into `cursors`, from the chunk's first row on: a half list
     /// reaches no lower sphere); in parallel over the rows.
-    fn measure(&mut self, sep: &MinimumImage, input: &ForceInput<'_>) {
+    fn measure(&mut self, sep: &BoxImage, input: &ForceInput<'_>) {
         let (x, radius, list, team) = (input.x, input.radius, input.neighbours, input.team);
         let (n, entries) = (x.len(), list.neighbours.len());
         let reach_factor = 1.0 + self.settings.reach;
