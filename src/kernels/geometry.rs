@@ -160,10 +160,11 @@ impl Separation for OrthogonalImage {
     }
 }
 
-/// The minimum image of a box, tilted or not, for loops that keep one type
-/// for both (the DEM contact pass, which also needs each pair's image):
-/// a branch per pair that always goes the same way costs less than the
-/// triclinic image's chain of roundings where [`OrthogonalImage`] applies.
+/// The minimum image a pass uses for its box: [`OrthogonalImage`] when it
+/// has no tilt. The bonded contact pass matches on it once and runs a loop
+/// compiled for each; the DEM passes, which also need each pair's image,
+/// keep it as one type, and a branch per pair that always goes the same
+/// way costs less than the triclinic image's chain of roundings.
 #[derive(Clone, Copy, Debug)]
 pub enum BoxImage {
     /// A tilted box.

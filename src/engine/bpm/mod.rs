@@ -20,8 +20,8 @@ use super::EngineError;
 use crate::kernels::{
     accumulate_multibody_sums, accumulate_reference_volumes, balance_multibody, gather_forces,
     gather_volumes, pair_forces, row_forces, row_volumes, window_forces, BondCoeffs, BondEntry,
-    BondRows, Fault, ForcePass, MultibodyInputs, MultibodySum, OrthogonalImage, Ownership,
-    PairCoeffs, PairInputs, RowInputs, RowWindow, Separation, Tally, Unwrapped,
+    BondRows, BoxImage, Fault, ForcePass, MultibodyInputs, MultibodySum, Ownership, PairCoeffs,
+    PairInputs, RowInputs, RowWindow, Separation, Tally, Unwrapped,
 };
 
 /// Index of the bond term in [`ModelTally::terms`].
@@ -458,13 +458,17 @@ impl BpmModel {
                 // A half list (`j > i`) split by `i` into parts of about
                 // as many pairs: chunk c writes from its first `i` on.
                 let first = |c| neighbours.balanced_rows(chunks, c).start;
-                let orthogonal = OrthogonalImage::of(&sep);
+                let image = BoxImage::of(&sep);
                 self.force_scratch
                     .scatter(team, as_vec3(f), first, |c, out| {
                         let rows = neighbours.rows(neighbours.balanced_rows(chunks, c));
-                        match &orthogonal {
-                            Some(image) => pair_forces(image, &inputs, rows, own, as_rows(out)),
-                            None => pair_forces(&sep, &inputs, rows, own, as_rows(out)),
+                        match &image {
+                            BoxImage::Orthogonal(image) => {
+                                pair_forces(image, &inputs, rows, own, as_rows(out))
+                            }
+                            BoxImage::Tilted(image) => {
+                                pair_forces(image, &inputs, rows, own, as_rows(out))
+                            }
                         }
                     })
             }
