@@ -215,9 +215,8 @@ fn packing_moduli_of_a_compressed_solid_match_its_calibration_in_both_engines() 
         &protocol,
         &CompactionEngine::Native,
         &dir,
-        1,
         None,
-        None,
+        &plain(),
     )
     .unwrap();
     let lammps = measure_state(
@@ -226,9 +225,8 @@ fn packing_moduli_of_a_compressed_solid_match_its_calibration_in_both_engines() 
         &protocol,
         &CompactionEngine::Lammps { ranks: 1 },
         &dir,
-        1,
         Some(&bpm),
-        None,
+        &plain(),
     )
     .unwrap();
     let strain = 1.0 - scale.powi(3);
@@ -803,6 +801,39 @@ fn a_compaction_study_stopped_twice_resumes_to_the_same_report() {
     .unwrap_err();
     stopped(e);
     assert!(lines.iter().any(|l| l.contains("moduli 1/2")), "{lines:?}");
+    // Stopped again in the middle of the second measurement: ten steps
+    // into its first loading (its steps count on from its relaxation's).
+    let third = session(true);
+    let relax_steps = opts.moduli.protocol.relax_stage().steps;
+    third
+        .checkpoint
+        .as_ref()
+        .unwrap()
+        .stop_runs_at(Some(relax_steps + 10));
+    let mut lines = Vec::new();
+    let e = run_compaction(&opts, &third, None, &dir, "test", &mut |line| {
+        lines.push(line.to_string())
+    })
+    .unwrap_err();
+    stopped(e);
+    assert!(!lines.iter().any(|l| l.contains("moduli 2/2")), "{lines:?}");
+    let (parts, run) = session(true).checkpoint.as_ref().unwrap().summary();
+    let measuring = format!("seed-3/moduli-{}/", straight.runs[0].moduli[1].step);
+    // Parts of a part (a measurement's steps) have a third `/`.
+    let steps: Vec<&String> = parts
+        .iter()
+        .filter(|p| p.matches('/').count() > 2)
+        .collect();
+    assert!(
+        steps.len() == 1 && steps[0].starts_with(&measuring) && steps[0].ends_with("/relaxed"),
+        "the second measurement's relaxed state kept, the first's steps dropped: {parts:?}"
+    );
+    let (key, step) = run.expect("stopped inside the loading");
+    assert!(
+        key.starts_with(&measuring) && key.ends_with("/compress"),
+        "{key}"
+    );
+    assert_eq!(step, relax_steps + 10);
     let mut lines = Vec::new();
     let resumed = run_compaction(&opts, &session(true), None, &dir, "test", &mut |line| {
         lines.push(line.to_string())
@@ -811,6 +842,12 @@ fn a_compaction_study_stopped_twice_resumes_to_the_same_report() {
     assert_eq!(runs_without_times(&straight), runs_without_times(&resumed));
     // The finished run and the first measurement came from the checkpoint.
     assert!(lines.iter().any(|l| l.contains("moduli 2/2")), "{lines:?}");
+    let (parts, run) = session(true).checkpoint.as_ref().unwrap().summary();
+    assert!(run.is_none());
+    assert!(
+        parts.iter().all(|p| p.matches('/').count() <= 2),
+        "only whole parts are left: {parts:?}"
+    );
     // Resumed with another moduli protocol, the study takes the packing
     // and the run from the checkpoint (its wall time comes back to the
     // bit) and measures the moduli anew.
@@ -862,10 +899,11 @@ fn a_compaction_study_stopped_twice_resumes_to_the_same_report() {
 /// two threads.
 #[test]
 fn the_moduli_loadings_branch_from_one_relaxation_as_three_full_runs() {
+    use bpm::scene::checkpoint::StudyCheckpoint;
     use bpm::scene::protocols::PackingModuliProtocol;
-    use bpm::scene::StopRequest;
-    use bpm::scene::{build_system, run_scene, RunOptions};
+    use bpm::scene::{build_system, run_scene, CheckpointEvery, RunOptions};
     use bpm::studies::compaction::moduli::{moduli_scenes, relax_once_then_load, MeasureStop};
+    use bpm::studies::{StudyRuntime, StudyStop};
     let packing = small_compaction(3).unwrap();
     // A saved state of the packing, jostled, so the relaxation has
     // something to relax.
@@ -893,7 +931,7 @@ fn the_moduli_loadings_branch_from_one_relaxation_as_three_full_runs() {
     };
     let scenes = moduli_scenes(&packing, &state, &protocol);
     for threads in [1, 2] {
-        let branched = relax_once_then_load(&scenes, threads, None).unwrap();
+        let branched = relax_once_then_load(&scenes, &StudyRuntime::plain(threads, false)).unwrap();
         for (scene, runs) in scenes.iter().zip(&branched) {
             let mut sys = build_system(scene, threads);
             let (full, error) = run_scene(&mut sys, scene, &RunOptions::quiet(threads));
@@ -915,18 +953,29 @@ fn the_moduli_loadings_branch_from_one_relaxation_as_three_full_runs() {
     // Scenes that differ before their loadings cannot share a relaxation.
     let mut other = scenes.clone();
     other[2].stages[0].dt = 0.04;
-    let e = relax_once_then_load(&other, 1, None).unwrap_err();
+    let e = relax_once_then_load(&other, &plain()).unwrap_err();
     assert!(matches!(e, MeasureStop::Failed(_)), "{e:?}");
     assert!(e.to_string().contains("differ only in their second"), "{e}");
     // A stop asked for (a signal's flag, here set before the start) ends
-    // the measurement after one step, naming the study's checkpoint, and
-    // is not taken for a failed measurement.
-    let stop = StopRequest {
-        flag: std::sync::Arc::new(std::sync::atomic::AtomicBool::new(true)),
-        resume_from: "study.ck".into(),
+    // the measurement, naming the study's checkpoint, and is not taken for
+    // a failed measurement.
+    let dir = common::scratch_dir("moduli-stop");
+    let path = dir.join("study.ck");
+    let checkpoint =
+        StudyCheckpoint::open(&path, CheckpointEvery::Steps(100), false, "compact", &(), 1)
+            .unwrap();
+    checkpoint
+        .stop_flag()
+        .store(true, std::sync::atomic::Ordering::SeqCst);
+    let runtime = StudyRuntime {
+        checkpoint: Some(checkpoint),
+        ..plain()
     };
-    match relax_once_then_load(&scenes, 1, Some(&stop)) {
-        Err(MeasureStop::Interrupted(path)) => assert_eq!(path, PathBuf::from("study.ck")),
+    match relax_once_then_load(&scenes, &runtime) {
+        Err(MeasureStop::Stopped(StudyStop::Interrupted(stopped_at))) => {
+            assert_eq!(stopped_at, path)
+        }
         other => panic!("not stopped as asked: {:?}", other.map(|_| ())),
     }
+    let _ = std::fs::remove_dir_all(&dir);
 }

@@ -114,7 +114,6 @@ impl RunArgs {
             progress,
             files,
             checkpoint,
-            stop: None,
         };
         let (report, sys) = run_native_report(&scene, &path, hash, &opts);
         report.write(&output)?;

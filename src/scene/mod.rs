@@ -25,5 +25,5 @@ pub use model::{
 };
 pub use records::{Checkpoint, StageOutput};
 pub use report::{run_native_report, EngineInfo, RunReport};
-pub use run::{run_scene, run_stage, DumpOptions, OutputFiles, RunError, RunOptions, StopRequest};
+pub use run::{run_scene, run_stage, DumpOptions, OutputFiles, RunError, RunOptions};
 pub use validate::{validate, SceneError};

@@ -68,25 +68,9 @@ pub struct RunOptions {
     pub progress: Progress,
     /// Files the run streams to.
     pub files: OutputFiles,
-    /// Checkpoints to write, or to resume from.
+    /// Checkpoints to write, or to resume from; a stop asked for (a
+    /// signal) reaches the run through them.
     pub checkpoint: Option<CheckpointOptions>,
-    /// A stop asked for from outside, for a run that keeps no checkpoint
-    /// of its own (with a checkpoint, [`CheckpointOptions`] carries it).
-    pub stop: Option<StopRequest>,
-}
-
-/// A stop asked for from outside a run without a checkpoint of its own: a
-/// short run that is one part of a checkpointed study, which starts the
-/// part again when resumed. The run ends after the step in which it sees
-/// `flag` set (unless that is its stage's last), with
-/// [`RunError::Interrupted`] naming `resume_from` ([`run_stage`] returns
-/// it inside [`RunError::Stopped`], with the stage's records so far).
-#[derive(Clone, Debug)]
-pub struct StopRequest {
-    /// Set (by a signal handler) to stop.
-    pub flag: std::sync::Arc<std::sync::atomic::AtomicBool>,
-    /// The checkpoint that continues the work the run belongs to.
-    pub resume_from: PathBuf,
 }
 
 impl RunOptions {
@@ -97,7 +81,6 @@ impl RunOptions {
             progress: Progress::hidden(),
             files: OutputFiles::default(),
             checkpoint: None,
-            stop: None,
         }
     }
 }
@@ -114,9 +97,8 @@ pub enum RunError {
     /// A checkpoint could not be written, read or used.
     #[error(transparent)]
     Checkpoint(#[from] CheckpointError),
-    /// The run was asked to stop; the checkpoint continues it (one the run
-    /// wrote, or for a run without one ([`StopRequest`]), the checkpoint of
-    /// the study it belongs to).
+    /// The run was asked to stop; the checkpoint it wrote (its own file,
+    /// or the study's it is a part of) continues it.
     #[error("stopped at step {step} as asked; the checkpoint {} continues the run (the same command with --resume)", checkpoint.display())]
     Interrupted {
         /// The global step reached.
@@ -548,16 +530,6 @@ fn run_stage_from(
             if k % 256 == 0 {
                 sys.check_finite()?;
                 bar.set(k);
-            }
-            // A run with a checkpoint stops through it (below), which saves
-            // first; a stop on the stage's last step lets the stage finish.
-            if let (Some(stop), None, true) = (&opts.stop, &saving, k < spec.steps) {
-                if stop.flag.load(std::sync::atomic::Ordering::Relaxed) {
-                    return Err(RunError::Interrupted {
-                        step: sys.step,
-                        checkpoint: stop.resume_from.clone(),
-                    });
-                }
             }
             if let Some(saving) = &mut saving {
                 let stop = saving.checkpointer.options().stop_requested(sys.step);

@@ -76,10 +76,21 @@ impl StudyRuntime {
         key: &str,
         scene: &crate::scene::Scene,
     ) -> Result<crate::scene::run::RunOutcome, StudyStop> {
-        use crate::scene::RunError;
         let mut sys = crate::scene::build_system(scene, self.threads);
-        let mut outcome =
-            crate::scene::run::run_scene_outcome(&mut sys, scene, &self.run_options(key));
+        self.run_system(key, &mut sys, scene)
+    }
+
+    /// [`StudyRuntime::run_scene`] on `sys`, a system of `scene` (in the
+    /// state the run starts from, unless the checkpoint continues it),
+    /// which is left in the run's final state.
+    pub fn run_system(
+        &self,
+        key: &str,
+        sys: &mut crate::engine::System,
+        scene: &crate::scene::Scene,
+    ) -> Result<crate::scene::run::RunOutcome, StudyStop> {
+        use crate::scene::RunError;
+        let mut outcome = crate::scene::run::run_scene_outcome(sys, scene, &self.run_options(key));
         match outcome.error.take() {
             Some(RunError::Interrupted { checkpoint, .. }) => {
                 Err(StudyStop::Interrupted(checkpoint))
@@ -103,7 +114,6 @@ impl StudyRuntime {
                 .checkpoint
                 .as_ref()
                 .map(|c| c.run_options(&format!("{}{key}", self.prefix))),
-            stop: None,
         }
     }
 }

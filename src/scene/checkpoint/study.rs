@@ -162,13 +162,18 @@ impl StudyCheckpoint {
     }
 
     /// Records part `key` as finished with `value` and writes the file
-    /// (without a run under way).
+    /// (without a run under way). The parts under it (`key/...`), the
+    /// steps it was made of, are dropped: a resumed study takes `value`
+    /// and never asks for them, and a part's steps can be large (a
+    /// measurement's relaxed state).
     pub fn finish<T: Serialize>(&self, key: &str, value: &T) -> Result<(), CheckpointError> {
         let mut state = self.lock();
         let value = ciborium::Value::serialized(value).map_err(|e| CheckpointError::Io {
             path: state.path.clone(),
             cause: std::io::Error::other(e.to_string()),
         })?;
+        let beneath = format!("{key}/");
+        state.parts.retain(|k, _| !k.starts_with(&beneath));
         state.parts.insert(key.to_string(), value);
         state.write(None)
     }

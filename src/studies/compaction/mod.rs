@@ -32,13 +32,12 @@ use crate::scene::model::ModelKind;
 use crate::scene::protocols::{compaction_scene, CompactionProtocol};
 use crate::scene::run::Checkpoint;
 use crate::scene::validate::{simbox_of, SceneError};
-use crate::scene::{write_scene, ForceField, Scene, StageOutput, StopRequest};
+use crate::scene::{write_scene, ForceField, Scene, StageOutput};
 use crate::studies::hertz::Moduli;
 use crate::studies::{StudyRuntime, StudyStop};
 use crate::verify::LammpsLauncher;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
-use std::sync::atomic::Ordering;
 
 /// Where the packings come from.
 #[derive(Clone, Debug, Serialize, Deserialize)]
@@ -1118,13 +1117,10 @@ pub fn run_compaction(
             // protocol measures anew (`checkpoint_identity`).
             let protocol = serde_json::to_string(&opts.moduli.protocol).unwrap_or_default();
             let key = format!("seed-{seed}/moduli-{}/{protocol}", row.step);
-            // A stop asked for during the state's native runs ends the
-            // study at their next step; the state is measured again when
-            // the study is resumed.
-            let stop = runtime.checkpoint.as_ref().map(|c| StopRequest {
-                flag: c.stop_flag(),
-                resume_from: c.path(),
-            });
+            // The native runs of a state are kept in the study's
+            // checkpoint as they go (`moduli::relax_once_then_load`), under
+            // the state's key.
+            let scoped = runtime.scoped(&key);
             let measured = runtime.part(&key, || {
                 let measured = moduli::measure_state(
                     &packing,
@@ -1132,21 +1128,20 @@ pub fn run_compaction(
                     &opts.moduli.protocol,
                     &opts.engine,
                     &folder,
-                    threads,
                     bpm,
-                    stop.as_ref(),
+                    &scoped,
                 );
-                // LAMMPS runs do not see the flag; one killed with the
-                // study fails, and is measured again too rather than kept
-                // as a failure (a real failure recurs on resume).
-                let asked = stop.as_ref().filter(|s| s.flag.load(Ordering::Relaxed));
+                // LAMMPS runs do not see a stop; one killed with the study
+                // fails, and is measured again too rather than kept as a
+                // failure (a real failure recurs on resume).
+                let asked = runtime.checkpoint.as_ref().filter(|c| c.stop_requested());
                 match (measured, asked) {
-                    (Err(moduli::MeasureStop::Interrupted(path)), _) => {
-                        Err(CompactionError::from(StudyStop::Interrupted(path)))
+                    (Err(moduli::MeasureStop::Stopped(stop)), _) => {
+                        Err(CompactionError::from(stop))
                     }
-                    (Err(_), Some(stop)) => Err(CompactionError::from(StudyStop::Interrupted(
-                        stop.resume_from.clone(),
-                    ))),
+                    (Err(_), Some(checkpoint)) => Err(CompactionError::from(
+                        StudyStop::Interrupted(checkpoint.path()),
+                    )),
                     (other, _) => Ok(other.map_err(|e| e.to_string())),
                 }
             })?;

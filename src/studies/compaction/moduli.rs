@@ -16,12 +16,14 @@ use crate::analysis::fit::{fit_line, LineFit};
 use crate::analysis::moduli::{
     compression_series, poisson_ratio, poisson_ratio_error, shear_series,
 };
+use crate::engine::{EngineState, System};
 use crate::scene::load::reference_lengths;
 use crate::scene::protocols::PackingModuliProtocol;
-use crate::scene::run::{run_stage, Checkpoint, Recorders, RunError};
-use crate::scene::{build_system, RunOptions, Scene, StageOutput, StopRequest};
+use crate::scene::run::Checkpoint;
+use crate::scene::{build_system, Scene, StageOutput};
+use crate::studies::{StudyRuntime, StudyStop};
 use serde::{Deserialize, Serialize};
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 /// Which states get their moduli measured, and how.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -212,29 +214,24 @@ fn run_all(
     engine: &CompactionEngine,
     folder: &Path,
     tag: &str,
-    threads: usize,
     bpm: Option<&Path>,
-    stop: Option<&StopRequest>,
+    runtime: &StudyRuntime,
 ) -> Result<[Vec<StageOutput>; 3], MeasureStop> {
     if *engine == CompactionEngine::Native {
-        return relax_once_then_load(scenes, threads, stop);
+        return relax_once_then_load(scenes, runtime);
     }
     let mut out: [Vec<StageOutput>; 3] = Default::default();
-    // The three short runs of a state are one part of a checkpointed
-    // study, kept when all three have finished.
-    let runtime = crate::studies::StudyRuntime::plain(threads, false);
-    for (k, (scene, kind)) in scenes
-        .iter()
-        .zip(["compress", "shear", "control"])
-        .enumerate()
-    {
+    // The three runs are one part of the study: a stop does not reach
+    // them, and a measurement cut short is made again from its start.
+    let plain = StudyRuntime::plain(runtime.threads, false);
+    for (k, (scene, kind)) in scenes.iter().zip(LOADINGS).enumerate() {
         let (stages, stopped, _) = run_engine(
             scene,
             engine,
             folder,
             &format!("{tag}-{kind}"),
             kind,
-            &runtime,
+            &plain,
             bpm,
         )
         .map_err(|e| e.to_string())?;
@@ -249,18 +246,33 @@ fn run_all(
     Ok(out)
 }
 
+/// The loadings of a state's three scenes, in order.
+const LOADINGS: [&str; 3] = ["compress", "shear", "control"];
+
+/// A state relaxed for its moduli: the relaxation's records and the
+/// engine's state at its end, where each loading starts.
+#[derive(Serialize, Deserialize)]
+struct Relaxed {
+    records: StageOutput,
+    state: EngineState,
+}
+
 /// The three scenes of one state in the native engine, their common
 /// relaxation run once: each loading starts from the relaxed state, saved
 /// and restored whole. A run continued from a saved state is the run that
 /// did not stop, so the records are those of three full runs, bit for
 /// bit, for one relaxation's steps instead of three (at a relaxation of
 /// 1e4 tau and the default --moduli-rate, 1.6e5 steps instead of 3.6e5;
-/// at the paper's slower rates, 7e5 instead of 9e5). A stop asked for
-/// through `stop` ends whichever run is under way at its next step.
+/// at the paper's slower rates, 7e5 instead of 9e5).
+///
+/// With a checkpoint in `runtime` (scoped to the state), the relaxed
+/// state and each finished loading are parts of the study (`relaxed`,
+/// `compress`, `shear`, `control`), and the run under way is checkpointed
+/// with the study: a stop or a kill loses at most the interval between
+/// two checkpoints, not the measurement.
 pub fn relax_once_then_load(
     scenes: &[Scene; 3],
-    threads: usize,
-    stop: Option<&StopRequest>,
+    runtime: &StudyRuntime,
 ) -> Result<[Vec<StageOutput>; 3], MeasureStop> {
     let first = &scenes[0];
     // The scenes differ only in their loading stage (`moduli_scenes`).
@@ -276,56 +288,47 @@ pub fn relax_once_then_load(
             "the moduli's scenes must differ only in their second (loading) stage".into(),
         ));
     }
-    let opts = RunOptions {
-        stop: stop.cloned(),
-        ..RunOptions::quiet(threads)
+    let with_stage = |scene: &Scene, k: usize| Scene {
+        stages: vec![scene.stages[k].clone()],
+        ..scene.clone()
     };
-    let mut no_files = Recorders::default();
-    let stopped = |kind: &str, e: RunError| match interrupted(&e) {
-        Some(checkpoint) => MeasureStop::Interrupted(checkpoint),
-        None => MeasureStop::Failed(format!("the {kind} run stopped: {e}")),
-    };
-    let mut sys = build_system(first, threads);
-    let relaxation = run_stage(
-        &mut sys,
-        &first.stages[0],
-        0,
-        first.seed,
-        &opts,
-        &mut no_files,
-    )
-    .map_err(|e| stopped("relaxation", e))?;
-    let relaxed = sys.save_state().map_err(|e| e.to_string())?;
-    drop(sys);
+    let relaxation = with_stage(first, 0);
+    let relaxed = runtime.part("relaxed", || {
+        let mut sys = build_system(&relaxation, runtime.threads);
+        let records = run_one_stage(runtime, "relaxation", &mut sys, &relaxation)?;
+        let state = sys.save_state().map_err(|e| e.to_string())?;
+        Ok::<_, MeasureStop>(Relaxed { records, state })
+    })?;
     let mut out: [Vec<StageOutput>; 3] = Default::default();
-    for ((scene, kind), runs) in scenes
-        .iter()
-        .zip(["compress", "shear", "control"])
-        .zip(&mut out)
-    {
-        let mut sys = build_system(scene, threads);
-        sys.restore(relaxed.clone()).map_err(|e| e.to_string())?;
-        let loading = run_stage(
-            &mut sys,
-            &scene.stages[1],
-            1,
-            scene.seed,
-            &opts,
-            &mut no_files,
-        )
-        .map_err(|e| stopped(kind, e))?;
-        *runs = vec![relaxation.clone(), loading];
+    for ((scene, kind), runs) in scenes.iter().zip(LOADINGS).zip(&mut out) {
+        let loading = with_stage(scene, 1);
+        let records = runtime.part(kind, || {
+            let mut sys = build_system(&loading, runtime.threads);
+            sys.restore(relaxed.state.clone())
+                .map_err(|e| e.to_string())?;
+            run_one_stage(runtime, kind, &mut sys, &loading)
+        })?;
+        *runs = vec![relaxed.records.clone(), records];
     }
     Ok(out)
 }
 
-/// The checkpoint a run stopped as asked names, if it did.
-fn interrupted(e: &RunError) -> Option<PathBuf> {
-    match e {
-        RunError::Interrupted { checkpoint, .. } => Some(checkpoint.clone()),
-        RunError::Stopped { error, .. } => interrupted(error),
-        _ => None,
+/// Runs `scene`, of one stage, on `sys` as the study's run `kind`; its
+/// records.
+fn run_one_stage(
+    runtime: &StudyRuntime,
+    kind: &str,
+    sys: &mut System,
+    scene: &Scene,
+) -> Result<StageOutput, MeasureStop> {
+    let mut outcome = runtime.run_system(kind, sys, scene)?;
+    if let Some(e) = outcome.error {
+        return Err(MeasureStop::Failed(format!("the {kind} run stopped: {e}")));
     }
+    outcome
+        .stages
+        .pop()
+        .ok_or_else(|| MeasureStop::Failed(format!("the {kind} run recorded no stage")))
 }
 
 /// Why a state's moduli were not measured.
@@ -335,10 +338,10 @@ pub enum MeasureStop {
     /// no moduli.
     #[error("{0}")]
     Failed(String),
-    /// A stop was asked for (a signal): the state is measured again from
-    /// its start when the study is resumed from this checkpoint.
-    #[error("stopped as asked; the checkpoint {} continues the study", .0.display())]
-    Interrupted(PathBuf),
+    /// The study stopped (asked to, or its checkpoint failed): its
+    /// checkpoint continues the measurement.
+    #[error(transparent)]
+    Stopped(#[from] StudyStop),
 }
 
 impl From<String> for MeasureStop {
@@ -398,18 +401,16 @@ fn slope_fit(x: &[f64], y: &[f64], what: &str) -> Result<LineFit, String> {
 
 /// Measures the moduli of `state`, a checkpoint of the compaction of
 /// `packing`, in `engine`; LAMMPS runs write their files into
-/// `folder/moduli-STEP-{compress,shear,control}.*`. `stop` ends the native
-/// runs at the next step when asked ([`MeasureStop::Interrupted`]).
-#[allow(clippy::too_many_arguments)]
+/// `folder/moduli-STEP-{compress,shear,control}.*`. Native runs are kept
+/// in `runtime`'s checkpoint, if it has one ([`relax_once_then_load`]).
 pub fn measure_state(
     packing: &Scene,
     state: &Checkpoint,
     protocol: &PackingModuliProtocol,
     engine: &CompactionEngine,
     folder: &Path,
-    threads: usize,
     bpm: Option<&Path>,
-    stop: Option<&StopRequest>,
+    runtime: &StudyRuntime,
 ) -> Result<PackingModuli, MeasureStop> {
     let start = std::time::Instant::now();
     let scenes = moduli_scenes(packing, state, protocol);
@@ -418,9 +419,8 @@ pub fn measure_state(
         engine,
         folder,
         &format!("moduli-{}", state.step),
-        threads,
         bpm,
-        stop,
+        runtime,
     )?;
     let (volumetric, pressure) = compression_series(&compress[1]).map_err(|e| e.to_string())?;
     let (shear_strain, shear_stress) = shear_series(&shear[1]).map_err(|e| e.to_string())?;
