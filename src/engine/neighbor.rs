@@ -11,7 +11,7 @@
 use super::parallel::balanced_range;
 use super::simbox::SimBox;
 use super::team::{chunk_range, Team};
-use crate::kernels::{MinimumImage, Separation};
+use crate::kernels::{BoxImage, Separation};
 use nalgebra::{Matrix3, Vector3};
 
 /// Pairs a pair list leaves out: for each particle its sorted partners
@@ -150,8 +150,8 @@ struct BinGrid<'a> {
 }
 
 /// Which candidate pairs a row keeps.
-struct PairTest<'a> {
-    image: &'a MinimumImage,
+struct PairTest<'a, S: Separation> {
+    image: &'a S,
     x: &'a [[f64; 3]],
     cut_sq: f64,
     exclude: Option<&'a Exclusions>,
@@ -162,9 +162,9 @@ struct PairTest<'a> {
 /// excluded, in increasing order. A plain function, not a closure, so
 /// that the grid and positions reach it as arguments the compiler may
 /// keep in registers across the row's pushes.
-fn search_rows(
+fn search_rows<S: Separation>(
     grid: &BinGrid,
-    pairs: &PairTest,
+    pairs: &PairTest<S>,
     atoms: std::ops::Range<usize>,
     part: &mut RowPart,
 ) {
@@ -213,6 +213,35 @@ fn search_rows(
         }
         part.neighbours[row_start..].sort_unstable();
         part.lengths.push(part.neighbours.len() - row_start);
+    }
+}
+
+/// Searches every row into `neighbours`, the atoms split into contiguous
+/// ranges over `team`'s threads (one `parts` entry each); every row is
+/// found and sorted on its own, so the list is the same for any number of
+/// threads.
+fn search_list<S: Separation>(
+    team: &Team,
+    grid: &BinGrid,
+    pairs: &PairTest<S>,
+    parts: &mut [RowPart],
+    neighbours: &mut Vec<i32>,
+) {
+    let n = pairs.x.len();
+    if let [part] = parts {
+        // One thread searches straight into the list's own buffer.
+        std::mem::swap(&mut part.neighbours, neighbours);
+        search_rows(grid, pairs, 0..n, part);
+        std::mem::swap(&mut part.neighbours, neighbours);
+    } else {
+        let chunks = parts.len();
+        team.run_on(parts, |c, part| {
+            search_rows(grid, pairs, chunk_range(n, chunks, c), part)
+        });
+        neighbours.clear();
+        for part in parts.iter() {
+            neighbours.extend_from_slice(&part.neighbours);
+        }
     }
 }
 
@@ -418,28 +447,27 @@ impl NeighbourList {
             bin_start: &self.bin_start,
             bin_atoms: &self.bin_atoms,
         };
-        let pairs = PairTest {
-            image: &image,
-            x,
-            cut_sq,
-            exclude,
-        };
-        let search = |atoms: std::ops::Range<usize>, part: &mut RowPart| {
-            search_rows(&grid, &pairs, atoms, part)
-        };
-        if chunks == 1 {
-            // One thread searches straight into the list's own buffer.
-            let part = &mut self.parts[0];
-            std::mem::swap(&mut part.neighbours, &mut self.neighbours);
-            search(0..n, part);
-            std::mem::swap(&mut part.neighbours, &mut self.neighbours);
-        } else {
-            team.run_on(&mut self.parts, |c, part| {
-                search(chunk_range(n, chunks, c), part)
-            });
-            self.neighbours.clear();
-            for part in &self.parts {
-                self.neighbours.extend_from_slice(&part.neighbours);
+        // Each candidate pair is imaged: per dimension when the box has
+        // no tilt (the same separations, bit for bit).
+        let (parts, neighbours) = (&mut self.parts, &mut self.neighbours);
+        match BoxImage::of(&image) {
+            BoxImage::Orthogonal(image) => {
+                let pairs = PairTest {
+                    image: &image,
+                    x,
+                    cut_sq,
+                    exclude,
+                };
+                search_list(team, &grid, &pairs, parts, neighbours)
+            }
+            BoxImage::Tilted(image) => {
+                let pairs = PairTest {
+                    image: &image,
+                    x,
+                    cut_sq,
+                    exclude,
+                };
+                search_list(team, &grid, &pairs, parts, neighbours)
             }
         }
         self.offsets.clear();
@@ -467,11 +495,35 @@ impl NeighbourList {
 
 /// Largest distance between matching points of `a` and `b`.
 fn max_displacement(a: &[[f64; 3]], b: &[[f64; 3]]) -> f64 {
-    let mut max_sq: f64 = 0.0;
-    for (p, q) in a.iter().zip(b) {
+    // Runs at every step. One running maximum is a chain of dependent
+    // `max`es that waits on each result; four independent ones keep the
+    // unit busy, and written as a comparison they vectorise (`f64::max`'s
+    // NaN rule does not; a NaN distance is passed over either way, and
+    // non-finite positions are caught by the run's own check). The maximum
+    // is the same in any order.
+    const LANES: usize = 4;
+    let larger = |m: f64, d: f64| if d > m { d } else { m };
+    let distance_sq = |p: &[f64; 3], q: &[f64; 3]| {
         let d = [p[0] - q[0], p[1] - q[1], p[2] - q[2]];
-        max_sq = max_sq.max(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+        d[0] * d[0] + d[1] * d[1] + d[2] * d[2]
+    };
+    let n = a.len().min(b.len());
+    let whole = n / LANES * LANES;
+    let mut lanes = [0.0f64; LANES];
+    for (p, q) in a[..whole]
+        .chunks_exact(LANES)
+        .zip(b[..whole].chunks_exact(LANES))
+    {
+        for l in 0..LANES {
+            lanes[l] = larger(lanes[l], distance_sq(&p[l], &q[l]));
+        }
     }
+    let max_sq = a[whole..n]
+        .iter()
+        .zip(&b[whole..n])
+        .fold(lanes.into_iter().fold(0.0, larger), |m, (p, q)| {
+            larger(m, distance_sq(p, q))
+        });
     max_sq.sqrt()
 }
 
@@ -587,6 +639,34 @@ mod tests {
                 "box {lengths:?} tilt {tilt:?}"
             );
         }
+    }
+
+    #[test]
+    fn the_largest_displacement_is_found_in_any_lane_and_in_the_tail() {
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(3);
+        for n in 1..=11 {
+            let a: Vec<[f64; 3]> = (0..n).map(|_| [rng.gen(), rng.gen(), rng.gen()]).collect();
+            for largest in 0..n {
+                let mut b: Vec<[f64; 3]> = a
+                    .iter()
+                    .map(|p| p.map(|c| c + 0.1 * rng.gen::<f64>()))
+                    .collect();
+                b[largest][1] -= 0.5;
+                let expected = a
+                    .iter()
+                    .zip(&b)
+                    .map(|(p, q)| (0..3).map(|d| (p[d] - q[d]).powi(2)).sum::<f64>())
+                    .fold(0.0, f64::max)
+                    .sqrt();
+                assert!(expected > 0.4);
+                assert_eq!(
+                    max_displacement(&a, &b),
+                    expected,
+                    "{n} points, largest {largest}"
+                );
+            }
+        }
+        assert_eq!(max_displacement(&[], &[]), 0.0);
     }
 
     #[test]
