@@ -834,6 +834,9 @@ fn a_compaction_study_stopped_twice_resumes_to_the_same_report() {
         "{key}"
     );
     assert_eq!(step, relax_steps + 10);
+    // Kept to be resumed below with other moduli options.
+    let midway = dir.join("midway.ck");
+    std::fs::copy(&path, &midway).unwrap();
     let mut lines = Vec::new();
     let resumed = run_compaction(&opts, &session(true), None, &dir, "test", &mut |line| {
         lines.push(line.to_string())
@@ -878,6 +881,48 @@ fn a_compaction_study_stopped_twice_resumes_to_the_same_report() {
         assert_eq!(m.step, n.step);
         assert_ne!(m.moduli.bulk, n.moduli.bulk);
     }
+    // Resumed from the middle of the second measurement with other moduli
+    // options, the study drops the steps that measurement kept (they would
+    // not be read again) and measures as from a finished run.
+    let from_midway = StudyRuntime {
+        checkpoint: Some(
+            StudyCheckpoint::open(
+                &midway,
+                CheckpointEvery::Steps(700),
+                true,
+                "compact",
+                &opts.checkpoint_identity(),
+                1,
+            )
+            .unwrap(),
+        ),
+        ..plain()
+    };
+    let again = run_compaction(
+        &relaxed_longer,
+        &from_midway,
+        None,
+        &dir,
+        "test",
+        &mut |_| {},
+    )
+    .unwrap();
+    assert_eq!(runs_without_times(&again), runs_without_times(&remeasured));
+    let (parts, run) = StudyCheckpoint::open(
+        &midway,
+        CheckpointEvery::Steps(700),
+        true,
+        "compact",
+        &opts.checkpoint_identity(),
+        1,
+    )
+    .unwrap()
+    .summary();
+    assert!(run.is_none());
+    assert!(
+        parts.iter().all(|p| p.matches('/').count() <= 2),
+        "no stale steps are left: {parts:?}"
+    );
     // Options other than the checkpoint's are refused.
     let mut other = opts.clone();
     other.seeds = vec![4];
@@ -956,26 +1001,37 @@ fn the_moduli_loadings_branch_from_one_relaxation_as_three_full_runs() {
     let e = relax_once_then_load(&other, &plain()).unwrap_err();
     assert!(matches!(e, MeasureStop::Failed(_)), "{e:?}");
     assert!(e.to_string().contains("differ only in their second"), "{e}");
-    // A stop asked for (a signal's flag, here set before the start) ends
-    // the measurement, naming the study's checkpoint, and is not taken for
-    // a failed measurement.
+    // A stop asked for (here at step 5 of the relaxation) ends the
+    // measurement, naming the study's checkpoint, which keeps the run under
+    // way; it is not taken for a failed measurement. A stop asked for
+    // between runs ends it before the next.
     let dir = common::scratch_dir("moduli-stop");
     let path = dir.join("study.ck");
     let checkpoint =
         StudyCheckpoint::open(&path, CheckpointEvery::Steps(100), false, "compact", &(), 1)
             .unwrap();
-    checkpoint
-        .stop_flag()
-        .store(true, std::sync::atomic::Ordering::SeqCst);
+    checkpoint.stop_runs_at(Some(5));
     let runtime = StudyRuntime {
-        checkpoint: Some(checkpoint),
+        checkpoint: Some(checkpoint.clone()),
         ..plain()
     };
-    match relax_once_then_load(&scenes, &runtime) {
-        Err(MeasureStop::Stopped(StudyStop::Interrupted(stopped_at))) => {
-            assert_eq!(stopped_at, path)
+    for _ in 0..2 {
+        match relax_once_then_load(&scenes, &runtime) {
+            Err(MeasureStop::Stopped(StudyStop::Interrupted(stopped_at))) => {
+                assert_eq!(stopped_at, path)
+            }
+            other => panic!("not stopped as asked: {:?}", other.map(|_| ())),
         }
-        other => panic!("not stopped as asked: {:?}", other.map(|_| ())),
+        let written =
+            StudyCheckpoint::open(&path, CheckpointEvery::Steps(100), true, "compact", &(), 1)
+                .unwrap();
+        assert_eq!(
+            written.summary(),
+            (vec![], Some(("relaxed".to_string(), 5)))
+        );
+        checkpoint
+            .stop_flag()
+            .store(true, std::sync::atomic::Ordering::SeqCst);
     }
     let _ = std::fs::remove_dir_all(&dir);
 }

@@ -667,6 +667,17 @@ mod tests {
             }
         }
         assert_eq!(max_displacement(&[], &[]), 0.0);
+        // As `f64::max` does, a NaN distance is passed over and an infinite
+        // one kept, in a lane or in the tail (the run's own finiteness
+        // check catches both).
+        let a = vec![[0.0; 3]; 6];
+        for at in [1, 5] {
+            let mut b = vec![[0.0, 0.25, 0.0]; 6];
+            b[at] = [f64::NAN, 0.0, 0.0];
+            assert_eq!(max_displacement(&a, &b), 0.25);
+            b[at] = [f64::INFINITY, 0.0, 0.0];
+            assert_eq!(max_displacement(&a, &b), f64::INFINITY);
+        }
     }
 
     #[test]

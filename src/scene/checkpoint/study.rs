@@ -178,6 +178,13 @@ impl StudyCheckpoint {
         state.write(None)
     }
 
+    /// Drops every part whose key `stale` names (written with the next
+    /// write): the steps of a part that will not be finished, such as a
+    /// measurement made by other options than the study now runs with.
+    pub fn drop_parts(&self, stale: impl Fn(&str) -> bool) {
+        self.lock().parts.retain(|k, _| !stale(k));
+    }
+
     /// The checkpointing of the study's run `key`: into this file,
     /// continuing the run if the file holds it under that key.
     pub fn run_options(&self, key: &str) -> CheckpointOptions {

@@ -1107,16 +1107,34 @@ pub fn run_compaction(
             report.runs[last].fits.pressure.map(|p| p.phi_c),
             opts.moduli.states,
         );
+        // Keyed by the protocol too: a study resumed with another
+        // protocol measures anew (`checkpoint_identity`).
+        let protocol = serde_json::to_string(&opts.moduli.protocol).unwrap_or_default();
+        let key_of = |step: u64| format!("seed-{seed}/moduli-{step}/{protocol}");
+        if let Some(checkpoint) = &runtime.checkpoint {
+            // The kept steps of a measurement left unfinished by a study
+            // now resumed with other moduli options are not read again:
+            // drop them rather than write them at every checkpoint.
+            let prefixed = |key: String| format!("{}{key}", runtime.prefix);
+            let measuring: Vec<String> = picked
+                .iter()
+                .map(|&i| prefixed(key_of(report.runs[last].states[i].step)))
+                .collect();
+            let moduli = prefixed(format!("seed-{seed}/moduli-"));
+            checkpoint.drop_parts(|k| {
+                k.starts_with(&moduli)
+                    && k.rsplit_once('/').is_some_and(|(parent, step)| {
+                        moduli::KEPT_STEPS.contains(&step) && !measuring.iter().any(|m| m == parent)
+                    })
+            });
+        }
         for (k, &i) in picked.iter().enumerate() {
             let run = &mut report.runs[last];
             let row = run.states[i].clone();
             let Some(checkpoint) = checkpoint_of(&stages, &row) else {
                 continue;
             };
-            // Keyed by the protocol too: a study resumed with another
-            // protocol measures anew (`checkpoint_identity`).
-            let protocol = serde_json::to_string(&opts.moduli.protocol).unwrap_or_default();
-            let key = format!("seed-{seed}/moduli-{}/{protocol}", row.step);
+            let key = key_of(row.step);
             // The native runs of a state are kept in the study's
             // checkpoint as they go (`moduli::relax_once_then_load`), under
             // the state's key.
@@ -1132,7 +1150,7 @@ pub fn run_compaction(
                     &scoped,
                 );
                 // LAMMPS runs do not see a stop; one killed with the study
-                // fails, and is measured again too rather than kept as a
+                // fails, and is measured again rather than kept as a
                 // failure (a real failure recurs on resume).
                 let asked = runtime.checkpoint.as_ref().filter(|c| c.stop_requested());
                 match (measured, asked) {

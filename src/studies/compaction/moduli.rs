@@ -83,8 +83,9 @@ pub struct PackingModuli {
     pub bulk_uncorrected: f64,
     /// The shear modulus without the control subtracted.
     pub shear_uncorrected: f64,
-    /// Wall-clock seconds of the measurement (natively one relaxation and
-    /// three loadings; in LAMMPS three full runs).
+    /// Wall-clock seconds of the measurement: natively its runs' (one
+    /// relaxation and three loadings), summed over the sessions of a
+    /// resumed study; in LAMMPS three full runs.
     pub seconds: f64,
 }
 
@@ -249,6 +250,10 @@ fn run_all(
 /// The loadings of a state's three scenes, in order.
 const LOADINGS: [&str; 3] = ["compress", "shear", "control"];
 
+/// The parts a native measurement keeps beneath its own in a study's
+/// checkpoint ([`relax_once_then_load`]).
+pub const KEPT_STEPS: [&str; 4] = ["relaxed", "compress", "shear", "control"];
+
 /// A state relaxed for its moduli: the relaxation's records and the
 /// engine's state at its end, where each loading starts.
 #[derive(Serialize, Deserialize)]
@@ -295,7 +300,7 @@ pub fn relax_once_then_load(
     let relaxation = with_stage(first, 0);
     let relaxed = runtime.part("relaxed", || {
         let mut sys = build_system(&relaxation, runtime.threads);
-        let records = run_one_stage(runtime, "relaxation", &mut sys, &relaxation)?;
+        let records = run_one_stage(runtime, "relaxed", "relaxation", &mut sys, &relaxation)?;
         let state = sys.save_state().map_err(|e| e.to_string())?;
         Ok::<_, MeasureStop>(Relaxed { records, state })
     })?;
@@ -306,22 +311,23 @@ pub fn relax_once_then_load(
             let mut sys = build_system(&loading, runtime.threads);
             sys.restore(relaxed.state.clone())
                 .map_err(|e| e.to_string())?;
-            run_one_stage(runtime, kind, &mut sys, &loading)
+            run_one_stage(runtime, kind, kind, &mut sys, &loading)
         })?;
         *runs = vec![relaxed.records.clone(), records];
     }
     Ok(out)
 }
 
-/// Runs `scene`, of one stage, on `sys` as the study's run `kind`; its
-/// records.
+/// Runs `scene`, of one stage, on `sys` as the study's run `key` (that of
+/// the part it computes), named `kind` in messages; its records.
 fn run_one_stage(
     runtime: &StudyRuntime,
+    key: &str,
     kind: &str,
     sys: &mut System,
     scene: &Scene,
 ) -> Result<StageOutput, MeasureStop> {
-    let mut outcome = runtime.run_system(kind, sys, scene)?;
+    let mut outcome = runtime.run_system(key, sys, scene)?;
     if let Some(e) = outcome.error {
         return Err(MeasureStop::Failed(format!("the {kind} run stopped: {e}")));
     }
@@ -443,7 +449,16 @@ pub fn measure_state(
         poisson_error: poisson_ratio_error(bulk, shear_modulus, k.slope_error, g.slope_error),
         bulk_uncorrected: slope_fit(&volumetric, &pressure, "bulk")?.line.slope,
         shear_uncorrected: slope_fit(&shear_strain, &shear_stress, "shear")?.line.slope,
-        seconds: start.elapsed().as_secs_f64(),
+        seconds: match engine {
+            // The runs' own wall times add up over the sessions of a
+            // resumed study; this session's clock would miss the parts
+            // taken from its checkpoint.
+            CompactionEngine::Native => [&compress[0], &compress[1], &shear[1], &control[1]]
+                .iter()
+                .map(|s| s.wall_seconds)
+                .sum(),
+            _ => start.elapsed().as_secs_f64(),
+        },
     })
 }
 
