@@ -162,9 +162,10 @@ impl Separation for OrthogonalImage {
 
 /// The minimum image a pass uses for its box: [`OrthogonalImage`] when it
 /// has no tilt. The bonded contact pass and the neighbour search match on
-/// it once and run a loop compiled for each; the DEM passes, which also need each pair's image,
-/// keep it as one type, and a branch per pair that always goes the same
-/// way costs less than the triclinic image's chain of roundings.
+/// it once and run a loop compiled for each; the DEM passes, which also
+/// need each pair's image, keep it as one type, and a branch per pair that
+/// always goes the same way costs less than the triclinic image's chain of
+/// roundings.
 #[derive(Clone, Copy, Debug)]
 pub enum BoxImage {
     /// A tilted box.

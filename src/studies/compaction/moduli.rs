@@ -250,9 +250,12 @@ fn run_all(
 /// The loadings of a state's three scenes, in order.
 const LOADINGS: [&str; 3] = ["compress", "shear", "control"];
 
+/// The part (and run) of a native measurement's relaxation.
+const RELAXED: &str = "relaxed";
+
 /// The parts a native measurement keeps beneath its own in a study's
 /// checkpoint ([`relax_once_then_load`]).
-pub const KEPT_STEPS: [&str; 4] = ["relaxed", "compress", "shear", "control"];
+pub const KEPT_STEPS: [&str; 4] = [RELAXED, LOADINGS[0], LOADINGS[1], LOADINGS[2]];
 
 /// A state relaxed for its moduli: the relaxation's records and the
 /// engine's state at its end, where each loading starts.
@@ -298,9 +301,9 @@ pub fn relax_once_then_load(
         ..scene.clone()
     };
     let relaxation = with_stage(first, 0);
-    let relaxed = runtime.part("relaxed", || {
+    let relaxed = runtime.part(RELAXED, || {
         let mut sys = build_system(&relaxation, runtime.threads);
-        let records = run_one_stage(runtime, "relaxed", "relaxation", &mut sys, &relaxation)?;
+        let records = run_one_stage(runtime, RELAXED, "relaxation", &mut sys, &relaxation)?;
         let state = sys.save_state().map_err(|e| e.to_string())?;
         Ok::<_, MeasureStop>(Relaxed { records, state })
     })?;
