@@ -162,15 +162,20 @@ fn the_lammps_compaction_script_follows_the_protocol_and_its_dump_is_measured() 
 /// measures independently: a bulk solid saved at 0.1% linear compression.
 /// Its relaxed pressure is then K times the volumetric strain, which holds
 /// only if the restart keeps the stress-free reference lengths; K and G
-/// match the calibration's, and LAMMPS's match the native engine's.
+/// match the calibration's, and LAMMPS's match the native engine's. In a
+/// study's checkpoint, LAMMPS's runs are kept as they finish.
 #[test]
 fn packing_moduli_of_a_compressed_solid_match_its_calibration_in_both_engines() {
     use bpm::scene::builders::bulk::{build_bulk, BulkParams};
+    use bpm::scene::checkpoint::StudyCheckpoint;
     use bpm::scene::protocols::PackingModuliProtocol;
     use bpm::scene::run::Checkpoint;
+    use bpm::scene::CheckpointEvery;
     use bpm::studies::calibration::{measure_moduli, CalibrationEngine, Loading};
-    use bpm::studies::compaction::moduli::measure_state;
+    use bpm::studies::compaction::moduli::{measure_state, MeasureStop};
     use bpm::studies::compaction::CompactionEngine;
+    use bpm::studies::{StudyRuntime, StudyStop};
+    use std::sync::atomic::Ordering;
 
     let solid = build_bulk(&BulkParams::shortened(6.0, 4, 0.0), 1, false)
         .unwrap()
@@ -219,16 +224,67 @@ fn packing_moduli_of_a_compressed_solid_match_its_calibration_in_both_engines() 
         &plain(),
     )
     .unwrap();
-    let lammps = measure_state(
-        &solid,
-        &state,
-        &protocol,
-        &CompactionEngine::Lammps { ranks: 1 },
-        &dir,
-        Some(&bpm),
-        &plain(),
+    // LAMMPS's three runs are kept in a study's checkpoint as they finish,
+    // beneath the state's key.
+    let checkpoint = StudyCheckpoint::open(
+        &dir.join("study.ck"),
+        CheckpointEvery::Steps(1000),
+        false,
+        "compact",
+        &(),
+        1,
     )
     .unwrap();
+    let runtime = StudyRuntime {
+        checkpoint: Some(checkpoint.clone()),
+        ..plain()
+    }
+    .scoped("state");
+    let measure_in_lammps = |bpm: Option<&std::path::Path>| {
+        measure_state(
+            &solid,
+            &state,
+            &protocol,
+            &CompactionEngine::Lammps { ranks: 1 },
+            &dir,
+            bpm,
+            &runtime,
+        )
+    };
+    let lammps = measure_in_lammps(Some(&bpm)).unwrap();
+    let kept = ["state/compress", "state/control", "state/shear"].map(String::from);
+    assert_eq!(checkpoint.summary(), (kept.to_vec(), None));
+    // Measured again from the kept runs, with no LAMMPS to run: the same
+    // moduli, bit for bit.
+    let again = measure_in_lammps(None).unwrap();
+    assert_eq!(
+        [
+            again.bulk,
+            again.shear,
+            again.relaxed_pressure,
+            again.seconds
+        ]
+        .map(f64::to_bits),
+        [
+            lammps.bulk,
+            lammps.shear,
+            lammps.relaxed_pressure,
+            lammps.seconds
+        ]
+        .map(f64::to_bits)
+    );
+    assert!(lammps.seconds > 0.0);
+    // A stop asked for after the first run ends the measurement before the
+    // next (without LAMMPS, running it would fail instead), keeping it.
+    checkpoint.drop_parts(|k| k != "state/compress");
+    checkpoint.stop_flag().store(true, Ordering::SeqCst);
+    match measure_in_lammps(None) {
+        Err(MeasureStop::Stopped(StudyStop::Interrupted(path))) => {
+            assert_eq!(path, dir.join("study.ck"))
+        }
+        other => panic!("not stopped as asked: {:?}", other.map(|_| ())),
+    }
+    assert_eq!(checkpoint.summary(), (vec![kept[0].clone()], None));
     let strain = 1.0 - scale.powi(3);
     // The built solid's own pressure (contacts between unbonded
     // neighbours) adds to the strain's.

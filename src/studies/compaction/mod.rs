@@ -1149,9 +1149,10 @@ pub fn run_compaction(
                     bpm,
                     &scoped,
                 );
-                // LAMMPS runs do not see a stop; one killed with the study
-                // fails, and is measured again rather than kept as a
-                // failure (a real failure recurs on resume).
+                // A LAMMPS run under way does not see a stop; one killed
+                // with the study fails, and is run again rather than the
+                // state kept as a failure (a real failure recurs on
+                // resume). Its finished runs are kept (`moduli::run_all`).
                 let asked = runtime.checkpoint.as_ref().filter(|c| c.stop_requested());
                 match (measured, asked) {
                     (Err(moduli::MeasureStop::Stopped(stop)), _) => {

@@ -83,9 +83,9 @@ pub struct PackingModuli {
     pub bulk_uncorrected: f64,
     /// The shear modulus without the control subtracted.
     pub shear_uncorrected: f64,
-    /// Wall-clock seconds of the measurement: natively its runs' (one
-    /// relaxation and three loadings), summed over the sessions of a
-    /// resumed study; in LAMMPS three full runs.
+    /// Wall-clock seconds of the measurement's runs (natively one
+    /// relaxation and three loadings, in LAMMPS three full runs), summed
+    /// over the sessions of a resumed study.
     pub seconds: f64,
 }
 
@@ -208,6 +208,10 @@ pub fn moduli_scenes(
     })
 }
 
+/// The three scenes of one state run in `engine`, each its relaxation and
+/// its loading (or hold), and the runs' wall-clock seconds.
+type Measured = ([Vec<StageOutput>; 3], f64);
+
 /// Runs the three scenes of one state in `engine`; each must return its
 /// relaxation and its loading (or hold).
 fn run_all(
@@ -217,34 +221,59 @@ fn run_all(
     tag: &str,
     bpm: Option<&Path>,
     runtime: &StudyRuntime,
-) -> Result<[Vec<StageOutput>; 3], MeasureStop> {
+) -> Result<Measured, MeasureStop> {
     if *engine == CompactionEngine::Native {
-        return relax_once_then_load(scenes, runtime);
+        let runs = relax_once_then_load(scenes, runtime)?;
+        // The runs' own wall times add up over the sessions of a resumed
+        // study; this session's clock would miss the parts taken from its
+        // checkpoint.
+        let seconds = [&runs[0][0], &runs[0][1], &runs[1][1], &runs[2][1]]
+            .iter()
+            .map(|s| s.wall_seconds)
+            .sum();
+        return Ok((runs, seconds));
     }
     let mut out: [Vec<StageOutput>; 3] = Default::default();
-    // The three runs are one part of the study: a stop does not reach
-    // them, and a measurement cut short is made again from its start.
+    let mut seconds = 0.0;
+    // Each finished run is a part of the study (beneath the state's), so
+    // a study stopped or killed during the second or third run keeps the
+    // first. A LAMMPS run does not see a stop; one killed with the study
+    // fails, and is made again from its start.
     let plain = StudyRuntime::plain(runtime.threads, false);
     for (k, (scene, kind)) in scenes.iter().zip(LOADINGS).enumerate() {
-        let (stages, stopped, _) = run_engine(
-            scene,
-            engine,
-            folder,
-            &format!("{tag}-{kind}"),
-            kind,
-            &plain,
-            bpm,
-        )
-        .map_err(|e| e.to_string())?;
-        if let Some(m) = stopped {
-            return Err(format!("the {kind} run stopped: {m}").into());
-        }
-        if stages.len() != 2 {
-            return Err(format!("the {kind} run returned {} stages, not 2", stages.len()).into());
-        }
-        out[k] = stages;
+        let run = runtime.part(kind, || {
+            let (stages, stopped, seconds) = run_engine(
+                scene,
+                engine,
+                folder,
+                &format!("{tag}-{kind}"),
+                kind,
+                &plain,
+                bpm,
+            )
+            .map_err(|e| e.to_string())?;
+            if let Some(m) = stopped {
+                return Err(format!("the {kind} run stopped: {m}").into());
+            }
+            if stages.len() != 2 {
+                return Err(MeasureStop::Failed(format!(
+                    "the {kind} run returned {} stages, not 2",
+                    stages.len()
+                )));
+            }
+            Ok(LammpsRun { stages, seconds })
+        })?;
+        seconds += run.seconds;
+        out[k] = run.stages;
     }
-    Ok(out)
+    Ok((out, seconds))
+}
+
+/// A finished LAMMPS run of a measurement, as its part keeps it.
+#[derive(Serialize, Deserialize)]
+struct LammpsRun {
+    stages: Vec<StageOutput>,
+    seconds: f64,
 }
 
 /// The loadings of a state's three scenes, in order.
@@ -253,8 +282,9 @@ const LOADINGS: [&str; 3] = ["compress", "shear", "control"];
 /// The part (and run) of a native measurement's relaxation.
 const RELAXED: &str = "relaxed";
 
-/// The parts a native measurement keeps beneath its own in a study's
-/// checkpoint ([`relax_once_then_load`]).
+/// The parts a measurement keeps beneath its own in a study's checkpoint:
+/// natively its relaxed state and loadings ([`relax_once_then_load`]), in
+/// LAMMPS its three runs.
 pub const KEPT_STEPS: [&str; 4] = [RELAXED, LOADINGS[0], LOADINGS[1], LOADINGS[2]];
 
 /// A state relaxed for its moduli: the relaxation's records and the
@@ -421,9 +451,8 @@ pub fn measure_state(
     bpm: Option<&Path>,
     runtime: &StudyRuntime,
 ) -> Result<PackingModuli, MeasureStop> {
-    let start = std::time::Instant::now();
     let scenes = moduli_scenes(packing, state, protocol);
-    let [compress, shear, control] = run_all(
+    let ([compress, shear, control], seconds) = run_all(
         &scenes,
         engine,
         folder,
@@ -452,16 +481,7 @@ pub fn measure_state(
         poisson_error: poisson_ratio_error(bulk, shear_modulus, k.slope_error, g.slope_error),
         bulk_uncorrected: slope_fit(&volumetric, &pressure, "bulk")?.line.slope,
         shear_uncorrected: slope_fit(&shear_strain, &shear_stress, "shear")?.line.slope,
-        seconds: match engine {
-            // The runs' own wall times add up over the sessions of a
-            // resumed study; this session's clock would miss the parts
-            // taken from its checkpoint.
-            CompactionEngine::Native => [&compress[0], &compress[1], &shear[1], &control[1]]
-                .iter()
-                .map(|s| s.wall_seconds)
-                .sum(),
-            _ => start.elapsed().as_secs_f64(),
-        },
+        seconds,
     })
 }
 
