@@ -273,6 +273,41 @@ impl Team {
         });
     }
 
+    /// [`Team::run_split2`] with a result per chunk: `job`'s results in
+    /// chunk order, folded with `merge` from `init` (as
+    /// [`Team::reduce_chunks`]).
+    pub fn reduce_split2<A, B, R, F, M>(
+        &self,
+        a: &mut [A],
+        b: &mut [B],
+        init: R,
+        job: F,
+        merge: M,
+    ) -> R
+    where
+        A: Send,
+        B: Send,
+        R: Send + Copy,
+        F: Fn(std::ops::Range<usize>, &mut [A], &mut [B]) -> R + Sync,
+        M: Fn(R, R) -> R,
+    {
+        assert_eq!(a.len(), b.len(), "split of two slices of one length");
+        let chunks = self.threads();
+        let len = a.len();
+        let (a, b) = (SharedSlice::new(a), SharedSlice::new(b));
+        self.reduce_chunks(
+            init,
+            |c| {
+                let range = chunk_range(len, chunks, c);
+                // SAFETY: the chunks' ranges are disjoint, and each chunk
+                // runs once.
+                let (pa, pb) = unsafe { (a.range(range.clone()), b.range(range.clone())) };
+                job(range, pa, pb)
+            },
+            merge,
+        )
+    }
+
     /// The results of `job(range)` over the team's [`chunk_range`]s of
     /// `0..len`, in chunk order, folded with `merge` from `init`.
     pub fn map_reduce<R, F, M>(&self, len: usize, init: R, job: F, merge: M) -> R
