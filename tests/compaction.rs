@@ -225,22 +225,39 @@ fn packing_moduli_of_a_compressed_solid_match_its_calibration_in_both_engines() 
     )
     .unwrap();
     // LAMMPS's three runs are kept in a study's checkpoint as they finish,
-    // beneath the state's key.
-    let checkpoint = StudyCheckpoint::open(
-        &dir.join("study.ck"),
-        CheckpointEvery::Steps(1000),
-        false,
-        "compact",
-        &(),
-        1,
+    // beneath the state's key: here the shear run fails (a `bpm` that
+    // refuses it) and the compression, run before it, stays kept.
+    let path = dir.join("study.ck");
+    let open = |resume| {
+        StudyCheckpoint::open(
+            &path,
+            CheckpointEvery::Steps(1000),
+            resume,
+            "compact",
+            &(),
+            1,
+        )
+        .unwrap()
+    };
+    let refusing = dir.join("bpm-refusing-shear");
+    std::fs::write(
+        &refusing,
+        format!(
+            "#!/bin/sh\ncase \"$*\" in *-shear/*) echo refused >&2; exit 3;; esac\nexec '{}' \"$@\"\n",
+            bpm.display()
+        ),
     )
     .unwrap();
-    let runtime = StudyRuntime {
-        checkpoint: Some(checkpoint.clone()),
-        ..plain()
-    }
-    .scoped("state");
-    let measure_in_lammps = |bpm: Option<&std::path::Path>| {
+    std::fs::set_permissions(
+        &refusing,
+        std::os::unix::fs::PermissionsExt::from_mode(0o755),
+    )
+    .unwrap();
+    let measure_in_lammps = |checkpoint: &StudyCheckpoint, bpm: Option<&std::path::Path>| {
+        let runtime = StudyRuntime {
+            checkpoint: Some(checkpoint.clone()),
+            ..plain()
+        };
         measure_state(
             &solid,
             &state,
@@ -248,15 +265,22 @@ fn packing_moduli_of_a_compressed_solid_match_its_calibration_in_both_engines() 
             &CompactionEngine::Lammps { ranks: 1 },
             &dir,
             bpm,
-            &runtime,
+            &runtime.scoped("state"),
         )
     };
-    let lammps = measure_in_lammps(Some(&bpm)).unwrap();
     let kept = ["state/compress", "state/control", "state/shear"].map(String::from);
-    assert_eq!(checkpoint.summary(), (kept.to_vec(), None));
+    let first = open(false);
+    let e = measure_in_lammps(&first, Some(&refusing)).unwrap_err();
+    assert!(matches!(e, MeasureStop::Failed(_)), "{e:?}");
+    assert_eq!(open(true).summary(), (vec![kept[0].clone()], None));
+    // Resumed from the file, the measurement runs the other two.
+    let lammps = measure_in_lammps(&open(true), Some(&bpm)).unwrap();
+    assert_eq!(open(true).summary(), (kept.to_vec(), None));
+    assert!(lammps.seconds > 0.0);
     // Measured again from the kept runs, with no LAMMPS to run: the same
     // moduli, bit for bit.
-    let again = measure_in_lammps(None).unwrap();
+    let resumed = open(true);
+    let again = measure_in_lammps(&resumed, None).unwrap();
     assert_eq!(
         [
             again.bulk,
@@ -273,18 +297,15 @@ fn packing_moduli_of_a_compressed_solid_match_its_calibration_in_both_engines() 
         ]
         .map(f64::to_bits)
     );
-    assert!(lammps.seconds > 0.0);
     // A stop asked for after the first run ends the measurement before the
     // next (without LAMMPS, running it would fail instead), keeping it.
-    checkpoint.drop_parts(|k| k != "state/compress");
-    checkpoint.stop_flag().store(true, Ordering::SeqCst);
-    match measure_in_lammps(None) {
-        Err(MeasureStop::Stopped(StudyStop::Interrupted(path))) => {
-            assert_eq!(path, dir.join("study.ck"))
-        }
+    resumed.drop_parts(|k| k != "state/compress");
+    resumed.stop_flag().store(true, Ordering::SeqCst);
+    match measure_in_lammps(&resumed, None) {
+        Err(MeasureStop::Stopped(StudyStop::Interrupted(stopped))) => assert_eq!(stopped, path),
         other => panic!("not stopped as asked: {:?}", other.map(|_| ())),
     }
-    assert_eq!(checkpoint.summary(), (vec![kept[0].clone()], None));
+    assert_eq!(resumed.summary(), (vec![kept[0].clone()], None));
     let strain = 1.0 - scale.powi(3);
     // The built solid's own pressure (contacts between unbonded
     // neighbours) adds to the strain's.

@@ -10,7 +10,7 @@ use super::external::{ExternalReport, ExternalTerms, Gravity};
 use super::integrator::{AfterKick, Integrator};
 use super::model::{ForceInput, ForceOutput, ModelTally, ParticleModel};
 use super::neighbor::NeighbourList;
-use super::particles::Particles;
+use super::particles::{mv2, Particles};
 use super::simbox::SimBox;
 use super::team::Team;
 use super::timers::{Stage, Timers};
@@ -178,9 +178,10 @@ impl System {
                 self.add_kinetic_tensor(&mut k);
                 k[0] + k[1] + k[2]
             }
-            // Each thread sums its own share of the velocities, which it
-            // has just updated: read by one thread, the others' shares would
-            // cross between the cores' caches twice a step.
+            // Each thread sums its own share of the velocities: read by one
+            // thread, the others' shares would cross between the cores'
+            // caches (a step sums them in its kick's pass instead,
+            // `Integrator::final_half_and`, bit for bit as here).
             None => self.team.map_reduce(
                 p.len(),
                 0.0,
@@ -188,7 +189,7 @@ impl System {
                     p.v[range.clone()]
                         .iter()
                         .zip(&p.mass[range])
-                        .map(|(v, &m)| (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]) * m)
+                        .map(|(v, &m)| mv2(v, m))
                         .sum::<f64>()
                 },
                 |a, b| a + b,
@@ -334,8 +335,11 @@ impl System {
         self.step += 1;
         self.check_faults(dt)?;
         self.check_walls()?;
-        // The deformation's box is known before the kick, and its remap
-        // and the barostat's kinetic sum are done in the kick's pass.
+        // The deformation's box depends on the time alone, so its remap
+        // and the barostat's kinetic sum join the kick's pass: each
+        // particle is read and written once after its forces, where three
+        // passes each paid again for the lines the other threads' force
+        // passes had read.
         let deformed = drivers
             .deformation
             .as_ref()
@@ -356,8 +360,8 @@ impl System {
         // Stage start plus steps times dt, not a running sum: no round-off
         // grows with the step count, and LAMMPS's harness computes the same.
         self.time = self.stage_start_time + stage_step as f64 * dt;
-        if let Some((new_box, remapped)) = deformed {
-            if !remapped {
+        if let Some((new_box, affine)) = deformed {
+            if !affine {
                 self.keep_unwrapped_through_flips(&new_box);
             }
             self.simbox = new_box;

@@ -1135,9 +1135,8 @@ pub fn run_compaction(
                 continue;
             };
             let key = key_of(row.step);
-            // The native runs of a state are kept in the study's
-            // checkpoint as they go (`moduli::relax_once_then_load`), under
-            // the state's key.
+            // A state's runs are kept in the study's checkpoint as they go,
+            // under the state's key (`moduli::run_all`).
             let scoped = runtime.scoped(&key);
             let measured = runtime.part(&key, || {
                 let measured = moduli::measure_state(

@@ -213,7 +213,10 @@ pub fn moduli_scenes(
 type Measured = ([Vec<StageOutput>; 3], f64);
 
 /// Runs the three scenes of one state in `engine`; each must return its
-/// relaxation and its loading (or hold).
+/// relaxation and its loading (or hold). Natively see
+/// [`relax_once_then_load`]; in LAMMPS each finished run is a part of
+/// `runtime`'s checkpoint (`compress`, `shear`, `control`), and a stop
+/// asked for ends the measurement before the next run.
 fn run_all(
     scenes: &[Scene; 3],
     engine: &CompactionEngine,
@@ -242,7 +245,7 @@ fn run_all(
     let plain = StudyRuntime::plain(runtime.threads, false);
     for (k, (scene, kind)) in scenes.iter().zip(LOADINGS).enumerate() {
         let run = runtime.part(kind, || {
-            let (stages, stopped, seconds) = run_engine(
+            let (stages, stopped, run_seconds) = run_engine(
                 scene,
                 engine,
                 folder,
@@ -253,7 +256,7 @@ fn run_all(
             )
             .map_err(|e| e.to_string())?;
             if let Some(m) = stopped {
-                return Err(format!("the {kind} run stopped: {m}").into());
+                return Err(MeasureStop::Failed(format!("the {kind} run stopped: {m}")));
             }
             if stages.len() != 2 {
                 return Err(MeasureStop::Failed(format!(
@@ -261,7 +264,10 @@ fn run_all(
                     stages.len()
                 )));
             }
-            Ok(LammpsRun { stages, seconds })
+            Ok(LammpsRun {
+                stages,
+                seconds: run_seconds,
+            })
         })?;
         seconds += run.seconds;
         out[k] = run.stages;
@@ -440,8 +446,8 @@ fn slope_fit(x: &[f64], y: &[f64], what: &str) -> Result<LineFit, String> {
 
 /// Measures the moduli of `state`, a checkpoint of the compaction of
 /// `packing`, in `engine`; LAMMPS runs write their files into
-/// `folder/moduli-STEP-{compress,shear,control}.*`. Native runs are kept
-/// in `runtime`'s checkpoint, if it has one ([`relax_once_then_load`]).
+/// `folder/moduli-STEP-{compress,shear,control}.*`. The runs are kept in
+/// `runtime`'s checkpoint, if it has one, as they finish ([`run_all`]).
 pub fn measure_state(
     packing: &Scene,
     state: &Checkpoint,
