@@ -45,14 +45,6 @@ pub struct Rotation {
     pub torque: Vec<[f64; 3]>,
 }
 
-/// `m |v|^2` of one particle, in LAMMPS's order: every sum of the
-/// kinetic energy (and the barostat's) adds these, so that they agree bit
-/// for bit however they are split.
-#[inline(always)]
-pub fn mv2(v: &[f64; 3], m: f64) -> f64 {
-    (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]) * m
-}
-
 impl Particles {
     /// `n` particles at `x`, at rest, mass 1, radius [`DEFAULT_RADIUS`],
     /// type 1, grain 0.
@@ -99,7 +91,7 @@ impl Particles {
             .v
             .iter()
             .zip(&self.mass)
-            .map(|(v, &m)| mv2(v, m))
+            .map(|(v, m)| (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]) * m)
             .sum::<f64>()
     }
 

@@ -7,10 +7,10 @@
 
 use super::deform::{Barostat, Deformation, LeesEdwards};
 use super::external::{ExternalReport, ExternalTerms, Gravity};
-use super::integrator::{AfterKick, Integrator};
+use super::integrator::Integrator;
 use super::model::{ForceInput, ForceOutput, ModelTally, ParticleModel};
 use super::neighbor::NeighbourList;
-use super::particles::{mv2, Particles};
+use super::particles::Particles;
 use super::simbox::SimBox;
 use super::team::Team;
 use super::timers::{Stage, Timers};
@@ -172,16 +172,16 @@ impl System {
     /// operations. The barostat drives this number.
     pub fn scalar_pressure(&self) -> f64 {
         let p = &self.particles;
+        let dof = (3 * p.len()) as f64 - 3.0;
         let sum_mv2: f64 = match &self.lees_edwards {
             Some(_) => {
                 let mut k = [0.0; 6];
                 self.add_kinetic_tensor(&mut k);
                 k[0] + k[1] + k[2]
             }
-            // Each thread sums its own share of the velocities: read by one
-            // thread, the others' shares would cross between the cores'
-            // caches (a step sums them in its kick's pass instead,
-            // `Integrator::final_half_and`, bit for bit as here).
+            // Each thread sums its own share of the velocities, which it
+            // has just updated: read by one thread, the others' shares would
+            // cross between the cores' caches twice a step.
             None => self.team.map_reduce(
                 p.len(),
                 0.0,
@@ -189,19 +189,12 @@ impl System {
                     p.v[range.clone()]
                         .iter()
                         .zip(&p.mass[range])
-                        .map(|(v, &m)| mv2(v, m))
+                        .map(|(v, &m)| (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]) * m)
                         .sum::<f64>()
                 },
                 |a, b| a + b,
             ),
         };
-        self.scalar_pressure_of(sum_mv2)
-    }
-
-    /// [`System::scalar_pressure`] from `sum m v^2` (under Lees-Edwards
-    /// boundaries, of the peculiar velocities).
-    fn scalar_pressure_of(&self, sum_mv2: f64) -> f64 {
-        let dof = (3 * self.particles.len()) as f64 - 3.0;
         let temperature = if dof > 0.0 {
             sum_mv2 * (1.0 / dof)
         } else {
@@ -335,42 +328,25 @@ impl System {
         self.step += 1;
         self.check_faults(dt)?;
         self.check_walls()?;
-        // The deformation's box depends on the time alone, so its remap
-        // and the barostat's kinetic sum join the kick's pass: each
-        // particle is read and written once after its forces, where three
-        // passes each paid again for the lines the other threads' force
-        // passes had read.
-        let deformed = drivers
-            .deformation
-            .as_ref()
-            .map(|d| (d.box_at(stage_box, elapsed), d.remaps_positions()));
-        let remap = match &deformed {
-            Some((new_box, true)) => Some(self.simbox.remap_to(new_box)),
-            _ => None,
-        };
-        let sum_mv2 = {
+        {
             let _t = self.timers.start(Stage::Integrate);
-            let after = AfterKick {
-                remap: remap.as_ref(),
-                kinetic_sum: drivers.barostat.is_some() && self.lees_edwards.is_none(),
-            };
             self.integrator
-                .final_half_and(&mut self.particles, dt, &self.team, after)
-        };
+                .final_half(&mut self.particles, dt, &self.team);
+        }
         // Stage start plus steps times dt, not a running sum: no round-off
         // grows with the step count, and LAMMPS's harness computes the same.
         self.time = self.stage_start_time + stage_step as f64 * dt;
-        if let Some((new_box, affine)) = deformed {
-            if !affine {
+        if let Some(deformation) = &drivers.deformation {
+            let new_box = deformation.box_at(stage_box, elapsed);
+            if deformation.remaps_positions() {
+                self.remap_into(new_box);
+            } else {
                 self.keep_unwrapped_through_flips(&new_box);
+                self.simbox = new_box;
             }
-            self.simbox = new_box;
         }
         if let Some(barostat) = &drivers.barostat {
-            let pressure = match sum_mv2 {
-                Some(sum_mv2) => self.scalar_pressure_of(sum_mv2),
-                None => self.scalar_pressure(),
-            };
+            let pressure = self.scalar_pressure();
             let new_box =
                 barostat
                     .step(&self.simbox, pressure)

@@ -261,42 +261,16 @@ impl Team {
         B: Send,
         F: Fn(std::ops::Range<usize>, &mut [A], &mut [B]) + Sync,
     {
-        self.reduce_split2(a, b, (), job, |(), ()| ());
-    }
-
-    /// [`Team::run_split2`] with a result per chunk: `job`'s results in
-    /// chunk order, folded with `merge` from `init` (as
-    /// [`Team::reduce_chunks`]).
-    pub fn reduce_split2<A, B, R, F, M>(
-        &self,
-        a: &mut [A],
-        b: &mut [B],
-        init: R,
-        job: F,
-        merge: M,
-    ) -> R
-    where
-        A: Send,
-        B: Send,
-        R: Send + Copy,
-        F: Fn(std::ops::Range<usize>, &mut [A], &mut [B]) -> R + Sync,
-        M: Fn(R, R) -> R,
-    {
         assert_eq!(a.len(), b.len(), "split of two slices of one length");
         let chunks = self.threads();
         let len = a.len();
         let (a, b) = (SharedSlice::new(a), SharedSlice::new(b));
-        self.reduce_chunks(
-            init,
-            |c| {
-                let range = chunk_range(len, chunks, c);
-                // SAFETY: the chunks' ranges are disjoint, and
-                // `reduce_chunks` runs each chunk exactly once.
-                let (pa, pb) = unsafe { (a.range(range.clone()), b.range(range.clone())) };
-                job(range, pa, pb)
-            },
-            merge,
-        )
+        self.run(|c| {
+            let range = chunk_range(len, chunks, c);
+            // SAFETY: the chunks' ranges are disjoint.
+            let (pa, pb) = unsafe { (a.range(range.clone()), b.range(range.clone())) };
+            job(range, pa, pb)
+        });
     }
 
     /// The results of `job(range)` over the team's [`chunk_range`]s of
@@ -311,8 +285,8 @@ impl Team {
         self.reduce_chunks(init, |c| job(chunk_range(len, chunks, c)), merge)
     }
 
-    /// The results of `job(c)` for every chunk `c` (each run exactly once),
-    /// in chunk order, folded with `merge` from `init`.
+    /// The results of `job(c)` for every chunk `c`, in chunk order, folded
+    /// with `merge` from `init`.
     pub fn reduce_chunks<R, F, M>(&self, init: R, job: F, merge: M) -> R
     where
         R: Send + Copy,
@@ -576,36 +550,6 @@ mod tests {
             }
         });
         assert_eq!(data, (0..101).collect::<Vec<_>>());
-    }
-
-    /// Two slices split alike, each chunk's result folded in chunk order;
-    /// with more threads than items the extra chunks are empty.
-    #[test]
-    fn reduce_split2_splits_both_slices_alike_and_folds_in_chunk_order() {
-        for (threads, len) in [(2, 101), (3, 2)] {
-            let team = Team::new(threads);
-            let (mut a, mut b) = (vec![0usize; len], vec![0usize; len]);
-            // Each chunk's range end, folded as digits: the fold's order
-            // shows in the number.
-            let digits = |acc: usize, end: usize| 1000 * acc + end;
-            let folded = team.reduce_split2(
-                &mut a,
-                &mut b,
-                0,
-                |range, a, b| {
-                    for ((k, a), b) in range.clone().zip(a.iter_mut()).zip(b.iter_mut()) {
-                        (*a, *b) = (k, 2 * k);
-                    }
-                    range.end
-                },
-                digits,
-            );
-            assert_eq!(a, (0..len).collect::<Vec<_>>());
-            assert_eq!(b, (0..len).map(|k| 2 * k).collect::<Vec<_>>());
-            let expected =
-                (0..threads).fold(0, |acc, c| digits(acc, chunk_range(len, threads, c).end));
-            assert_eq!(folded, expected);
-        }
     }
 
     #[test]
