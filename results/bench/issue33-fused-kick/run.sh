@@ -3,9 +3,9 @@
 # kinetic sum in its pass, against the three passes apart: two builds
 # alternated, 20,000 steps of the late-compaction stage compress-5 and of
 # the jam (barostat), 1 and 2 threads, three rounds. Each build made with
-# `cargo build --release` in a `git worktree` at its commit; run from this
-# folder:
-#   sh run.sh bb5d91c/target/release/bpm 1828d5e/target/release/bpm > timing.txt
+# `cargo build --release` in a `git worktree` at its commit (give their
+# absolute paths); run from this folder:
+#   sh run.sh /path/to/bb5d91c/target/release/bpm /path/to/1828d5e/target/release/bpm > timing.txt
 # The states: the default compaction (32 smoother grains of R = 3 d, seed
 # 1) through its jam and compress-0 to compress-4, made with the first
 # build (about 4 minutes on two threads); the jam from the built packing.
