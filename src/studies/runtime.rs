@@ -42,6 +42,11 @@ impl StudyRuntime {
         }
     }
 
+    /// `key` as the checkpoint files it: under this runtime's scope.
+    pub fn key_in_checkpoint(&self, key: &str) -> String {
+        format!("{}{key}", self.prefix)
+    }
+
     /// Part `key` of the study: the value the checkpoint kept for it, or
     /// else `compute`'s, kept in the checkpoint (a computation that fails
     /// is not kept). A stop asked for (a signal) before a part starts
@@ -54,7 +59,7 @@ impl StudyRuntime {
         let Some(checkpoint) = &self.checkpoint else {
             return compute();
         };
-        let key = format!("{}{key}", self.prefix);
+        let key = self.key_in_checkpoint(key);
         if let Some(value) = checkpoint.finished(&key).map_err(StudyStop::from)? {
             return Ok(value);
         }
@@ -113,7 +118,7 @@ impl StudyRuntime {
             checkpoint: self
                 .checkpoint
                 .as_ref()
-                .map(|c| c.run_options(&format!("{}{key}", self.prefix))),
+                .map(|c| c.run_options(&self.key_in_checkpoint(key))),
         }
     }
 }

@@ -1115,12 +1115,11 @@ pub fn run_compaction(
             // The kept steps of a measurement left unfinished by a study
             // now resumed with other moduli options are not read again:
             // drop them rather than write them at every checkpoint.
-            let prefixed = |key: String| format!("{}{key}", runtime.prefix);
             let measuring: Vec<String> = picked
                 .iter()
-                .map(|&i| prefixed(key_of(report.runs[last].states[i].step)))
+                .map(|&i| runtime.key_in_checkpoint(&key_of(report.runs[last].states[i].step)))
                 .collect();
-            let moduli = prefixed(format!("seed-{seed}/moduli-"));
+            let moduli = runtime.key_in_checkpoint(&format!("seed-{seed}/moduli-"));
             checkpoint.drop_parts(|k| {
                 k.starts_with(&moduli)
                     && k.rsplit_once('/').is_some_and(|(parent, step)| {
