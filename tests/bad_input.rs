@@ -122,6 +122,29 @@ proptest! {
         }
     }
 
+    /// One value of a breaking, yielding bond rule replaced by an awkward
+    /// one: rejected with an error, or accepted and run without a panic or
+    /// a NaN.
+    #[test]
+    fn any_bond_failure_edit_is_rejected_or_runs_cleanly(
+        pick in any::<proptest::sample::Index>(),
+        value in awkward_number(),
+    ) {
+        let mut doc = valid_scene();
+        doc["force_field"]["bond_failure"] = json!({
+            "critical_strain": 0.05, "plastic_strain": 0.01, "smooth": true,
+            "breaks": true, "normalize": false
+        });
+        let mut paths = Vec::new();
+        leaves(&doc["force_field"]["bond_failure"], &mut Vec::new(), &mut paths);
+        let mut path = vec![json!("force_field"), json!("bond_failure")];
+        path.extend(pick.get(&paths).iter().cloned());
+        *at(&mut doc, &path) = value;
+        if let Ok(scene) = serde_json::from_value::<Scene>(doc) {
+            run_if_valid(scene);
+        }
+    }
+
     /// Scene text cut short or with a character replaced: an error, never
     /// a panic.
     #[test]

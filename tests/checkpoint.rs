@@ -161,6 +161,51 @@ fn a_bonded_run_resumed_at_any_step_ends_bit_for_bit_as_without_stopping() {
     assert_resumes_exactly("ck-bonded-2", &scene, &[777], 2);
 }
 
+/// The small solid pulled apart while its bonds yield at 1% and break at
+/// 3% strain: bonds leave the arrays and broken pairs become contacts
+/// between checkpoints.
+fn failing_scene() -> Scene {
+    let (mut scene, _) = build_bulk(&BulkParams::shortened(5.0, 4, 0.0), 1, false).unwrap();
+    scene.force_field = ForceField::paper(-0.5);
+    scene.force_field.bond_failure = Some(bpm::kernels::BondFailure {
+        plastic_strain: Some(0.01),
+        ..bpm::kernels::BondFailure::breaking(0.03)
+    });
+    let mut pull = StageSpec::hold("pull", 700, 0.05);
+    pull.deformation = Some(Deformation::Isotropic {
+        true_strain_rate: 1e-3,
+    });
+    pull.record.every = 20;
+    let mut settle = StageSpec::hold("settle", 300, 0.05);
+    settle.viscous = 0.1;
+    settle.record.every = 20;
+    scene.stages = vec![pull, settle];
+    scene
+}
+
+#[test]
+fn a_run_whose_bonds_break_and_yield_resumes_exactly() {
+    let scene = failing_scene();
+    let mut sys = build_system(&scene, 1);
+    let (_, error) = run_scene(&mut sys, &scene, &RunOptions::quiet(1));
+    assert!(error.is_none(), "{error:?}");
+    let model = sys.model_as::<bpm::engine::BpmModel>().unwrap();
+    let (broken, yielded) = (
+        model.broken_bonds().len(),
+        model
+            .plastic_strains()
+            .iter()
+            .filter(|&&e| e != 0.0)
+            .count(),
+    );
+    assert!(
+        broken > 100 && yielded > 100,
+        "{broken} broken, {yielded} yielded"
+    );
+    assert_resumes_exactly("ck-failing", &scene, &[250, 555, 700, 701], 1);
+    assert_resumes_exactly("ck-failing-2", &scene, &[333], 2);
+}
+
 #[test]
 fn a_walled_bonded_run_resumes_exactly() {
     assert_resumes_exactly("ck-walled", &walled_scene(), &[123, 321], 1);

@@ -1191,3 +1191,149 @@ fn windowed_bond_pass_gives_the_full_size_forces_bit_for_bit() {
         }
     }
 }
+
+/// The failing bond pass (breaking, smoothing, yielding): a rule that never
+/// acts gives the elastic rows bit for bit, energy and virial included;
+/// a rule that breaks and yields some rows gives the same rows, counts and
+/// sums on every instruction set, each row what the per-bond kernel gives.
+#[test]
+fn failing_rows_match_the_elastic_rows_and_agree_between_instruction_sets() {
+    let (simbox, x, bonds, r0, v) = periodic_network(52);
+    let sep = simbox.minimum_image();
+    let n = x.len();
+    let EngineRows {
+        rows,
+        interior,
+        vol0,
+        ..
+    } = engine_rows(&sep, &x, &bonds, &r0);
+    let ni = interior.len();
+    let mut lengths = vec![[0.0; 2]; rows.len()];
+    let (a, b) = lengths.split_at_mut(ni);
+    row_volumes(&Unwrapped, &rows, 0..ni, &x, a);
+    row_volumes(&sep, &rows, ni..rows.len(), &x, b);
+    let mut vol = vec![0.0; n];
+    gather_volumes(&rows, 0..n, &lengths, &mut vol);
+    let coeffs = BondCoeffs {
+        k: 1.3,
+        a: -0.55,
+        gamma: 0.8,
+    };
+    let isas: Vec<Isa> = [Isa::Portable, Isa::Avx2]
+        .into_iter()
+        .filter(|i| i.available())
+        .collect();
+    // Plastic strains on entry, some nonzero.
+    let entry: Vec<f64> = (0..rows.len())
+        .map(|k| [0.0, 0.004, -0.003][k % 3])
+        .collect();
+    let never = BondFailure {
+        smooth: false,
+        ..BondFailure::breaking(50.0)
+    };
+    let acting = |normalize| BondFailure {
+        plastic_strain: Some(0.01),
+        normalize,
+        ..BondFailure::breaking(0.035)
+    };
+    for (multibody, damped, tally) in [
+        (true, true, true),
+        (false, true, true),
+        (false, false, false),
+    ] {
+        let inputs = RowInputs {
+            x: &x,
+            v: damped.then_some(&v[..]),
+            coeffs,
+            multibody: multibody.then_some((&vol[..], &lengths[..])),
+            tally,
+        };
+        let run = |isa: Isa, rule: &BondFailure, start: &[f64]| {
+            let mut out: Vec<[f64; 4]> = start
+                .iter()
+                .map(|&e| [f64::NAN, f64::NAN, f64::NAN, e])
+                .collect();
+            let (a, b) = out.split_at_mut(ni);
+            let pass =
+                failing_row_forces_on(isa, &Unwrapped, &rows, 0..ni, &inputs, rule, a).merged(
+                    &failing_row_forces_on(isa, &sep, &rows, ni..rows.len(), &inputs, rule, b),
+                );
+            (out, pass)
+        };
+        let case = format!("multibody {multibody}, damped {damped}, tally {tally}");
+        for &isa in &isas {
+            let mut elastic = vec![[0.0; 4]; rows.len()];
+            let (a, b) = elastic.split_at_mut(ni);
+            let want = row_forces_on(isa, &Unwrapped, &rows, 0..ni, &inputs, a)
+                .merged(&row_forces_on(isa, &sep, &rows, ni..rows.len(), &inputs, b));
+            let (got, pass) = run(isa, &never, &vec![0.0; rows.len()]);
+            assert_eq!(
+                got, elastic,
+                "{isa:?}, {case}: rows of a rule that never acts"
+            );
+            assert_eq!(
+                pass.pass, want,
+                "{isa:?}, {case}: its energy, virial and faults"
+            );
+            assert_eq!((pass.broken, pass.yielded), (0, 0));
+        }
+        for normalize in [false, true] {
+            let rule = acting(normalize);
+            let results: Vec<_> = isas.iter().map(|&isa| run(isa, &rule, &entry)).collect();
+            let (out, pass) = &results[0];
+            assert!(
+                pass.broken > 10 && pass.yielded > 10 && pass.broken + pass.yielded < rows.len(),
+                "{case}: {} broken, {} yielded of {}",
+                pass.broken,
+                pass.yielded,
+                rows.len()
+            );
+            let bits = |o: &[[f64; 4]]| -> Vec<[u64; 4]> {
+                o.iter().map(|r| r.map(f64::to_bits)).collect()
+            };
+            for (other, other_pass) in &results[1..] {
+                let first = bits(other).iter().zip(bits(out)).position(|(a, b)| *a != b);
+                assert_eq!(first, None, "{case}, normalize {normalize}: first row that differs between instruction sets");
+                assert_eq!(
+                    other_pass, pass,
+                    "{case}, normalize {normalize}: counts and sums"
+                );
+            }
+            // Each row is the per-bond kernel's force.
+            for (k, row) in out.iter().enumerate() {
+                let b = rows.bonds().nth(k).unwrap();
+                let bond = &bonds[b];
+                let (i, j) = (bond.i as usize, bond.j as usize);
+                let del = sep.delta(&x[i], &x[j]);
+                let r = lengths[k][0];
+                let dv = [v[i][0] - v[j][0], v[i][1] - v[j][1], v[i][2] - v[j][2]];
+                let damping = if damped {
+                    coeffs.gamma * dot3(&del, &dv) / r
+                } else {
+                    0.0
+                };
+                let d = multibody.then(|| dilation(vol[i], vol[j], vol0[i], vol0[j]));
+                let mut e_p = entry[k];
+                match failing_bond_force(r, r0[b], &mut e_p, d, damping, &coeffs, &rule) {
+                    None => assert!(row_broke(row), "row {k} should have broken"),
+                    Some(f) => {
+                        assert!(!row_broke(row));
+                        assert_eq!(row[3], e_p, "row {k}: plastic strain");
+                        for c in 0..3 {
+                            assert_relative_eq!(
+                                row[c],
+                                del[c] * f / r,
+                                max_relative = 1e-12,
+                                epsilon = 1e-14
+                            );
+                        }
+                    }
+                }
+            }
+        }
+    }
+}
+
+fn dot3(a: &[f64; 3], b: &[f64; 3]) -> f64 {
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+}

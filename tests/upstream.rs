@@ -230,3 +230,25 @@ fn the_closure_in_the_modern_lammps_follows_the_native_engine() {
     }
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+#[test]
+fn a_bond_pulled_to_failure_breaks_and_yields_as_upstreams() {
+    let lmp = modern();
+    let dir = workdir("bond-pull");
+    let mut rows = Vec::new();
+    use bpm::studies::upstream::bond_pull::{compare_pull, native_pull, pull_cases};
+    for case in pull_cases() {
+        assert!(
+            native_pull(&case).break_step().is_some(),
+            "{} breaks",
+            case.name
+        );
+        compare_pull(&lmp, &case, &dir, &mut rows).unwrap();
+    }
+    for r in &rows {
+        eprintln!("{}", r.line());
+    }
+    // Three pulls: force and break step each, and the plastic plateau.
+    assert_eq!(judged(&rows), 7);
+    let _ = std::fs::remove_dir_all(&dir);
+}

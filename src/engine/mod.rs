@@ -29,7 +29,7 @@ pub mod system;
 pub mod team;
 pub mod timers;
 
-pub use bpm::{BondTopology, BondWindow, BpmModel, BpmTerms};
+pub use bpm::{BondTopology, BondWindow, BpmForceField, BpmModel, BpmTerms};
 pub use deform::{Barostat, Deformation, LeesEdwards, ShearRemap, TiltFactor};
 pub use dem::{
     ActiveGranularWall, BeyondReach, ClosurePass, ClosureReport, ContactStore, DemModel, DemReport,

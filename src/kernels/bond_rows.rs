@@ -36,15 +36,15 @@ const MAX_INDEX: usize = (AS_J - 1) as usize;
 #[derive(Clone, Debug, Default)]
 pub struct BondRows {
     particles: usize,
-    i: Vec<u32>,
-    j: Vec<u32>,
-    r0: Vec<f64>,
+    pub(super) i: Vec<u32>,
+    pub(super) j: Vec<u32>,
+    pub(super) r0: Vec<f64>,
     /// `1 / r0`, once per layout instead of a division per step.
-    inv_r0: Vec<f64>,
+    pub(super) inv_r0: Vec<f64>,
     /// `1 / (V0_i + V0_j)`, when the layout was given reference volumes.
-    inv_v0sum: Vec<f64>,
+    pub(super) inv_v0sum: Vec<f64>,
     /// Each row's bond in the caller's numbering (for fault reports).
-    bond: Vec<u32>,
+    pub(super) bond: Vec<u32>,
     /// `offsets[p]..offsets[p + 1]` index `incidence` for particle `p`.
     offsets: Vec<usize>,
     /// Row indices, in increasing order per particle, with [`AS_J`] set
@@ -156,6 +156,25 @@ impl BondRows {
         Ok(layout)
     }
 
+    /// Replaces the reference volumes the rows were built with by `vol0`
+    /// (`V0` per particle): `1 / (V0_i + V0_j)` of every row anew.
+    pub fn set_reference_volumes(&mut self, vol0: &[f64]) -> Result<(), BondRowsError> {
+        if vol0.len() != self.particles {
+            return Err(BondRowsError::ReferenceVolumes {
+                given: vol0.len(),
+                particles: self.particles,
+            });
+        }
+        self.inv_v0sum.clear();
+        self.inv_v0sum.extend(
+            self.i
+                .iter()
+                .zip(&self.j)
+                .map(|(&i, &j)| reciprocal(vol0[i as usize] + vol0[j as usize])),
+        );
+        Ok(())
+    }
+
     /// Number of rows.
     pub fn len(&self) -> usize {
         self.i.len()
@@ -191,6 +210,47 @@ impl BondRows {
     /// about as many bond ends each.
     pub(crate) fn offsets(&self) -> &[usize] {
         &self.offsets
+    }
+
+    /// Row `row`'s two particles.
+    #[inline(always)]
+    pub(super) fn atoms(&self, row: usize) -> (usize, usize) {
+        (self.i[row] as usize, self.j[row] as usize)
+    }
+
+    /// Row `row`'s reference length.
+    #[inline(always)]
+    pub(super) fn r0(&self, row: usize) -> f64 {
+        self.r0[row]
+    }
+
+    /// Row `row`'s `1 / (V0_i + V0_j)` (rows built with reference volumes).
+    #[inline(always)]
+    pub(super) fn inv_v0sum(&self, row: usize) -> f64 {
+        self.inv_v0sum[row]
+    }
+
+    /// Each row's bond in the caller's numbering.
+    pub fn bonds(&self) -> impl ExactSizeIterator<Item = usize> + '_ {
+        self.bond.iter().map(|&b| b as usize)
+    }
+
+    /// Checks what a force pass over `range` into `out` rows reads.
+    pub(super) fn check_inputs(&self, range: &Range<usize>, out: usize, inputs: &RowInputs) {
+        self.check_range(range, out);
+        self.check_particles("positions", inputs.x.len());
+        if let Some(v) = inputs.v {
+            self.check_particles("velocities", v.len());
+        }
+        if let Some((vol, lengths)) = inputs.multibody {
+            self.check_particles("volumes", vol.len());
+            assert_eq!(lengths.len(), self.len(), "one length per row");
+            assert_eq!(
+                self.inv_v0sum.len(),
+                self.len(),
+                "the multibody term needs rows built with reference volumes"
+            );
+        }
     }
 
     fn check_range(&self, range: &Range<usize>, out: usize) {
@@ -332,25 +392,12 @@ pub(super) fn row_forces_carried<S: Separation>(
     lanes: &mut LaneTally,
     last: bool,
 ) -> ForcePass {
-    rows.check_range(&range, out.len());
-    rows.check_particles("positions", inputs.x.len());
+    rows.check_inputs(&range, out.len(), inputs);
     assert!(
         last || range.len() % 4 == 0,
         "a piece of {} rows before the last",
         range.len()
     );
-    if let Some(v) = inputs.v {
-        rows.check_particles("velocities", v.len());
-    }
-    if let Some((vol, lengths)) = inputs.multibody {
-        rows.check_particles("volumes", vol.len());
-        assert_eq!(lengths.len(), rows.len(), "one length per row");
-        assert_eq!(
-            rows.inv_v0sum.len(),
-            rows.len(),
-            "the multibody term needs rows built with reference volumes"
-        );
-    }
     let flags = (inputs.multibody.is_some(), inputs.v.is_some(), inputs.tally);
     macro_rules! dispatch {
         ($($mb:literal, $damped:literal, $tally:literal);*) => {
@@ -448,11 +495,11 @@ fn blocks_of_four<S: Separation, const MB: bool, const DAMPED: bool, const TALLY
 #[derive(Clone, Debug, Default)]
 pub(super) struct LaneTally {
     /// Energy, then the virial `[xx, yy, zz, xy, xz, yz]`, per lane.
-    sums: [[f64; 4]; 7],
+    pub(super) sums: [[f64; 4]; 7],
 }
 
 impl LaneTally {
-    fn add(&mut self, lane: usize, force: &RowForce) {
+    pub(super) fn add(&mut self, lane: usize, force: &RowForce) {
         let RowForce {
             del, fpair, energy, ..
         } = *force;
@@ -472,7 +519,7 @@ impl LaneTally {
     }
 
     /// The lanes added in order.
-    fn total(&self) -> Tally {
+    pub(super) fn total(&self) -> Tally {
         let added = |s: &[f64; 4]| ((s[0] + s[1]) + s[2]) + s[3];
         Tally {
             energy: added(&self.sums[0]),
@@ -482,11 +529,11 @@ impl LaneTally {
 }
 
 /// One row's force, as the lanes of [`super::bond_forces`] compute it.
-struct RowForce {
-    del: [f64; 3],
-    r: f64,
-    fpair: f64,
-    energy: f64,
+pub(super) struct RowForce {
+    pub(super) del: [f64; 3],
+    pub(super) r: f64,
+    pub(super) fpair: f64,
+    pub(super) energy: f64,
 }
 
 #[inline(always)]
@@ -536,6 +583,20 @@ fn settle_row<const TALLY: bool>(
     pass: &mut ForcePass,
     out: &mut [f64; 4],
 ) {
+    settle_checked_row::<TALLY>(rows, row, rows.r0[row], force, pass, out)
+}
+
+/// [`settle_row`] checking the length against `rest` (a bond's rest
+/// length, which yielding moves away from `r0`).
+#[inline(always)]
+pub(super) fn settle_checked_row<const TALLY: bool>(
+    rows: &BondRows,
+    row: usize,
+    rest: f64,
+    force: &RowForce,
+    pass: &mut ForcePass,
+    out: &mut [f64; 4],
+) {
     let RowForce {
         del,
         r,
@@ -546,16 +607,15 @@ fn settle_row<const TALLY: bool>(
     if TALLY {
         pass.tally.add(1.0, energy, &del, fpair);
     }
-    let r0 = rows.r0[row];
     let in_range =
-        r > COLLAPSED_BELOW * r0 && r < OVERSTRETCHED_ABOVE * r0 && fpair.abs() < f64::INFINITY;
+        r > COLLAPSED_BELOW * rest && r < OVERSTRETCHED_ABOVE * rest && fpair.abs() < f64::INFINITY;
     if !in_range && pass.fault.is_none() {
         pass.fault = Fault::of_bond(
             rows.bond[row] as usize,
             rows.i[row] as usize,
             rows.j[row] as usize,
             r,
-            r0,
+            rest,
             fpair,
         );
     }
@@ -711,7 +771,7 @@ fn check_gather(rows: &BondRows, particles: &Range<usize>, values: usize, out: u
 #[cfg(target_arch = "x86_64")]
 // Lane loops index several per-lane arrays at once.
 #[allow(clippy::needless_range_loop)]
-mod avx2 {
+pub(super) mod avx2 {
     //! Four rows at a time. Positions and velocities are loaded as rows
     //! `[x, y, z, -]` (a masked load: the fourth lane is not read), the
     //! differences formed row-wise and turned into lanes of x, y and z by a
@@ -745,12 +805,23 @@ mod avx2 {
     /// Lanes of x, y and z to `[x, y, z, 0]` rows.
     #[target_feature(enable = "avx2")]
     #[inline]
-    unsafe fn to_rows(x: __m256d, y: __m256d, z: __m256d) -> [__m256d; 4] {
-        let zero = _mm256_setzero_pd();
+    pub(in crate::kernels) unsafe fn to_rows(x: __m256d, y: __m256d, z: __m256d) -> [__m256d; 4] {
+        to_rows_with(x, y, z, _mm256_setzero_pd())
+    }
+
+    /// Lanes of x, y, z and w to `[x, y, z, w]` rows.
+    #[target_feature(enable = "avx2")]
+    #[inline]
+    pub(in crate::kernels) unsafe fn to_rows_with(
+        x: __m256d,
+        y: __m256d,
+        z: __m256d,
+        w: __m256d,
+    ) -> [__m256d; 4] {
         let xy02 = _mm256_unpacklo_pd(x, y);
         let xy13 = _mm256_unpackhi_pd(x, y);
-        let z02 = _mm256_unpacklo_pd(z, zero);
-        let z13 = _mm256_unpackhi_pd(z, zero);
+        let z02 = _mm256_unpacklo_pd(z, w);
+        let z13 = _mm256_unpackhi_pd(z, w);
         [
             _mm256_permute2f128_pd(xy02, z02, 0x20),
             _mm256_permute2f128_pd(xy13, z13, 0x20),
@@ -762,7 +833,11 @@ mod avx2 {
     /// `a[i] - a[j]` for the four rows' atoms, as lanes.
     #[target_feature(enable = "avx2")]
     #[inline]
-    unsafe fn differences(a: &[[f64; 3]], i: &[u32], j: &[u32]) -> [__m256d; 3] {
+    pub(in crate::kernels) unsafe fn differences(
+        a: &[[f64; 3]],
+        i: &[u32],
+        j: &[u32],
+    ) -> [__m256d; 3] {
         let p = a.as_ptr();
         let mut d = [_mm256_setzero_pd(); 4];
         for (l, d) in d.iter_mut().enumerate() {
@@ -775,7 +850,7 @@ mod avx2 {
     }
 
     /// A minimum-image convention broadcast to lanes.
-    pub(super) struct LaneImage {
+    pub(in crate::kernels) struct LaneImage {
         lengths: [__m256d; 3],
         tilt: [__m256d; 3],
         inv: [__m256d; 3],
@@ -784,7 +859,7 @@ mod avx2 {
 
     impl LaneImage {
         #[target_feature(enable = "avx2")]
-        pub(super) unsafe fn new(image: &MinimumImage) -> Self {
+        pub(in crate::kernels) unsafe fn new(image: &MinimumImage) -> Self {
             let lanes = |v: [f64; 3]| v.map(|c| _mm256_set1_pd(c));
             Self {
                 lengths: lanes(image.lengths),
@@ -820,7 +895,7 @@ mod avx2 {
     /// when `image` holds the separation's minimum-image convention.
     #[target_feature(enable = "avx2")]
     #[inline]
-    unsafe fn separations<S: Separation>(
+    pub(in crate::kernels) unsafe fn separations<S: Separation>(
         sep: &S,
         image: Option<&LaneImage>,
         x: &[[f64; 3]],
@@ -849,7 +924,7 @@ mod avx2 {
 
     #[target_feature(enable = "avx2")]
     #[inline]
-    unsafe fn dot(a: &[__m256d; 3], b: &[__m256d; 3]) -> __m256d {
+    pub(in crate::kernels) unsafe fn dot(a: &[__m256d; 3], b: &[__m256d; 3]) -> __m256d {
         _mm256_add_pd(
             _mm256_add_pd(_mm256_mul_pd(a[0], b[0]), _mm256_mul_pd(a[1], b[1])),
             _mm256_mul_pd(a[2], b[2]),
@@ -887,7 +962,7 @@ mod avx2 {
     /// The lengths of four rows from their `[r, r^3]` pairs, as lanes.
     #[target_feature(enable = "avx2")]
     #[inline]
-    unsafe fn lengths_of(pairs: *const [f64; 2]) -> __m256d {
+    pub(in crate::kernels) unsafe fn lengths_of(pairs: *const [f64; 2]) -> __m256d {
         let p = pairs as *const f64;
         let (rows01, rows23) = (_mm256_loadu_pd(p), _mm256_loadu_pd(p.add(4)));
         // [r0, r2, r1, r3] in lane order 0, 1, 2, 3, then put in place.
@@ -943,7 +1018,7 @@ mod avx2 {
     /// the scalar routine for the rare rest.
     #[target_feature(enable = "avx2")]
     #[inline]
-    unsafe fn cube_roots(q: __m256d, xq: __m256d) -> __m256d {
+    pub(in crate::kernels) unsafe fn cube_roots(q: __m256d, xq: __m256d) -> __m256d {
         let magnitude = _mm256_and_pd(xq, _mm256_castsi256_pd(_mm256_set1_epi64x(i64::MAX)));
         let (degree_7, degree_9) = cube_root_series(xq);
         let far = _mm256_cmp_pd::<_CMP_GT_OQ>(magnitude, _mm256_set1_pd(CLOSE_TO_ONE));

@@ -10,6 +10,7 @@
 //! `+n` (positive is repulsive) and on `j` along `-n`.
 
 mod bond;
+mod bond_failure;
 mod bond_rows;
 mod closure_lanes;
 mod diagnosis;
@@ -29,6 +30,10 @@ mod zero_net;
 pub use bond::{
     bond_force_magnitude, bond_forces, bond_forces_on, cube_root, dilation, reciprocal, BondCoeffs,
     BondEntry, BondInputs,
+};
+pub use bond_failure::{
+    failing_bond_force, failing_row_forces, failing_row_forces_on, gather_rest_volumes,
+    plastic_strain_after, row_broke, smoothing, BondFailure, BondFailureError, FailurePass,
 };
 pub use bond_rows::{
     gather_forces, gather_forces_on, gather_volumes, row_forces, row_forces_on, row_volumes,

@@ -143,6 +143,22 @@ fn check_supported(index: usize, stage: &StageSpec, scene: &Scene) -> Result<(),
     if stage.sphere_wall.is_some() {
         return Err(unsupported("a spherical wall"));
     }
+    if scene
+        .bonds
+        .plastic_strain
+        .as_ref()
+        .is_some_and(|e| e.iter().any(|&e| e != 0.0))
+    {
+        return Err(unsupported(
+            "bonds with plastic strains (`bonds.plastic_strain`): the harness's LAMMPS runs take only reference lengths",
+        ));
+    }
+    let fails = |ff: &ForceField| ff.bond_failure.is_some_and(|f| f.is_live());
+    if fails(&scene.force_field) || stage.force_field.as_ref().is_some_and(fails) {
+        return Err(unsupported(
+            "bonds that break or yield (`bond_failure`): the harness's LAMMPS runs use the elastic `bpm/multibody`",
+        ));
+    }
     if stage.barostat.is_some() {
         if !scene.simbox.periodic.iter().all(|&p| p) {
             return Err(unsupported(

@@ -22,6 +22,7 @@ macro_rules! templates {
 
 templates![
     "bench_bonds.in",
+    "bond_pull/pull.in",
     "compaction.in",
     "hertz_squeeze.in",
     "plugin_load_example.in",

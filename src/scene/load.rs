@@ -57,22 +57,18 @@ pub fn model_of(scene: &Scene) -> Box<dyn ParticleModel> {
     let n = scene.particles.positions.len();
     match scene.model {
         ModelKind::Bpm => {
-            let triples: Vec<(usize, usize, f64)> = scene
+            let strains = scene.bonds.plastic_strain.as_deref();
+            let bonds: Vec<(usize, usize, f64, f64)> = scene
                 .bonds
                 .pairs
                 .iter()
                 .zip(reference_lengths(scene))
-                .map(|(&[i, j], r0)| (i, j, r0))
+                .enumerate()
+                .map(|(k, (&[i, j], r0))| (i, j, r0, strains.map_or(0.0, |e| e[k])))
                 .collect();
-            let bonds = BondTopology::new(n, &triples);
+            let bonds = BondTopology::with_plastic_strains(n, &bonds);
             let ff = &scene.force_field;
-            Box::new(BpmModel::new(
-                ff.bond,
-                ff.pair,
-                ff.zero_net_multibody,
-                n,
-                bonds,
-            ))
+            Box::new(BpmModel::new(ff.bpm(), n, bonds))
         }
         ModelKind::Dem => {
             let max_radius = scene
@@ -159,6 +155,8 @@ pub fn final_scene(scene: &Scene, sys: &System) -> Scene {
             .map(|b| [b.i as usize, b.j as usize])
             .collect();
         fin.bonds.r0 = Some(bonds.r0.clone());
+        let plastic = bpm.plastic_strains();
+        fin.bonds.plastic_strain = plastic.iter().any(|&e| e != 0.0).then_some(plastic);
     }
     fin
 }

@@ -6,7 +6,7 @@
 use crate::engine::{
     Barostat, Deformation, FlatWall, GranularWall, MultiContact, SphereWall, Tether,
 };
-use crate::kernels::{BondCoeffs, GranularMaterial, PairCoeffs};
+use crate::kernels::{BondCoeffs, BondFailure, GranularMaterial, PairCoeffs};
 use serde::{Deserialize, Serialize};
 
 /// The scene format this build writes. Version 1 (files without a
@@ -182,6 +182,11 @@ pub struct Bonds {
     /// Reference length per bond; default the distance at load.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub r0: Option<Vec<f64>>,
+    /// Plastic strain per bond (bonds that yield: the rest length is
+    /// `(1 + e_p) r0`); default 0. A final scene of a run whose bonds
+    /// yielded carries it.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub plastic_strain: Option<Vec<f64>>,
 }
 
 /// Interaction parameters: bonds and contacts of the bonded particle
@@ -193,6 +198,10 @@ pub struct ForceField {
     /// bond forces), as a DEM scene leaves them.
     #[serde(default, skip_serializing_if = "BondCoeffs::is_zero")]
     pub bond: BondCoeffs,
+    /// How bonds break and yield (critical strain, smoothing, plastic
+    /// strain); absent, they stay elastic and never break.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub bond_failure: Option<BondFailure>,
     /// Pair coefficients `k`, `d`, `a` (a_P), `gamma`; absent for no contacts.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub pair: Option<PairCoeffs>,
@@ -224,6 +233,16 @@ fn default_skin() -> f64 {
 }
 
 impl ForceField {
+    /// The bonded model's part of the field.
+    pub fn bpm(&self) -> crate::engine::BpmForceField {
+        crate::engine::BpmForceField {
+            bond: self.bond,
+            failure: self.bond_failure,
+            pair: self.pair,
+            zero_net: self.zero_net_multibody,
+        }
+    }
+
     /// The paper's parameters: `k = 1`, `Gamma = 1`, `a_P = 50`, `d = 1`.
     pub fn paper(a_b: f64) -> Self {
         Self {
@@ -238,6 +257,7 @@ impl ForceField {
                 a: 50.0,
                 gamma: 1.0,
             }),
+            bond_failure: None,
             skin: default_skin(),
             zero_net_multibody: false,
             granular: None,
@@ -250,6 +270,7 @@ impl ForceField {
     pub fn dem(material: GranularMaterial) -> Self {
         Self {
             bond: BondCoeffs::default(),
+            bond_failure: None,
             pair: None,
             skin: default_skin(),
             zero_net_multibody: false,

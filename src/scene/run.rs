@@ -342,7 +342,7 @@ fn begin_stage(
     let n = sys.len();
     if let Some(ff) = &spec.force_field {
         if let Some(bpm) = sys.model_as_mut::<BpmModel>() {
-            bpm.set_coefficients(ff.bond, ff.pair, ff.zero_net_multibody, n);
+            bpm.set_coefficients(ff.bpm(), n);
         } else if let (Some(dem), Some(material)) = (sys.model_as_mut::<DemModel>(), ff.granular) {
             dem.set_force_field(material, ff.multicontact);
         } else {

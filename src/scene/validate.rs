@@ -186,6 +186,22 @@ fn check_force_field(
         }
         (_, None) => {}
     }
+    if let Some(failure) = &ff.bond_failure {
+        let field = format!("{prefix}.bond_failure");
+        if model == ModelKind::Dem {
+            return Err(invalid(field, "belongs to the bonded model (model bpm)"));
+        }
+        failure
+            .check()
+            .map_err(|e| invalid(field.clone(), e.to_string()))?;
+        if ff.zero_net_multibody && failure.is_live() {
+            return Err(invalid(
+                field,
+                "the zero-net-multibody variant does not combine with bonds that break or yield yet: \
+                 leave out zero_net_multibody or bond_failure",
+            ));
+        }
+    }
     non_negative(&format!("{prefix}.bond.k"), ff.bond.k)?;
     finite(&format!("{prefix}.bond.a"), ff.bond.a)?;
     non_negative(&format!("{prefix}.bond.gamma"), ff.bond.gamma)?;
@@ -576,6 +592,30 @@ pub fn validate(scene: &Scene) -> Result<(), SceneError> {
         }
         for (k, &r) in r0.iter().enumerate() {
             positive(&format!("bonds.r0[{k}]"), r)?;
+        }
+    }
+    if let Some(strains) = &bonds.plastic_strain {
+        if strains.len() != bonds.pairs.len() {
+            return Err(invalid(
+                "bonds.plastic_strain",
+                format!(
+                    "has {} entries for {} bonds",
+                    strains.len(),
+                    bonds.pairs.len()
+                ),
+            ));
+        }
+        if let Some((k, e)) = strains
+            .iter()
+            .enumerate()
+            .find(|(_, e)| !(e.is_finite() && **e > -1.0))
+        {
+            return Err(invalid(
+                format!("bonds.plastic_strain[{k}]"),
+                format!(
+                    "= {e}: a plastic strain must be finite and above -1 (a positive rest length)"
+                ),
+            ));
         }
     }
     let mut seen = std::collections::HashSet::with_capacity(bonds.pairs.len());

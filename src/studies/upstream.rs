@@ -9,6 +9,7 @@
 //! (`lammps_inputs/upstream_compare/`, run from the embedded copy written
 //! into the work folder).
 
+pub mod bond_pull;
 pub mod cli;
 
 use crate::engine::SimBox;
@@ -814,6 +815,11 @@ pub fn run_upstream_check(
     // (docs/model.md's damping is the plain gamma (v_ij . n) n).
     for config in configurations(opts.size, opts.grain_radius, opts.seed, -0.5)? {
         compare_configuration(&lammps, &config, 1.0, 0, 1, &work, &mut rows)?;
+        flush(&rows);
+    }
+    // Bonds that break and yield: one bond pulled to failure.
+    for case in bond_pull::pull_cases() {
+        bond_pull::compare_pull(&lammps, &case, &work, &mut rows)?;
         flush(&rows);
     }
     let mut speeds = Vec::new();

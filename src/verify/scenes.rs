@@ -155,6 +155,7 @@ pub fn grain_pair(radius: f64, seed: u64, a_b: f64) -> Result<Scene, SceneError>
         bonds: crate::scene::Bonds {
             pairs,
             r0: Some(lengths),
+            plastic_strain: None,
         },
         force_field: ForceField::paper(a_b),
         stages: vec![StageSpec::hold("point", 0, 0.1)],

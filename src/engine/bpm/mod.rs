@@ -5,7 +5,15 @@
 //! The model owns its bonds, their reference lengths and the per-particle
 //! volume proxies. Terms that a scene cannot use are removed at load: no
 //! volume pass when `a_B` is 0, no velocity terms when `Gamma` is 0, no pair
-//! list when there is no pair style or it has no stiffness.
+//! list when there is no pair style or it has no stiffness, and the
+//! elastic bond pass unless bonds break or yield.
+//!
+//! Bonds that break ([`BondFailure`]) leave the bond arrays at the end of
+//! the step in which they break; their particles then interact through the
+//! contact law from the next step, through a short list of new contacts
+//! until the pair list is next rebuilt without their exclusion. The
+//! volume proxies `V` and `V0` sum over intact bonds, and `V0` over their
+//! rest lengths (docs/model.md, "Breaking and yielding").
 
 mod topology;
 
@@ -18,9 +26,10 @@ use super::simbox::SimBox;
 use super::timers::Stage;
 use super::EngineError;
 use crate::kernels::{
-    accumulate_multibody_sums, accumulate_reference_volumes, balance_multibody, gather_forces,
-    gather_volumes, pair_forces, row_forces, row_volumes, window_forces, BondCoeffs, BondEntry,
-    BondRows, BoxImage, Fault, ForcePass, MultibodyInputs, MultibodySum, Ownership, PairCoeffs,
+    accumulate_multibody_sums, accumulate_reference_volumes, balance_multibody, failing_row_forces,
+    gather_forces, gather_rest_volumes, gather_volumes, pair_forces, row_broke, row_forces,
+    row_volumes, window_forces, BondCoeffs, BondEntry, BondFailure, BondRows, BoxImage,
+    FailurePass, Fault, ForcePass, MultibodyInputs, MultibodySum, Ownership, PairCoeffs,
     PairInputs, RowInputs, RowWindow, Separation, Tally, Unwrapped,
 };
 
@@ -57,27 +66,59 @@ pub struct BpmTerms {
     /// The zero-net-multibody correction (the variant chosen and the
     /// multibody term live).
     pub zero_net: bool,
+    /// Bonds break, yield or have a spring in strain
+    /// ([`BondFailure::is_live`]): the failing bond pass replaces the
+    /// elastic one.
+    pub failure: bool,
+    /// Bonds yield: their rest lengths, and with the multibody term the
+    /// reference volumes, change from step to step.
+    pub yields: bool,
 }
 
 impl BpmTerms {
-    fn of(bond: &BondCoeffs, pair: Option<&PairCoeffs>, zero_net: bool, no_bonds: bool) -> Self {
+    fn of(field: &BpmForceField, no_bonds: bool) -> Self {
+        let (bond, pair) = (&field.bond, field.pair.as_ref());
         let pairs = pair.is_some_and(|p| p.k != 0.0 || p.a != 0.0);
         let multibody = bond.a != 0.0 && !no_bonds;
+        let failure = field.live_failure();
         Self {
             multibody,
-            zero_net: zero_net && multibody,
+            zero_net: field.zero_net && multibody,
             bond_damping: bond.gamma != 0.0,
             pairs,
             pair_damping: pairs && pair.is_some_and(|p| p.gamma != 0.0),
+            failure: failure.is_some() && !no_bonds,
+            yields: failure.is_some_and(|f| f.plastic_strain.is_some()) && !no_bonds,
         }
+    }
+}
+
+/// The bonded model's force field: bond coefficients and how bonds fail,
+/// pair coefficients, and the bond force's variant.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct BpmForceField {
+    /// Bond coefficients.
+    pub bond: BondCoeffs,
+    /// How bonds break and yield; `None`, they stay elastic.
+    pub failure: Option<BondFailure>,
+    /// Pair coefficients, if contacts are modelled.
+    pub pair: Option<PairCoeffs>,
+    /// The zero-net-multibody variant (the scene refuses it with failing
+    /// bonds).
+    pub zero_net: bool,
+}
+
+impl BpmForceField {
+    /// How bonds fail, if that changes anything ([`BondFailure::is_live`]).
+    pub fn live_failure(&self) -> Option<&BondFailure> {
+        self.failure.as_ref().filter(|f| f.is_live())
     }
 }
 
 /// The bonds, bond and pair coefficients, and the per-particle volumes.
 #[derive(Debug)]
 pub struct BpmModel {
-    bond: BondCoeffs,
-    pair: Option<PairCoeffs>,
+    field: BpmForceField,
     bonds: BondTopology,
     terms: BpmTerms,
     volume: Vec<f64>,
@@ -85,20 +126,49 @@ pub struct BpmModel {
     multibody_sums: Vec<MultibodySum>,
     force_scratch: Scratch<Vec3>,
     layout: BondLayout,
-    /// Whether the zero-net-multibody variant was chosen (live only with
-    /// the multibody term: [`BpmTerms::zero_net`]).
-    zero_net_variant: bool,
+    /// Each thread's share of the failing bond pass.
+    failure_passes: Vec<FailurePass>,
+    /// Pairs whose bond broke since the pair list was built.
+    new_contacts: NewContacts,
+    /// The particles of every bond that broke, in the order they broke.
+    broken: Vec<[usize; 2]>,
+    /// Whether `V0` must be summed anew over the rows' rest lengths before
+    /// the next pass (bonds that yield, with the multibody term): after a
+    /// layout rebuild and after a pass in which bonds yielded.
+    rest_volumes_stale: bool,
 }
 
-/// What a step or a stage changes in the model: the current force field
-/// and the reference lengths (a stress-free reset rewrites them). The
-/// volumes and the bond layout follow from these.
+/// Pairs whose bond broke: they interact as contacts from the step after,
+/// through this list until the pair list is rebuilt (positions wrapped)
+/// without their exclusion.
+#[derive(Clone, Debug, Default, serde::Serialize, serde::Deserialize)]
+struct NewContacts {
+    /// The wrap count when they broke.
+    wraps: u64,
+    /// `(i, [j])` with `i < j`, in the form of a pair list's rows.
+    pairs: Vec<(usize, [i32; 1])>,
+}
+
+/// What a step or a stage changes in the model: the current force field,
+/// the reference lengths (a stress-free reset rewrites them), and with
+/// failing bonds the bonds left, their plastic strains, the bonds broken
+/// and the contacts they left. The volumes and the bond layout follow from
+/// these.
 #[derive(serde::Serialize, serde::Deserialize)]
 struct BpmState {
-    bond: BondCoeffs,
-    pair: Option<PairCoeffs>,
-    zero_net: bool,
+    field: BpmForceField,
     r0: Vec<f64>,
+    /// With failing bonds: the bonds left, their plastic strains, the broken
+    /// bonds and the contacts not yet in the pair list.
+    failing: Option<FailingState>,
+}
+
+#[derive(serde::Serialize, serde::Deserialize)]
+struct FailingState {
+    bonds: Vec<[usize; 2]>,
+    plastic: Vec<f64>,
+    broken: Vec<[usize; 2]>,
+    new_contacts: NewContacts,
 }
 
 /// The bonds as rows for the two-step bond pass
@@ -198,14 +268,17 @@ impl BondLayout {
 
     /// Plans the window for a team of `threads` if the rows or the team
     /// changed since the last plan; none when the rows are few or their
-    /// partners too far apart.
-    fn plan_window(&mut self, threads: usize) {
+    /// partners too far apart, or the pass cannot run in windows
+    /// (`!allowed`: the failing bond pass keeps each row's plastic strain
+    /// in the full-size array). A change of `allowed` comes with new rows.
+    fn plan_window(&mut self, threads: usize, allowed: bool) {
         if self.window_planned_for != Some(threads) {
-            let wanted = match self.mode {
-                BondWindow::Auto => self.rows.len() >= WINDOW_FROM_ROWS,
-                BondWindow::Always => true,
-                BondWindow::Never => false,
-            };
+            let wanted = allowed
+                && match self.mode {
+                    BondWindow::Auto => self.rows.len() >= WINDOW_FROM_ROWS,
+                    BondWindow::Always => true,
+                    BondWindow::Never => false,
+                };
             self.window = wanted
                 .then(|| {
                     let offsets = self.rows.offsets();
@@ -232,44 +305,42 @@ impl BondLayout {
 }
 
 impl BpmModel {
-    /// A model of `bonds` on `n` particles, with the zero-net-multibody
-    /// variant of the bond force or without; `V0` is computed here once.
-    pub fn new(
-        bond: BondCoeffs,
-        pair: Option<PairCoeffs>,
-        zero_net: bool,
-        n: usize,
-        bonds: BondTopology,
-    ) -> Self {
+    /// A model of `bonds` on `n` particles with force field `field`; `V0`
+    /// is computed here once.
+    pub fn new(field: BpmForceField, n: usize, bonds: BondTopology) -> Self {
         let mut model = Self {
-            bond,
-            pair,
+            field,
             bonds,
-            terms: BpmTerms::of(&bond, pair.as_ref(), zero_net, false),
+            terms: BpmTerms::of(&field, false),
             volume: Vec::new(),
             reference_volume: Vec::new(),
             multibody_sums: Vec::new(),
             force_scratch: Scratch::default(),
             layout: BondLayout::default(),
-            zero_net_variant: zero_net,
+            failure_passes: Vec::new(),
+            new_contacts: NewContacts::default(),
+            broken: Vec::new(),
+            rest_volumes_stale: true,
         };
-        model.set_coefficients(bond, pair, zero_net, n);
+        model.set_coefficients(field, n);
         model
     }
 
-    /// Replaces the coefficients and the variant (a stage's force-field
-    /// change) and re-derives the live terms and `V0`.
-    pub fn set_coefficients(
-        &mut self,
-        bond: BondCoeffs,
-        pair: Option<PairCoeffs>,
-        zero_net: bool,
-        n: usize,
-    ) {
-        self.bond = bond;
-        self.pair = pair;
-        self.zero_net_variant = zero_net;
-        self.terms = BpmTerms::of(&bond, pair.as_ref(), zero_net, self.bonds.is_empty());
+    /// Replaces the force field (a stage's force-field change) and
+    /// re-derives the live terms and `V0`. Bonds keep their plastic
+    /// strains; a field whose bonds do not yield makes each bond's rest
+    /// length its reference length.
+    pub fn set_coefficients(&mut self, field: BpmForceField, n: usize) {
+        self.retire_layout();
+        if field
+            .live_failure()
+            .and_then(|f| f.plastic_strain)
+            .is_none()
+        {
+            self.bonds.fold_plastic_strains();
+        }
+        self.field = field;
+        self.terms = BpmTerms::of(&field, self.bonds.is_empty());
         self.update_reference_volumes(n);
     }
 
@@ -293,17 +364,41 @@ impl BpmModel {
 
     /// Bond coefficients.
     pub fn bond_coeffs(&self) -> BondCoeffs {
-        self.bond
+        self.field.bond
     }
 
     /// Pair coefficients, if contacts are modelled.
     pub fn pair_coeffs(&self) -> Option<PairCoeffs> {
-        self.pair
+        self.field.pair
     }
 
-    /// The bonds and their reference lengths.
+    /// The force field.
+    pub fn force_field(&self) -> BpmForceField {
+        self.field
+    }
+
+    /// The bonds and their reference lengths. Plastic strains are those of
+    /// the last bond-layout rebuild; [`BpmModel::plastic_strains`] has the
+    /// current ones.
     pub fn bonds(&self) -> &BondTopology {
         &self.bonds
+    }
+
+    /// Each bond's current plastic strain, in the order of
+    /// [`BpmModel::bonds`].
+    pub fn plastic_strains(&self) -> Vec<f64> {
+        let mut plastic = self.bonds.plastic.clone();
+        if self.layout_holds_plastic_strains() {
+            for (b, row) in self.layout.rows.bonds().zip(&self.layout.force) {
+                plastic[b] = row[3];
+            }
+        }
+        plastic
+    }
+
+    /// The particles of every bond that broke, in the order they broke.
+    pub fn broken_bonds(&self) -> &[[usize; 2]] {
+        &self.broken
     }
 
     /// The live terms.
@@ -311,22 +406,50 @@ impl BpmModel {
         self.terms
     }
 
-    /// Makes every bond's current length its reference length (the
-    /// stress-free reset of the compaction protocol) and recomputes `V0`.
+    /// Makes every bond's current length its reference length and its
+    /// plastic strain 0 (the stress-free reset of the compaction protocol)
+    /// and recomputes `V0`.
     pub fn reset_reference(&mut self, simbox: &SimBox, x: &[[f64; 3]]) {
+        self.retire_layout();
         self.bonds.reset_reference(simbox, x);
         self.update_reference_volumes(x.len());
     }
 
-    fn update_reference_volumes(&mut self, n: usize) {
+    /// Whether the bond layout's force rows carry the bonds' current
+    /// plastic strains (in their fourth values), newer than the topology's.
+    fn layout_holds_plastic_strains(&self) -> bool {
+        self.terms.yields && self.layout.generation.is_some()
+    }
+
+    /// Drops the bond layout, first giving the topology the plastic strains
+    /// its rows carry; the next evaluation builds it anew.
+    fn retire_layout(&mut self) {
+        if self.layout_holds_plastic_strains() {
+            for (b, row) in self.layout.rows.bonds().zip(&self.layout.force) {
+                self.bonds.plastic[b] = row[3];
+            }
+        }
         self.layout.generation = None;
+    }
+
+    /// Recomputes `V0` over the bonds' rest lengths (only with the
+    /// multibody term); the layout must have been retired.
+    fn update_reference_volumes(&mut self, n: usize) {
+        debug_assert!(self.layout.generation.is_none(), "layout retired first");
         if self.terms.multibody {
             self.volume = vec![0.0; n];
             self.reference_volume = vec![0.0; n];
             self.multibody_sums = vec![[0.0; 4]; n];
+            let rest: Vec<f64>;
+            let lengths = if self.bonds.plastic.iter().any(|&e| e != 0.0) {
+                rest = self.bonds.rest_lengths().collect();
+                &rest
+            } else {
+                &self.bonds.r0
+            };
             accumulate_reference_volumes(
                 &self.bonds.entries,
-                &self.bonds.r0,
+                lengths,
                 Ownership::all(n),
                 &mut self.reference_volume,
             );
@@ -357,10 +480,31 @@ impl BpmModel {
         let chunks = team.threads();
         let sep = simbox.minimum_image();
         if self.layout.generation != Some(wraps) {
+            self.retire_layout();
             let reference = self.terms.multibody.then_some(&self.reference_volume[..]);
             self.layout.rebuild(&sep, x, &self.bonds, reference, wraps);
+            self.rest_volumes_stale = true;
+            if self.terms.failure {
+                let layout = &mut self.layout;
+                for (b, row) in layout.rows.bonds().zip(layout.force.iter_mut()) {
+                    row[3] = self.bonds.plastic[b];
+                }
+            }
         }
-        self.layout.plan_window(chunks);
+        self.layout.plan_window(chunks, !self.terms.failure);
+        if self.terms.multibody && self.terms.yields && self.rest_volumes_stale {
+            // V0 of the rest lengths the last pass left.
+            let _t = timers.start(Stage::Volumes);
+            let layout = &self.layout;
+            team.run_split(&mut self.reference_volume, |_, range, part| {
+                gather_rest_volumes(&layout.rows, range, &layout.force, part)
+            });
+            self.layout
+                .rows
+                .set_reference_volumes(&self.reference_volume)
+                .expect("one reference volume per particle");
+            self.rest_volumes_stale = false;
+        }
         let layout = &mut self.layout;
         layout.passes.resize(chunks, ForcePass::default());
         let rows = &layout.rows;
@@ -382,19 +526,40 @@ impl BpmModel {
                 gather_volumes(rows, range, lengths, part)
             });
         }
+        let inputs = RowInputs {
+            x,
+            v: self.terms.bond_damping.then_some(v),
+            coeffs: self.field.bond,
+            multibody: self
+                .terms
+                .multibody
+                .then_some((&self.volume[..], &layout.lengths[..])),
+            tally,
+        };
+        let mut broken = 0;
         let bond_pass = {
             let _t = timers.start(Stage::Bonds);
-            let inputs = RowInputs {
-                x,
-                v: self.terms.bond_damping.then_some(v),
-                coeffs: self.bond,
-                multibody: self
-                    .terms
-                    .multibody
-                    .then_some((&self.volume[..], &layout.lengths[..])),
-                tally,
-            };
-            if let Some(window) = &layout.window {
+            if let Some(rule) = self.field.live_failure().filter(|_| self.terms.failure) {
+                self.failure_passes.resize(chunks, FailurePass::default());
+                team.run_sections(
+                    &mut layout.force,
+                    layout.interior,
+                    &mut self.failure_passes,
+                    |_, [(ri, interior), (rb, boundary)]| {
+                        failing_row_forces(&Unwrapped, rows, ri, &inputs, rule, interior)
+                            .merged(&failing_row_forces(&sep, rows, rb, &inputs, rule, boundary))
+                    },
+                );
+                let forces = &layout.force;
+                team.run_split(f, |_, range, part| gather_forces(rows, range, forces, part));
+                let pass = self
+                    .failure_passes
+                    .iter()
+                    .fold(FailurePass::default(), |acc, p| acc.merged(p));
+                broken = pass.broken;
+                self.rest_volumes_stale |= pass.yielded > 0;
+                pass.pass
+            } else if let Some(window) = &layout.window {
                 // Boundary rows first, into the full-size array's tail;
                 // then each thread's part, its interior rows in its ring.
                 team.run_sections(
@@ -442,8 +607,12 @@ impl BpmModel {
         } else {
             Tally::default()
         };
-        let pair_pass = match (self.terms.pairs, self.pair) {
-            (true, Some(p)) if !neighbours.is_empty() => {
+        if self.new_contacts.wraps != wraps {
+            // The pair list was rebuilt: it holds them now.
+            self.new_contacts.pairs.clear();
+        }
+        let pair_pass = match (self.terms.pairs, self.field.pair) {
+            (true, Some(p)) => {
                 let _t = timers.start(Stage::Pairs);
                 let coeffs = [p];
                 let inputs = PairInputs {
@@ -459,26 +628,66 @@ impl BpmModel {
                 // as many pairs: chunk c writes from its first `i` on.
                 let first = |c| neighbours.balanced_rows(chunks, c).start;
                 let image = BoxImage::of(&sep);
-                self.force_scratch
-                    .scatter(team, as_vec3(f), first, |c, out| {
-                        let rows = neighbours.rows(neighbours.balanced_rows(chunks, c));
-                        match &image {
-                            BoxImage::Orthogonal(image) => {
-                                pair_forces(image, &inputs, rows, own, as_rows(out))
+                let listed = if neighbours.is_empty() {
+                    ForcePass::default()
+                } else {
+                    self.force_scratch
+                        .scatter(team, as_vec3(f), first, |c, out| {
+                            let rows = neighbours.rows(neighbours.balanced_rows(chunks, c));
+                            match &image {
+                                BoxImage::Orthogonal(image) => {
+                                    pair_forces(image, &inputs, rows, own, as_rows(out))
+                                }
+                                BoxImage::Tilted(image) => {
+                                    pair_forces(image, &inputs, rows, own, as_rows(out))
+                                }
                             }
-                            BoxImage::Tilted(image) => {
-                                pair_forces(image, &inputs, rows, own, as_rows(out))
-                            }
-                        }
-                    })
+                        })
+                };
+                let new = &self.new_contacts.pairs;
+                let unlisted = new.iter().map(|(i, j)| (*i, &j[..]));
+                listed.merged(&pair_forces(&sep, &inputs, unlisted, own, f))
             }
             _ => ForcePass::default(),
         };
+        if broken > 0 {
+            self.break_bonds(wraps);
+        }
         out.fault = out.fault.or(bond_pass.fault).or(pair_pass.fault);
         let mut result = ModelTally::default();
         result.terms[BOND_TERM] = bond_pass.tally.merged(&balance);
         result.terms[PAIR_TERM] = pair_pass.tally;
         result
+    }
+
+    /// Removes the bonds whose rows broke in the last pass: their pairs
+    /// become new contacts, `V0` is summed over the bonds left, and the
+    /// layout is built anew at the next evaluation.
+    fn break_bonds(&mut self, wraps: u64) {
+        let layout = &self.layout;
+        let mut doomed: Vec<usize> = layout
+            .rows
+            .bonds()
+            .zip(&layout.force)
+            .filter(|(_, row)| row_broke(row))
+            .map(|(b, _)| b)
+            .collect();
+        doomed.sort_unstable();
+        self.retire_layout();
+        let pairs = self.bonds.remove(&doomed);
+        if self.new_contacts.wraps != wraps {
+            self.new_contacts = NewContacts {
+                wraps,
+                pairs: Vec::new(),
+            };
+        }
+        self.new_contacts
+            .pairs
+            .extend(pairs.iter().map(|&[i, j]| (i, [j as i32])));
+        self.broken.extend(pairs);
+        let n = self.bonds.offsets.len().saturating_sub(1);
+        self.terms = BpmTerms::of(&self.field, self.bonds.is_empty());
+        self.update_reference_volumes(n);
     }
 }
 
@@ -500,7 +709,7 @@ impl BpmModel {
             x,
             bonds: &bonds.entries,
             r0: &bonds.r0,
-            coeffs: std::slice::from_ref(&self.bond),
+            coeffs: std::slice::from_ref(&self.field.bond),
             volumes: (&self.volume, &self.reference_volume),
         };
         accumulate_multibody_sums(sep, &inputs, own, &mut self.multibody_sums);
@@ -514,7 +723,9 @@ impl ParticleModel for BpmModel {
     }
 
     fn pair_cutoff(&self) -> Option<f64> {
-        self.terms.pairs.then(|| self.pair.map_or(0.0, |p| p.d))
+        self.terms
+            .pairs
+            .then(|| self.field.pair.map_or(0.0, |p| p.d))
     }
 
     fn exclusions(&self) -> Option<&Exclusions> {
@@ -530,15 +741,25 @@ impl ParticleModel for BpmModel {
     }
 
     fn likely_cause(&self, fault: &Fault, dt: f64, mass: f64, nearest_unbonded: f64) -> String {
-        fault.likely_cause(dt, Some(&self.bond), mass, nearest_unbonded)
+        fault.likely_cause(dt, Some(&self.field.bond), mass, nearest_unbonded)
     }
 
     fn save_state(&self) -> Result<ciborium::Value, EngineError> {
+        let failing = self.terms.failure.then(|| FailingState {
+            bonds: self
+                .bonds
+                .entries
+                .iter()
+                .map(|b| [b.i as usize, b.j as usize])
+                .collect(),
+            plastic: self.plastic_strains(),
+            broken: self.broken.clone(),
+            new_contacts: self.new_contacts.clone(),
+        });
         let state = BpmState {
-            bond: self.bond,
-            pair: self.pair,
-            zero_net: self.zero_net_variant,
+            field: self.field,
             r0: self.bonds.r0.clone(),
+            failing,
         };
         ciborium::Value::serialized(&state).map_err(|e| EngineError::StateMismatch {
             what: format!("the bonded model's state could not be saved: {e}"),
@@ -551,18 +772,44 @@ impl ParticleModel for BpmModel {
             .map_err(|e| EngineError::StateMismatch {
                 what: format!("it is not a bonded model's state: {e}"),
             })?;
-        if state.r0.len() != self.bonds.len() {
-            return Err(EngineError::StateMismatch {
-                what: format!(
-                    "it has {} bonds, this system {}",
-                    state.r0.len(),
-                    self.bonds.len()
-                ),
-            });
-        }
-        self.bonds.r0 = state.r0;
         let n = self.bonds.offsets.len().saturating_sub(1);
-        self.set_coefficients(state.bond, state.pair, state.zero_net, n);
+        let count_mismatch = |what: &str, saved: usize, here: usize| {
+            Err(EngineError::StateMismatch {
+                what: format!("it has {saved} {what}, this system {here}"),
+            })
+        };
+        self.layout.generation = None;
+        match state.failing {
+            Some(failing) => {
+                if failing.bonds.len() != state.r0.len() || failing.plastic.len() != state.r0.len()
+                {
+                    return count_mismatch("bonds", failing.bonds.len(), state.r0.len());
+                }
+                if let Some(&[i, j]) = failing.bonds.iter().find(|[i, j]| *i >= n || *j >= n) {
+                    return Err(EngineError::StateMismatch {
+                        what: format!("it bonds particles {i} and {j}, this system has {n}"),
+                    });
+                }
+                let bonds: Vec<_> = failing
+                    .bonds
+                    .iter()
+                    .zip(&state.r0)
+                    .zip(&failing.plastic)
+                    .map(|((&[i, j], &r0), &e_p)| (i, j, r0, e_p))
+                    .collect();
+                self.bonds = BondTopology::with_plastic_strains(n, &bonds);
+                self.broken = failing.broken;
+                self.new_contacts = failing.new_contacts;
+            }
+            None => {
+                if state.r0.len() != self.bonds.len() {
+                    return count_mismatch("bonds", state.r0.len(), self.bonds.len());
+                }
+                self.bonds.r0 = state.r0;
+                self.bonds.plastic.fill(0.0);
+            }
+        }
+        self.set_coefficients(state.field, n);
         Ok(())
     }
 

@@ -298,6 +298,7 @@ pub fn build_bulk(
             .map(|b| [b.i as usize, b.j as usize])
             .collect(),
         r0: Some(bonds.r0.clone()),
+        plastic_strain: None,
     };
     scene.force_field = params.force_field.clone();
     scene.stages = Vec::new();

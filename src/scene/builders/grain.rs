@@ -314,6 +314,7 @@ pub fn build_grain(
     scene.bonds = Bonds {
         pairs,
         r0: Some(lengths),
+        plastic_strain: None,
     };
     scene.stages = Vec::new();
     let bonds = scene.bonds.pairs.len();

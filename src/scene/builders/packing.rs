@@ -482,6 +482,7 @@ pub fn build_packing(
     scene.bonds = Bonds {
         pairs,
         r0: Some(r0),
+        plastic_strain: None,
     };
     let mut grain_centres = centres.clone();
     let (relax_sweeps, crowding) = relax_overlaps(&mut scene, &mut grain_centres)?;

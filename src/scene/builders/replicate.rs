@@ -81,6 +81,7 @@ pub fn replicate(scene: &Scene, copies: [usize; 3]) -> Result<Scene, SceneError>
     out.bonds = Bonds {
         pairs,
         r0: Some(tiled(&r0, times)),
+        plastic_strain: scene.bonds.plastic_strain.as_ref().map(|e| tiled(e, times)),
     };
     out.simbox.lengths = [0, 1, 2].map(|d| b.lengths[d] * copies[d] as f64);
     out.description = format!("{} (replicated {copies:?})", scene.description);

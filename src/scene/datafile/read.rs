@@ -599,7 +599,11 @@ fn assemble(
             ids: Some(atoms.iter().map(|a| a.id as u64).collect())
                 .filter(|ids: &Vec<u64>| !is_default_numbering(ids)),
         },
-        bonds: Bonds { pairs, r0: None },
+        bonds: Bonds {
+            pairs,
+            r0: None,
+            plastic_strain: None,
+        },
         force_field,
         stages: Vec::new(),
         provenance: serde_json::json!({"imported_from": src.path.display().to_string()}),

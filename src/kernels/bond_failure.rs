@@ -1,0 +1,811 @@
+//! Bonds that break and yield (docs/model.md, "Breaking and yielding").
+//!
+//! A bond keeps its first length `r0` and a plastic strain `e_p`; its rest
+//! length is `r_eq = (1 + e_p) r0` and its strain `e = (r - r0) / r0`.
+//!
+//! - **Breaking**: a bond with `|e| > eps_c` breaks. It exerts no force in
+//!   the step it breaks, and its two particles interact through the contact
+//!   law from the next step on.
+//! - **Smoothing**: the whole bond force (spring, multibody term and
+//!   damping) is multiplied by `w = 1 - (e / eps_c)^8`, which falls to 0
+//!   at the critical strain, so a bond lets go without a jump in force.
+//! - **Yielding**: `e_p` moves so that `|e - e_p| <= eps_p`. The spring is
+//!   `k (r_eq - r)`, or `-k (e - e_p)` with `normalize`, and the multibody
+//!   term `a (D - r / r_eq)`; under steady stretching the spring force
+//!   levels off at `k eps_p r0`.
+//!
+//! These are the rules of upstream LAMMPS's `bpm/spring` and
+//! `bpm/spring/plastic` bond styles; the multibody term with yielding is
+//! ours (upstream's plastic style has no volume term). A bond whose `e_p`
+//! is 0 gets, bit for bit, the force of the elastic kernels times `w`.
+
+use super::bond::{cube_root, reciprocal, BondCoeffs};
+use super::bond_rows::{settle_checked_row, BondRows, LaneTally, RowForce, RowInputs, AS_J};
+use super::fault::ForcePass;
+use super::isa::Isa;
+use super::Separation;
+use std::ops::Range;
+
+/// How bonds of one type break and yield; absent, they do neither.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct BondFailure {
+    /// Critical strain `eps_c` (dimensionless, > 0): a bond breaks when
+    /// `|r - r0| / r0` exceeds it; also the scale of the smoothing.
+    pub critical_strain: f64,
+    /// Whether bonds break (upstream's `break`); default true.
+    #[serde(default = "yes")]
+    pub breaks: bool,
+    /// Whether the bond force is smoothed to 0 at the critical strain
+    /// (upstream's `smooth`); default true. Needs `breaks`.
+    #[serde(default = "yes")]
+    pub smooth: bool,
+    /// Plastic strain `eps_p` (dimensionless, 0 < eps_p < eps_c): the rest
+    /// length follows the bond so that `|e - e_p| <= eps_p`; absent, bonds
+    /// stay elastic.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub plastic_strain: Option<f64>,
+    /// The spring in strain, `-k (e - e_p)`, instead of in length,
+    /// `-k (r - r_eq)` (upstream's `normalize`); default false.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub normalize: bool,
+}
+
+fn yes() -> bool {
+    true
+}
+
+/// A [`BondFailure`] the model cannot use, naming the value.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum BondFailureError {
+    /// `eps_c` not positive and finite.
+    #[error("the critical strain eps_c = {0} must be positive and finite")]
+    CriticalStrain(f64),
+    /// `eps_p` not positive and finite.
+    #[error("the plastic strain eps_p = {0} must be positive and finite")]
+    PlasticStrain(f64),
+    /// `eps_p >= eps_c`: the bond would break before it yields.
+    #[error(
+        "the plastic strain eps_p = {plastic} must be below the critical strain eps_c = \
+         {critical}: a bond would break before it yields"
+    )]
+    YieldsAfterBreaking {
+        /// `eps_p`.
+        plastic: f64,
+        /// `eps_c`.
+        critical: f64,
+    },
+    /// Smoothing asked for without breaking (upstream refuses it too).
+    #[error(
+        "smoothing needs breaking: with breaks false, set smooth false too (the smoothed \
+         force would fall to 0 at eps_c and stay there)"
+    )]
+    SmoothWithoutBreaking,
+}
+
+impl BondFailure {
+    /// Upstream's defaults for a critical strain: bonds break, smoothed,
+    /// elastic until they break.
+    pub fn breaking(critical_strain: f64) -> Self {
+        Self {
+            critical_strain,
+            breaks: true,
+            smooth: true,
+            plastic_strain: None,
+            normalize: false,
+        }
+    }
+
+    /// The first value the model cannot use.
+    pub fn check(&self) -> Result<(), BondFailureError> {
+        let eps_c = self.critical_strain;
+        if !(eps_c.is_finite() && eps_c > 0.0) {
+            return Err(BondFailureError::CriticalStrain(eps_c));
+        }
+        if let Some(eps_p) = self.plastic_strain {
+            if !(eps_p.is_finite() && eps_p > 0.0) {
+                return Err(BondFailureError::PlasticStrain(eps_p));
+            }
+            if eps_p >= eps_c {
+                return Err(BondFailureError::YieldsAfterBreaking {
+                    plastic: eps_p,
+                    critical: eps_c,
+                });
+            }
+        }
+        if self.smooth && !self.breaks {
+            return Err(BondFailureError::SmoothWithoutBreaking);
+        }
+        Ok(())
+    }
+
+    /// Whether bonds behave differently from elastic ones at all: they
+    /// break, yield or have a spring in strain.
+    pub fn is_live(&self) -> bool {
+        self.breaks || self.plastic_strain.is_some() || self.normalize
+    }
+}
+
+/// A bond's plastic strain after it reaches strain `e`, from `e_p`: moved
+/// just enough that `|e - e_p| <= eps_p`.
+#[inline(always)]
+pub fn plastic_strain_after(e: f64, e_p: f64, eps_p: f64) -> f64 {
+    if e > e_p + eps_p {
+        e - eps_p
+    } else if e < e_p - eps_p {
+        e + eps_p
+    } else {
+        e_p
+    }
+}
+
+/// The smoothing factor `1 - (e / eps_c)^8`, from `1 / eps_c` (a product
+/// where upstream divides: the same to round-off, and cheaper).
+#[inline(always)]
+pub fn smoothing(e: f64, inverse_critical_strain: f64) -> f64 {
+    let s = e * inverse_critical_strain;
+    let s2 = s * s;
+    let s4 = s2 * s2;
+    1.0 - s4 * s4
+}
+
+/// One bond's force magnitude along `+n` on atom `i` (positive pushes
+/// apart), or `None` if it breaks at length `r`; updates its plastic
+/// strain `e_p` first. `dilation` is `D_ij` if the multibody term is on;
+/// `damping` is the damping force `Gamma (n . dv)`, formed by the caller as
+/// its elastic kernel forms it, so that an unyielded, unsmoothed bond gets
+/// that kernel's force bit for bit.
+#[inline(always)]
+pub fn failing_bond_force(
+    r: f64,
+    r0: f64,
+    e_p: &mut f64,
+    dilation: Option<f64>,
+    damping: f64,
+    c: &BondCoeffs,
+    rule: &BondFailure,
+) -> Option<f64> {
+    let e = (r - r0) * reciprocal(r0);
+    if rule.breaks && e.abs() > rule.critical_strain {
+        return None;
+    }
+    if let Some(eps_p) = rule.plastic_strain {
+        *e_p = plastic_strain_after(e, *e_p, eps_p);
+    }
+    let r_eq = r0 * (1.0 + *e_p);
+    let mut f = if rule.normalize {
+        -c.k * (e - *e_p)
+    } else {
+        -c.k * (r - r_eq)
+    };
+    if let Some(d) = dilation {
+        f += c.a * (d - r * reciprocal(r_eq));
+    }
+    f -= damping;
+    if rule.smooth {
+        f *= smoothing(e, 1.0 / rule.critical_strain);
+    }
+    Some(f)
+}
+
+/// What a pass over failing bonds found besides forces.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct FailurePass {
+    /// Energy, virial and the first row out of range.
+    pub pass: ForcePass,
+    /// Rows that broke in this pass (marked in their force rows).
+    pub broken: usize,
+    /// Rows whose plastic strain changed in this pass.
+    pub yielded: usize,
+}
+
+impl FailurePass {
+    /// This pass followed by `later`.
+    pub fn merged(&self, later: &Self) -> Self {
+        Self {
+            pass: self.pass.merged(&later.pass),
+            broken: self.broken + later.broken,
+            yielded: self.yielded + later.yielded,
+        }
+    }
+}
+
+/// Whether a force row from [`failing_row_forces`] belongs to a bond that
+/// broke in that pass.
+#[inline(always)]
+pub fn row_broke(row: &[f64; 4]) -> bool {
+    row[3].is_nan()
+}
+
+/// [`super::row_forces`] for bonds that break and yield.
+///
+/// Each row of `out` carries its bond's plastic strain `e_p` in its fourth
+/// value, which the gathers ignore: read on entry, updated on exit. A row
+/// whose bond breaks gets zero force and `NaN` there ([`row_broke`]); the
+/// engine removes such bonds before the next pass. With the multibody
+/// term, the rows' reference volumes are those of the rest lengths
+/// ([`gather_rest_volumes`], [`BondRows::set_reference_volumes`]). Runs on
+/// the widest instruction set this processor has; every build gives the
+/// same rows and sums bit for bit.
+pub fn failing_row_forces<S: Separation>(
+    sep: &S,
+    rows: &BondRows,
+    range: Range<usize>,
+    inputs: &RowInputs,
+    rule: &BondFailure,
+    out: &mut [[f64; 4]],
+) -> FailurePass {
+    failing_row_forces_on(Isa::detect(), sep, rows, range, inputs, rule, out)
+}
+
+/// [`failing_row_forces`] compiled for `isa` (the portable build when this
+/// processor lacks it).
+pub fn failing_row_forces_on<S: Separation>(
+    isa: Isa,
+    sep: &S,
+    rows: &BondRows,
+    range: Range<usize>,
+    inputs: &RowInputs,
+    rule: &BondFailure,
+    out: &mut [[f64; 4]],
+) -> FailurePass {
+    rows.check_inputs(&range, out.len(), inputs);
+    let pass = FailingPass {
+        sep,
+        rows,
+        inputs,
+        rule,
+    };
+    let flags = (
+        inputs.multibody.is_some(),
+        inputs.v.is_some(),
+        inputs.tally,
+        rule.plastic_strain.is_some(),
+    );
+    macro_rules! dispatch {
+        ($($mb:literal, $damped:literal, $tally:literal, $plastic:literal);*) => {
+            match flags {
+                $(($mb, $damped, $tally, $plastic) => {
+                    pass.rows_on::<$mb, $damped, $tally, $plastic>(isa, range, out)
+                })*
+            }
+        };
+    }
+    dispatch!(
+        true, true, true, true; true, true, false, true; true, false, true, true;
+        true, false, false, true; false, true, true, true; false, true, false, true;
+        false, false, true, true; false, false, false, true;
+        true, true, true, false; true, true, false, false; true, false, true, false;
+        true, false, false, false; false, true, true, false; false, true, false, false;
+        false, false, true, false; false, false, false, false
+    )
+}
+
+/// What a failing pass reads.
+struct FailingPass<'a, S> {
+    sep: &'a S,
+    rows: &'a BondRows,
+    inputs: &'a RowInputs<'a>,
+    rule: &'a BondFailure,
+}
+
+/// One intact row: its force, its rest length and its new plastic strain.
+struct IntactRow {
+    force: RowForce,
+    rest: f64,
+    e_p: f64,
+}
+
+impl<S: Separation> FailingPass<'_, S> {
+    /// Rows `range` into `out`: blocks of four with their energy and
+    /// virial summed in lanes (as the elastic pass does), then the last
+    /// rows one by one.
+    #[inline(always)]
+    fn rows_on<const MB: bool, const DAMPED: bool, const TALLY: bool, const PLASTIC: bool>(
+        &self,
+        isa: Isa,
+        range: Range<usize>,
+        out: &mut [[f64; 4]],
+    ) -> FailurePass {
+        let full = range.len() / 4 * 4;
+        let mut lanes = LaneTally::default();
+        let blocks = range.start..range.start + full;
+        let mut result =
+            self.blocks::<MB, DAMPED, TALLY, PLASTIC>(isa, blocks, &mut out[..full], &mut lanes);
+        if TALLY {
+            result.pass.tally = lanes.total();
+        }
+        for (k, out) in out.iter_mut().enumerate().skip(full) {
+            let row = range.start + k;
+            let e_p = out[3];
+            match self.row::<MB, DAMPED>(row, e_p) {
+                Some(intact) => {
+                    settle_checked_row::<TALLY>(
+                        self.rows,
+                        row,
+                        intact.rest,
+                        &intact.force,
+                        &mut result.pass,
+                        out,
+                    );
+                    result.yielded += usize::from(intact.e_p != e_p);
+                    out[3] = intact.e_p;
+                }
+                None => {
+                    *out = BROKEN_ROW;
+                    result.broken += 1;
+                }
+            }
+        }
+        result
+    }
+
+    #[inline(always)]
+    fn blocks<const MB: bool, const DAMPED: bool, const TALLY: bool, const PLASTIC: bool>(
+        &self,
+        isa: Isa,
+        range: Range<usize>,
+        out: &mut [[f64; 4]],
+        lanes: &mut LaneTally,
+    ) -> FailurePass {
+        #[cfg(target_arch = "x86_64")]
+        if isa == Isa::Avx2 && Isa::Avx2.available() {
+            // SAFETY: the processor has AVX2; indices were checked by the
+            // layout and lengths by the caller.
+            return unsafe {
+                avx2::failing_blocks::<S, MB, DAMPED, TALLY, PLASTIC>(self, range, out, lanes)
+            };
+        }
+        let _ = isa;
+        let mut result = FailurePass::default();
+        for (k, out) in out.iter_mut().enumerate() {
+            let row = range.start + k;
+            let e_p = out[3];
+            match self.row::<MB, DAMPED>(row, e_p) {
+                Some(intact) => {
+                    settle_checked_row::<false>(
+                        self.rows,
+                        row,
+                        intact.rest,
+                        &intact.force,
+                        &mut result.pass,
+                        out,
+                    );
+                    result.yielded += usize::from(intact.e_p != e_p);
+                    out[3] = intact.e_p;
+                    if TALLY {
+                        lanes.add(k % 4, &intact.force);
+                    }
+                }
+                None => {
+                    *out = BROKEN_ROW;
+                    result.broken += 1;
+                }
+            }
+        }
+        result
+    }
+
+    /// Row `row` with plastic strain `e_p`, or `None` if it breaks.
+    #[inline(always)]
+    fn row<const MB: bool, const DAMPED: bool>(&self, row: usize, e_p: f64) -> Option<IntactRow> {
+        let (rows, inputs) = (self.rows, self.inputs);
+        let (i, j) = rows.atoms(row);
+        let r0 = rows.r0(row);
+        let c = &inputs.coeffs;
+        let x = inputs.x;
+        let del = self.sep.delta(&x[i], &x[j]);
+        let r = match inputs.multibody {
+            Some((_, lengths)) if MB => lengths[row][0],
+            _ => (del[0] * del[0] + del[1] * del[1] + del[2] * del[2]).sqrt(),
+        };
+        let rinv = 1.0 / r;
+        let dilation = if MB {
+            let vol = inputs.multibody.map_or(&[][..], |m| m.0);
+            Some(cube_root((vol[i] + vol[j]) * rows.inv_v0sum(row)))
+        } else {
+            None
+        };
+        let damping = if DAMPED {
+            let v = inputs.v.unwrap_or(&[]);
+            let dv = [v[i][0] - v[j][0], v[i][1] - v[j][1], v[i][2] - v[j][2]];
+            let del_dot_dv = del[0] * dv[0] + del[1] * dv[1] + del[2] * dv[2];
+            c.gamma * del_dot_dv * rinv
+        } else {
+            0.0
+        };
+        let mut e_p = e_p;
+        let fmag = failing_bond_force(r, r0, &mut e_p, dilation, damping, c, self.rule)?;
+        let rest = r0 * (1.0 + e_p);
+        let stretch = r - rest;
+        Some(IntactRow {
+            force: RowForce {
+                del,
+                r,
+                fpair: fmag * rinv,
+                energy: 0.5 * c.k * stretch * stretch,
+            },
+            rest,
+            e_p,
+        })
+    }
+}
+
+/// The force row of a bond that broke ([`row_broke`]).
+const BROKEN_ROW: [f64; 4] = [0.0, 0.0, 0.0, f64::NAN];
+
+/// Sets `vol0[p]` for each particle `p` of `particles` (`vol0` holds
+/// exactly those) to the sum of its rows' `r_eq^3`, with each row's plastic
+/// strain read from the fourth value of its force row (`forces`, as
+/// [`failing_row_forces`] leaves them), in row order.
+pub fn gather_rest_volumes(
+    rows: &BondRows,
+    particles: Range<usize>,
+    forces: &[[f64; 4]],
+    vol0: &mut [f64],
+) {
+    assert!(
+        particles.end <= rows.particles()
+            && vol0.len() == particles.len()
+            && forces.len() == rows.len(),
+        "rest volumes of particles {particles:?} into {} from {} rows",
+        vol0.len(),
+        forces.len()
+    );
+    let incidence = rows.incidence();
+    for (p, out) in particles.zip(vol0.iter_mut()) {
+        *out = incidence.of(p).iter().fold(0.0, |sum, &e| {
+            let row = (e & !AS_J) as usize;
+            let r_eq = rows.r0(row) * (1.0 + forces[row][3]);
+            sum + r_eq * r_eq * r_eq
+        });
+    }
+}
+
+#[cfg(target_arch = "x86_64")]
+mod avx2 {
+    //! Four rows at a time, as the elastic pass's vector build; the rule's
+    //! choices are blends, so every lane computes what
+    //! [`failing_bond_force`] computes, operation by operation.
+
+    use super::super::bond_rows::avx2::differences;
+    use super::super::bond_rows::avx2::{
+        cube_roots, dot, lengths_of, separations, to_rows_with, LaneImage,
+    };
+    use super::super::fault::{Fault, COLLAPSED_BELOW, OVERSTRETCHED_ABOVE};
+    use super::*;
+    use std::arch::x86_64::*;
+
+    #[target_feature(enable = "avx2")]
+    pub(super) unsafe fn failing_blocks<
+        S: Separation,
+        const MB: bool,
+        const DAMPED: bool,
+        const TALLY: bool,
+        const PLASTIC: bool,
+    >(
+        pass: &FailingPass<'_, S>,
+        range: Range<usize>,
+        out: &mut [[f64; 4]],
+        lanes: &mut LaneTally,
+    ) -> FailurePass {
+        let FailingPass {
+            sep,
+            rows,
+            inputs,
+            rule,
+        } = *pass;
+        let c = &inputs.coeffs;
+        let (neg_k, a, gamma, half_k) = (
+            _mm256_set1_pd(-c.k),
+            _mm256_set1_pd(c.a),
+            _mm256_set1_pd(c.gamma),
+            _mm256_set1_pd(0.5 * c.k),
+        );
+        let one = _mm256_set1_pd(1.0);
+        let critical = _mm256_set1_pd(rule.critical_strain);
+        let inverse_critical = _mm256_set1_pd(1.0 / rule.critical_strain);
+        let plastic = _mm256_set1_pd(rule.plastic_strain.unwrap_or(0.0));
+        let magnitude = _mm256_castsi256_pd(_mm256_set1_epi64x(i64::MAX));
+        let (collapsed, torn) = (
+            _mm256_set1_pd(COLLAPSED_BELOW),
+            _mm256_set1_pd(OVERSTRETCHED_ABOVE),
+        );
+        let infinity = _mm256_set1_pd(f64::INFINITY);
+        let image = sep.minimum_image().map(|m| LaneImage::new(m));
+        let mut result = FailurePass::default();
+        let mut sums = [_mm256_setzero_pd(); 7];
+        if TALLY {
+            for (sum, lane) in sums.iter_mut().zip(&lanes.sums) {
+                *sum = _mm256_loadu_pd(lane.as_ptr());
+            }
+        }
+        for k in (0..range.len()).step_by(4) {
+            let row = range.start + k;
+            let (i, j) = (&rows.i[row..row + 4], &rows.j[row..row + 4]);
+            let del = separations(sep, image.as_ref(), inputs.x, i, j);
+            let r0 = _mm256_loadu_pd(rows.r0.as_ptr().add(row));
+            let inv_r0 = _mm256_loadu_pd(rows.inv_r0.as_ptr().add(row));
+            let r = match inputs.multibody {
+                Some((_, lengths)) if MB => lengths_of(lengths.as_ptr().add(row)),
+                _ => _mm256_sqrt_pd(dot(&del, &del)),
+            };
+            let rinv = _mm256_div_pd(one, r);
+            let elongation = _mm256_sub_pd(r, r0);
+            let e = _mm256_mul_pd(elongation, inv_r0);
+            let broken = if rule.breaks {
+                _mm256_cmp_pd::<_CMP_GT_OQ>(_mm256_and_pd(e, magnitude), critical)
+            } else {
+                _mm256_setzero_pd()
+            };
+            let dst = out.as_mut_ptr().add(k) as *mut f64;
+            // Without yielding, e_p stays 0: the rest length is r0, bit
+            // for bit what (1 + 0) r0 gives.
+            let (e_p, rest, stretch) = if PLASTIC {
+                let mut e_p = _mm256_setr_pd(*dst.add(3), *dst.add(7), *dst.add(11), *dst.add(15));
+                let before = e_p;
+                let above = _mm256_cmp_pd::<_CMP_GT_OQ>(e, _mm256_add_pd(e_p, plastic));
+                let below = _mm256_cmp_pd::<_CMP_LT_OQ>(e, _mm256_sub_pd(e_p, plastic));
+                e_p = _mm256_blendv_pd(e_p, _mm256_sub_pd(e, plastic), above);
+                e_p = _mm256_blendv_pd(e_p, _mm256_add_pd(e, plastic), below);
+                let moved = _mm256_andnot_pd(broken, _mm256_cmp_pd::<_CMP_NEQ_OQ>(e_p, before));
+                result.yielded += _mm256_movemask_pd(moved).count_ones() as usize;
+                let rest = _mm256_mul_pd(r0, _mm256_add_pd(one, e_p));
+                (e_p, rest, _mm256_sub_pd(r, rest))
+            } else {
+                (_mm256_setzero_pd(), r0, elongation)
+            };
+            let mut fmag = if rule.normalize {
+                _mm256_mul_pd(neg_k, _mm256_sub_pd(e, e_p))
+            } else {
+                _mm256_mul_pd(neg_k, stretch)
+            };
+            if MB {
+                let vol = inputs.multibody.map_or(&[][..], |m| m.0);
+                let idx_i = _mm_loadu_si128(i.as_ptr() as *const __m128i);
+                let idx_j = _mm_loadu_si128(j.as_ptr() as *const __m128i);
+                let vsum = _mm256_add_pd(
+                    _mm256_i32gather_pd::<8>(vol.as_ptr(), idx_i),
+                    _mm256_i32gather_pd::<8>(vol.as_ptr(), idx_j),
+                );
+                let inv_v0sum = _mm256_loadu_pd(rows.inv_v0sum.as_ptr().add(row));
+                let q = _mm256_mul_pd(vsum, inv_v0sum);
+                let dilation = cube_roots(q, _mm256_sub_pd(q, one));
+                let inv_rest = if PLASTIC {
+                    _mm256_div_pd(one, rest)
+                } else {
+                    inv_r0
+                };
+                fmag = _mm256_add_pd(
+                    fmag,
+                    _mm256_mul_pd(a, _mm256_sub_pd(dilation, _mm256_mul_pd(r, inv_rest))),
+                );
+            }
+            if DAMPED {
+                let dv = differences(inputs.v.unwrap_or(&[]), i, j);
+                let del_dot_dv = dot(&del, &dv);
+                fmag = _mm256_sub_pd(fmag, _mm256_mul_pd(_mm256_mul_pd(gamma, del_dot_dv), rinv));
+            }
+            if rule.smooth {
+                let s = _mm256_mul_pd(e, inverse_critical);
+                let s2 = _mm256_mul_pd(s, s);
+                let s4 = _mm256_mul_pd(s2, s2);
+                fmag = _mm256_mul_pd(fmag, _mm256_sub_pd(one, _mm256_mul_pd(s4, s4)));
+            }
+            let intact = _mm256_andnot_pd(broken, _mm256_castsi256_pd(_mm256_set1_epi64x(-1)));
+            let fpair = _mm256_and_pd(_mm256_mul_pd(fmag, rinv), intact);
+            // Broken rows: +0, as the scalar build writes them.
+            let force = [
+                _mm256_and_pd(_mm256_mul_pd(del[0], fpair), intact),
+                _mm256_and_pd(_mm256_mul_pd(del[1], fpair), intact),
+                _mm256_and_pd(_mm256_mul_pd(del[2], fpair), intact),
+            ];
+            let fourth = _mm256_blendv_pd(e_p, _mm256_set1_pd(f64::NAN), broken);
+            let force_rows = to_rows_with(force[0], force[1], force[2], fourth);
+            for (l, fr) in force_rows.into_iter().enumerate() {
+                _mm256_storeu_pd(dst.add(4 * l), fr);
+            }
+            let broken_lanes = _mm256_movemask_pd(broken);
+            result.broken += broken_lanes.count_ones() as usize;
+            if TALLY {
+                let energy = _mm256_and_pd(
+                    _mm256_mul_pd(_mm256_mul_pd(half_k, stretch), stretch),
+                    intact,
+                );
+                let terms = [
+                    energy,
+                    _mm256_mul_pd(force[0], del[0]),
+                    _mm256_mul_pd(force[1], del[1]),
+                    _mm256_mul_pd(force[2], del[2]),
+                    _mm256_mul_pd(force[0], del[1]),
+                    _mm256_mul_pd(force[0], del[2]),
+                    _mm256_mul_pd(force[1], del[2]),
+                ];
+                for (sum, term) in sums.iter_mut().zip(terms) {
+                    *sum = _mm256_add_pd(*sum, term);
+                }
+            }
+            let in_range = _mm256_and_pd(
+                _mm256_and_pd(
+                    _mm256_cmp_pd::<_CMP_GT_OQ>(r, _mm256_mul_pd(collapsed, rest)),
+                    _mm256_cmp_pd::<_CMP_LT_OQ>(r, _mm256_mul_pd(torn, rest)),
+                ),
+                _mm256_cmp_pd::<_CMP_LT_OQ>(_mm256_and_pd(fpair, magnitude), infinity),
+            );
+            let faulty = !_mm256_movemask_pd(in_range) & !broken_lanes & 0b1111;
+            if faulty != 0 && result.pass.fault.is_none() {
+                let l = faulty.trailing_zeros() as usize;
+                let lane = |v: __m256d| {
+                    let mut a = [0.0; 4];
+                    _mm256_storeu_pd(a.as_mut_ptr(), v);
+                    a[l]
+                };
+                result.pass.fault = Fault::of_bond(
+                    rows.bond[row + l] as usize,
+                    rows.i[row + l] as usize,
+                    rows.j[row + l] as usize,
+                    lane(r),
+                    lane(rest),
+                    lane(fpair),
+                );
+            }
+        }
+        if TALLY {
+            for (sum, lane) in sums.iter().zip(lanes.sums.iter_mut()) {
+                _mm256_storeu_pd(lane.as_mut_ptr(), *sum);
+            }
+        }
+        result
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::kernels::{bond_force_magnitude, dilation as bond_dilation};
+
+    const COEFFS: BondCoeffs = BondCoeffs {
+        k: 2.0,
+        a: -0.5,
+        gamma: 0.3,
+    };
+
+    fn rule(eps_c: f64, eps_p: Option<f64>) -> BondFailure {
+        BondFailure {
+            plastic_strain: eps_p,
+            ..BondFailure::breaking(eps_c)
+        }
+    }
+
+    #[test]
+    fn an_unyielded_unsmoothed_bond_has_the_elastic_force_bit_for_bit() {
+        let elastic = BondFailure {
+            smooth: false,
+            ..rule(0.5, None)
+        };
+        for r in [0.8, 0.97, 1.0, 1.03, 1.4] {
+            let d = bond_dilation(1.1, 0.9, 1.0, 1.0);
+            let mut e_p = 0.0;
+            let f = failing_bond_force(r, 1.0, &mut e_p, Some(d), 0.3 * 0.2, &COEFFS, &elastic);
+            assert_eq!(
+                f,
+                Some(bond_force_magnitude(r, 1.0, d, 0.2, &COEFFS)),
+                "r = {r}"
+            );
+        }
+    }
+
+    #[test]
+    fn a_bond_breaks_just_beyond_the_critical_strain_in_both_directions() {
+        let rule = rule(0.1, None);
+        let mut e_p = 0.0;
+        for (r, breaks) in [
+            (1.0999, false),
+            (1.1001, true),
+            (0.9001, false),
+            (0.8999, true),
+        ] {
+            let f = failing_bond_force(r, 1.0, &mut e_p, None, 0.0, &COEFFS, &rule);
+            assert_eq!(f.is_none(), breaks, "r = {r}");
+        }
+        let unbreakable = BondFailure {
+            breaks: false,
+            smooth: false,
+            ..rule
+        };
+        assert!(failing_bond_force(2.0, 1.0, &mut e_p, None, 0.0, &COEFFS, &unbreakable).is_some());
+    }
+
+    #[test]
+    fn smoothing_scales_the_whole_force_and_vanishes_at_the_critical_strain() {
+        let smooth = rule(0.1, None);
+        let plain = BondFailure {
+            smooth: false,
+            ..smooth
+        };
+        let r = 1.05;
+        let (mut a, mut b) = (0.0, 0.0);
+        let d = Some(1.01);
+        let fs = failing_bond_force(r, 1.0, &mut a, d, 0.4, &COEFFS, &smooth).unwrap();
+        let fp = failing_bond_force(r, 1.0, &mut b, d, 0.4, &COEFFS, &plain).unwrap();
+        let w = 1.0 - 0.5f64.powi(8);
+        assert!((fs / fp - w).abs() < 1e-14, "{fs} / {fp} against {w}");
+        assert!(smoothing(0.1, 10.0).abs() < 1e-15 && smoothing(-0.1, 10.0).abs() < 1e-15);
+    }
+
+    #[test]
+    fn a_stretched_plastic_bond_levels_off_at_k_eps_p_r0_and_unloads_elastically() {
+        let rule = BondFailure {
+            smooth: false,
+            breaks: false,
+            ..rule(0.5, Some(0.02))
+        };
+        let c = BondCoeffs {
+            a: 0.0,
+            gamma: 0.0,
+            ..COEFFS
+        };
+        let r0 = 1.3;
+        let mut e_p = 0.0;
+        let mut last = 0.0;
+        for step in 1..=100 {
+            let r = r0 * (1.0 + 0.001 * step as f64);
+            last = failing_bond_force(r, r0, &mut e_p, None, 0.0, &c, &rule).unwrap();
+        }
+        assert!((last + c.k * 0.02 * r0).abs() < 1e-12, "plateau {last}");
+        assert!((e_p - 0.08).abs() < 1e-12, "plastic strain {e_p}");
+        let rest = r0 * (1.0 + e_p);
+        let f = failing_bond_force(rest, r0, &mut e_p, None, 0.0, &c, &rule).unwrap();
+        assert!(f.abs() < 1e-12, "force at the new rest length {f}");
+        // Compressed back by less than eps_p: elastic, e_p unchanged.
+        let f = failing_bond_force(rest - 0.01 * r0, r0, &mut e_p, None, 0.0, &c, &rule).unwrap();
+        assert!((e_p - 0.08).abs() < 1e-12 && (f - c.k * 0.01 * r0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn the_normalized_spring_is_the_length_spring_over_r0() {
+        let length = BondFailure {
+            smooth: false,
+            breaks: false,
+            ..rule(0.5, Some(0.02))
+        };
+        let strain = BondFailure {
+            normalize: true,
+            ..length
+        };
+        let c = BondCoeffs {
+            a: 0.0,
+            gamma: 0.0,
+            ..COEFFS
+        };
+        let (mut a, mut b) = (0.01, 0.01);
+        let fl = failing_bond_force(2.1, 2.0, &mut a, None, 0.0, &c, &length).unwrap();
+        let fs = failing_bond_force(2.1, 2.0, &mut b, None, 0.0, &c, &strain).unwrap();
+        assert!((fs - fl / 2.0).abs() < 1e-14, "{fs} against {fl} / 2");
+    }
+
+    #[test]
+    fn bad_values_are_refused_naming_them() {
+        let cases = [
+            (rule(0.0, None), "eps_c = 0"),
+            (rule(f64::NAN, None), "eps_c = NaN"),
+            (
+                rule(0.1, Some(0.1)),
+                "eps_p = 0.1 must be below the critical strain eps_c = 0.1",
+            ),
+            (rule(0.1, Some(-0.01)), "eps_p = -0.01"),
+            (
+                BondFailure {
+                    breaks: false,
+                    ..rule(0.1, None)
+                },
+                "smoothing needs breaking",
+            ),
+        ];
+        for (rule, expected) in cases {
+            let message = rule.check().unwrap_err().to_string();
+            assert!(message.contains(expected), "{message}");
+        }
+        assert_eq!(rule(0.1, Some(0.05)).check(), Ok(()));
+    }
+}
