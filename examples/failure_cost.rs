@@ -62,7 +62,7 @@ fn main() -> anyhow::Result<()> {
             let mut field = scene.force_field.bpm();
             field.failure = failure;
             let model = sys.model_as_mut::<BpmModel>().expect("a bonded scene");
-            model.set_coefficients(field, n);
+            model.set_force_field(field, n);
             for _ in 0..5 {
                 step += 1;
                 sys.step(&drivers, step, &stage_box)?;

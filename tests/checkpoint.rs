@@ -162,8 +162,8 @@ fn a_bonded_run_resumed_at_any_step_ends_bit_for_bit_as_without_stopping() {
 }
 
 /// The small solid pulled apart while its bonds yield at 1% and break at
-/// 3% strain: bonds leave the arrays and broken pairs become contacts
-/// between checkpoints.
+/// 3% strain (bonds leave the arrays and broken pairs become contacts
+/// between checkpoints), then held with elastic bonds.
 fn failing_scene() -> Scene {
     let (mut scene, _) = build_bulk(&BulkParams::shortened(5.0, 4, 0.0), 1, false).unwrap();
     scene.force_field = ForceField::paper(-0.5);
@@ -176,9 +176,13 @@ fn failing_scene() -> Scene {
         true_strain_rate: 1e-3,
     });
     pull.record.every = 20;
+    // The second stage's field has no failure rule: the bonds left keep
+    // their rest lengths as reference lengths, and a checkpoint must still
+    // carry the bonds that broke.
     let mut settle = StageSpec::hold("settle", 300, 0.05);
     settle.viscous = 0.1;
     settle.record.every = 20;
+    settle.force_field = Some(ForceField::paper(-0.5));
     scene.stages = vec![pull, settle];
     scene
 }
@@ -190,20 +194,44 @@ fn a_run_whose_bonds_break_and_yield_resumes_exactly() {
     let (_, error) = run_scene(&mut sys, &scene, &RunOptions::quiet(1));
     assert!(error.is_none(), "{error:?}");
     let model = sys.model_as::<bpm::engine::BpmModel>().unwrap();
-    let (broken, yielded) = (
-        model.broken_bonds().len(),
-        model
-            .plastic_strains()
-            .iter()
-            .filter(|&&e| e != 0.0)
-            .count(),
-    );
-    assert!(
-        broken > 100 && yielded > 100,
-        "{broken} broken, {yielded} yielded"
-    );
+    let broken = model.broken_bonds().len();
+    assert!(broken > 100, "{broken} broken");
+    // At the end of the pull, many bonds had yielded.
+    let mut pulled = scene.clone();
+    pulled.stages.truncate(1);
+    let mut sys = build_system(&pulled, 1);
+    let (_, error) = run_scene(&mut sys, &pulled, &RunOptions::quiet(1));
+    assert!(error.is_none(), "{error:?}");
+    let model = sys.model_as::<bpm::engine::BpmModel>().unwrap();
+    let yielded = model
+        .plastic_strains()
+        .iter()
+        .filter(|&&e| e != 0.0)
+        .count();
+    assert!(yielded > 100, "{yielded} yielded");
     assert_resumes_exactly("ck-failing", &scene, &[250, 555, 700, 701], 1);
     assert_resumes_exactly("ck-failing-2", &scene, &[333], 2);
+}
+
+#[test]
+fn a_run_whose_every_bond_broke_resumes_exactly() {
+    // Two bonded particles flying apart: the bond breaks early on, and
+    // the checkpoints after it hold no bond.
+    let scene: Scene = serde_json::from_value(serde_json::json!({
+        "seed": 1,
+        "box": {"lo": [0, 0, 0], "lengths": [12, 12, 12], "periodic": [true, true, true]},
+        "particles": {"positions": [[5, 6, 6], [6, 6, 6]], "velocities": [[-0.2, 0, 0], [0.2, 0, 0]]},
+        "bonds": {"pairs": [[0, 1]]},
+        "force_field": {
+            "bond": {"k": 1, "a": -0.5, "gamma": 0},
+            "pair": {"k": 1, "d": 1, "a": 50, "gamma": 0},
+            "bond_failure": {"critical_strain": 0.1}
+        },
+        "stages": [{"name": "fly", "steps": 400, "dt": 0.01, "record": {"every": 10}}]
+    }))
+    .unwrap();
+    bpm::scene::validate(&scene).unwrap();
+    assert_resumes_exactly("ck-all-broken", &scene, &[200, 350], 1);
 }
 
 #[test]

@@ -183,13 +183,20 @@ fn breaking_a_bond_of_a_relaxed_solid_leaves_no_multibody_force() {
     let mut reference = build_system(&without, 1);
     reference.setup(&drivers).unwrap();
     assert_eq!(after_break, reference.particles.f);
-    // With the reference volume still counting the broken bond, the two
-    // particles would feel the multibody term: the check above has teeth.
-    let mut stale = scene.clone();
-    stale.force_field.bond_failure = None;
-    let mut stale = build_system(&stale, 1);
-    stale.setup(&drivers).unwrap();
-    assert!(common::max_abs(&stale.particles.f) > 1e-3);
+    // The reference volumes are those of the bonds left, and differ from
+    // the scene's with the broken bond where it was: without the update the
+    // two particles would feel the multibody term.
+    let model = sys.model_as::<BpmModel>().unwrap();
+    let left = reference.model_as::<BpmModel>().unwrap();
+    assert_eq!(model.volumes().1, left.volumes().1);
+    let mut whole = scene.clone();
+    whole.force_field.bond_failure = None;
+    let whole = build_system(&whole, 1);
+    let with_it = whole.model_as::<BpmModel>().unwrap().volumes().1;
+    let [i, j] = scene.bonds.pairs[0];
+    for p in [i, j] {
+        assert!(with_it[p] > model.volumes().1[p], "V0 of particle {p}");
+    }
 }
 
 /// A regular tetrahedron of edge 1 flying apart radially at `speed`: every
@@ -388,4 +395,38 @@ fn a_final_scene_keeps_the_plastic_strains_and_reloads_at_rest() {
         message.contains("bonds.plastic_strain[2]") && message.contains("-1.5"),
         "{message}"
     );
+}
+
+#[test]
+fn a_run_with_failing_bonds_records_bonds_intact_and_broken() {
+    let mut scene = small_solid().clone();
+    scene.force_field = ForceField::paper(-0.5);
+    scene.force_field.bond_failure = Some(BondFailure::breaking(0.03));
+    let mut pull = StageSpec::hold("pull", 1000, 0.05);
+    pull.deformation = Some(Deformation::Isotropic {
+        true_strain_rate: 1e-3,
+    });
+    pull.record.every = 100;
+    scene.stages = vec![pull];
+    let total = scene.bonds.pairs.len() as f64;
+    let mut sys = build_system(&scene, 1);
+    let (out, error) = run_scene(&mut sys, &scene, &RunOptions::quiet(1));
+    assert!(error.is_none(), "{error:?}");
+    let (bonds, broken) = (
+        out[0].column("bonds").unwrap(),
+        out[0].column("broken_bonds").unwrap(),
+    );
+    assert_eq!(broken[0], 0.0);
+    assert!(broken.windows(2).all(|w| w[1] >= w[0]), "{broken:?}");
+    assert!(*broken.last().unwrap() > 0.0);
+    for (b, k) in bonds.iter().zip(&broken) {
+        assert_eq!(b + k, total);
+    }
+    // An elastic run records neither.
+    let mut elastic = scene.clone();
+    elastic.force_field.bond_failure = None;
+    elastic.stages[0].steps = 10;
+    let mut sys = build_system(&elastic, 1);
+    let (out, _) = run_scene(&mut sys, &elastic, &RunOptions::quiet(1));
+    assert!(out[0].column("bonds").is_none());
 }

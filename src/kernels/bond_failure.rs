@@ -58,8 +58,8 @@ fn yes() -> bool {
 /// A [`BondFailure`] the model cannot use, naming the value.
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
 pub enum BondFailureError {
-    /// `eps_c` not positive and finite.
-    #[error("the critical strain eps_c = {0} must be positive and finite")]
+    /// `eps_c` not positive and finite, or so small its reciprocal is not.
+    #[error("the critical strain eps_c = {0} must be positive and finite (and above 1e-300)")]
     CriticalStrain(f64),
     /// `eps_p` not positive and finite.
     #[error("the plastic strain eps_p = {0} must be positive and finite")]
@@ -77,8 +77,8 @@ pub enum BondFailureError {
     },
     /// Smoothing asked for without breaking (upstream refuses it too).
     #[error(
-        "smoothing needs breaking: with breaks false, set smooth false too (the smoothed \
-         force would fall to 0 at eps_c and stay there)"
+        "smoothing needs breaking: with breaks false, set smooth false too (beyond eps_c \
+         the smoothing factor turns negative and grows: the force would reverse)"
     )]
     SmoothWithoutBreaking,
 }
@@ -99,14 +99,14 @@ impl BondFailure {
     /// The first value the model cannot use.
     pub fn check(&self) -> Result<(), BondFailureError> {
         let eps_c = self.critical_strain;
-        if !(eps_c.is_finite() && eps_c > 0.0) {
+        if !(eps_c.is_finite() && eps_c > 0.0 && (1.0 / eps_c).is_finite()) {
             return Err(BondFailureError::CriticalStrain(eps_c));
         }
         if let Some(eps_p) = self.plastic_strain {
             if !(eps_p.is_finite() && eps_p > 0.0) {
                 return Err(BondFailureError::PlasticStrain(eps_p));
             }
-            if eps_p >= eps_c {
+            if self.breaks && eps_p >= eps_c {
                 return Err(BondFailureError::YieldsAfterBreaking {
                     plastic: eps_p,
                     critical: eps_c,
@@ -166,7 +166,9 @@ pub fn failing_bond_force(
     rule: &BondFailure,
 ) -> Option<f64> {
     let e = (r - r0) * reciprocal(r0);
-    if rule.breaks && e.abs() > rule.critical_strain {
+    // A bond to a particle gone to infinity is a blow-up to report, not a
+    // break.
+    if rule.breaks && e.abs() > rule.critical_strain && r < f64::INFINITY {
         return None;
     }
     if let Some(eps_p) = rule.plastic_strain {
@@ -289,10 +291,9 @@ struct FailingPass<'a, S> {
     rule: &'a BondFailure,
 }
 
-/// One intact row: its force, its rest length and its new plastic strain.
+/// One intact row: its force and its new plastic strain.
 struct IntactRow {
     force: RowForce,
-    rest: f64,
     e_p: f64,
 }
 
@@ -323,7 +324,7 @@ impl<S: Separation> FailingPass<'_, S> {
                     settle_checked_row::<TALLY>(
                         self.rows,
                         row,
-                        intact.rest,
+                        self.rows.r0(row),
                         &intact.force,
                         &mut result.pass,
                         out,
@@ -366,7 +367,7 @@ impl<S: Separation> FailingPass<'_, S> {
                     settle_checked_row::<false>(
                         self.rows,
                         row,
-                        intact.rest,
+                        self.rows.r0(row),
                         &intact.force,
                         &mut result.pass,
                         out,
@@ -414,18 +415,26 @@ impl<S: Separation> FailingPass<'_, S> {
         } else {
             0.0
         };
-        let mut e_p = e_p;
+        // Without yielding e_p is 0, whatever the row held.
+        let mut e_p = if self.rule.plastic_strain.is_some() {
+            e_p
+        } else {
+            0.0
+        };
         let fmag = failing_bond_force(r, r0, &mut e_p, dilation, damping, c, self.rule)?;
         let rest = r0 * (1.0 + e_p);
         let stretch = r - rest;
+        let mut energy = 0.5 * c.k * stretch * stretch;
+        if self.rule.normalize {
+            energy *= rows.inv_r0[row];
+        }
         Some(IntactRow {
             force: RowForce {
                 del,
                 r,
                 fpair: fmag * rinv,
-                energy: 0.5 * c.k * stretch * stretch,
+                energy,
             },
-            rest,
             e_p,
         })
     }
@@ -534,7 +543,10 @@ mod avx2 {
             let elongation = _mm256_sub_pd(r, r0);
             let e = _mm256_mul_pd(elongation, inv_r0);
             let broken = if rule.breaks {
-                _mm256_cmp_pd::<_CMP_GT_OQ>(_mm256_and_pd(e, magnitude), critical)
+                _mm256_and_pd(
+                    _mm256_cmp_pd::<_CMP_GT_OQ>(_mm256_and_pd(e, magnitude), critical),
+                    _mm256_cmp_pd::<_CMP_LT_OQ>(r, infinity),
+                )
             } else {
                 _mm256_setzero_pd()
             };
@@ -608,10 +620,11 @@ mod avx2 {
             let broken_lanes = _mm256_movemask_pd(broken);
             result.broken += broken_lanes.count_ones() as usize;
             if TALLY {
-                let energy = _mm256_and_pd(
-                    _mm256_mul_pd(_mm256_mul_pd(half_k, stretch), stretch),
-                    intact,
-                );
+                let mut energy = _mm256_mul_pd(_mm256_mul_pd(half_k, stretch), stretch);
+                if rule.normalize {
+                    energy = _mm256_mul_pd(energy, inv_r0);
+                }
+                let energy = _mm256_and_pd(energy, intact);
                 let terms = [
                     energy,
                     _mm256_mul_pd(force[0], del[0]),
@@ -621,14 +634,16 @@ mod avx2 {
                     _mm256_mul_pd(force[0], del[2]),
                     _mm256_mul_pd(force[1], del[2]),
                 ];
+                // Broken lanes add +0 (their force is masked, and so is
+                // the product with a separation that may not be finite).
                 for (sum, term) in sums.iter_mut().zip(terms) {
-                    *sum = _mm256_add_pd(*sum, term);
+                    *sum = _mm256_add_pd(*sum, _mm256_and_pd(term, intact));
                 }
             }
             let in_range = _mm256_and_pd(
                 _mm256_and_pd(
-                    _mm256_cmp_pd::<_CMP_GT_OQ>(r, _mm256_mul_pd(collapsed, rest)),
-                    _mm256_cmp_pd::<_CMP_LT_OQ>(r, _mm256_mul_pd(torn, rest)),
+                    _mm256_cmp_pd::<_CMP_GT_OQ>(r, _mm256_mul_pd(collapsed, r0)),
+                    _mm256_cmp_pd::<_CMP_LT_OQ>(r, _mm256_mul_pd(torn, r0)),
                 ),
                 _mm256_cmp_pd::<_CMP_LT_OQ>(_mm256_and_pd(fpair, magnitude), infinity),
             );
@@ -645,7 +660,7 @@ mod avx2 {
                     rows.i[row + l] as usize,
                     rows.j[row + l] as usize,
                     lane(r),
-                    lane(rest),
+                    lane(r0),
                     lane(fpair),
                 );
             }

@@ -64,7 +64,14 @@ pub fn model_of(scene: &Scene) -> Box<dyn ParticleModel> {
                 .iter()
                 .zip(reference_lengths(scene))
                 .enumerate()
-                .map(|(k, (&[i, j], r0))| (i, j, r0, strains.map_or(0.0, |e| e[k])))
+                .map(|(k, (&[i, j], r0))| {
+                    (
+                        i,
+                        j,
+                        r0,
+                        strains.and_then(|e| e.get(k)).copied().unwrap_or(0.0),
+                    )
+                })
                 .collect();
             let bonds = BondTopology::with_plastic_strains(n, &bonds);
             let ff = &scene.force_field;

@@ -9,7 +9,7 @@
 //! lists column names.
 
 use super::model::StageSpec;
-use crate::engine::{DemModel, EnergyTerm, System};
+use crate::engine::{BpmModel, DemModel, EnergyTerm, System};
 use serde::{Deserialize, Serialize};
 
 /// What a column measures.
@@ -50,6 +50,10 @@ pub enum Quantity {
     LargestCorrection,
     /// Contacts (or terms) the advanced closure switched off.
     SwitchedOff,
+    /// Bonds intact.
+    Bonds,
+    /// Bonds broken since the run began.
+    BrokenBonds,
 }
 
 /// One recorded column.
@@ -188,6 +192,21 @@ pub fn closure_columns() -> Vec<Column> {
     ]
 }
 
+/// The columns a stage adds when its bonds break or yield: bonds intact
+/// and bonds broken. The harness's LAMMPS runs refuse such scenes.
+pub fn failure_columns() -> Vec<Column> {
+    let col = |name: &str, quantity| Column {
+        name: name.into(),
+        quantity,
+        observable: "bond counts".into(),
+        lammps: None,
+    };
+    vec![
+        col("bonds", Quantity::Bonds),
+        col("broken_bonds", Quantity::BrokenBonds),
+    ]
+}
+
 /// The declaration of a column every bonded-particle stage records (box,
 /// stress, pressure, energies, step, time), by name.
 pub fn standard_column(name: &str) -> Option<Column> {
@@ -208,6 +227,7 @@ impl Column {
         let b = &sys.simbox;
         let r = &sys.report;
         let dem = sys.model_as::<DemModel>().map(DemModel::report);
+        let bpm = sys.model_as::<BpmModel>();
         match self.quantity {
             Quantity::Step => sys.step as f64,
             Quantity::Time => sys.time,
@@ -230,6 +250,8 @@ impl Column {
             Quantity::SwitchedOff => dem
                 .and_then(|d| d.closure)
                 .map_or(0.0, |c| c.switched_off as f64),
+            Quantity::Bonds => bpm.map_or(0.0, |m| m.bonds().len() as f64),
+            Quantity::BrokenBonds => bpm.map_or(0.0, |m| m.broken_bonds().len() as f64),
         }
     }
 

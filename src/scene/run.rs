@@ -4,7 +4,9 @@ use super::checkpoint::{
     CheckpointError, CheckpointOptions, Checkpointer, RunCheckpoint, StageProgress, StreamedFile,
 };
 use super::model::{Scene, StageSpec, VelocityInit};
-use super::observables::{closure_columns, column_names, native_row, stage_columns};
+use super::observables::{
+    closure_columns, column_names, failure_columns, native_row, stage_columns,
+};
 pub use super::records::{Checkpoint, StageOutput};
 use super::trajectory::{DumpWriter, Frame, ThermoWriter, TrajectoryError};
 use crate::engine::{
@@ -342,7 +344,7 @@ fn begin_stage(
     let n = sys.len();
     if let Some(ff) = &spec.force_field {
         if let Some(bpm) = sys.model_as_mut::<BpmModel>() {
-            bpm.set_coefficients(ff.bpm(), n);
+            bpm.set_force_field(ff.bpm(), n);
         } else if let (Some(dem), Some(material)) = (sys.model_as_mut::<DemModel>(), ff.granular) {
             dem.set_force_field(material, ff.multicontact);
         } else {
@@ -469,6 +471,12 @@ fn run_stage_from(
                 .is_some_and(|m| m.multicontact().is_some())
             {
                 columns.extend(closure_columns());
+            }
+            if sys
+                .model_as::<BpmModel>()
+                .is_some_and(|m| m.force_field().live_failure().is_some())
+            {
+                columns.extend(failure_columns());
             }
             if let Some(t) = out_files.thermo() {
                 t.begin_stage(index, &spec.name, &column_names(&columns))?;

@@ -216,6 +216,11 @@ fn keep_particles(scene: &Scene, keep: impl Fn(usize) -> bool) -> Scene {
         .collect();
     out.bonds.pairs = bonds.iter().map(|b| b.1).collect();
     out.bonds.r0 = Some(bonds.iter().map(|b| r0[b.0]).collect());
+    out.bonds.plastic_strain = scene
+        .bonds
+        .plastic_strain
+        .as_ref()
+        .map(|e| bonds.iter().map(|b| e[b.0]).collect());
     out
 }
 

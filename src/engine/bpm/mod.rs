@@ -143,7 +143,7 @@ pub struct BpmModel {
 /// without their exclusion.
 #[derive(Clone, Debug, Default, serde::Serialize, serde::Deserialize)]
 struct NewContacts {
-    /// The wrap count when they broke.
+    /// The wrap count (pair-list generation) the list belongs to.
     wraps: u64,
     /// `(i, [j])` with `i < j`, in the form of a pair list's rows.
     pairs: Vec<(usize, [i32; 1])>,
@@ -322,7 +322,7 @@ impl BpmModel {
             broken: Vec::new(),
             rest_volumes_stale: true,
         };
-        model.set_coefficients(field, n);
+        model.set_force_field(field, n);
         model
     }
 
@@ -330,7 +330,7 @@ impl BpmModel {
     /// re-derives the live terms and `V0`. Bonds keep their plastic
     /// strains; a field whose bonds do not yield makes each bond's rest
     /// length its reference length.
-    pub fn set_coefficients(&mut self, field: BpmForceField, n: usize) {
+    pub fn set_force_field(&mut self, field: BpmForceField, n: usize) {
         self.retire_layout();
         if field
             .live_failure()
@@ -681,9 +681,12 @@ impl BpmModel {
                 pairs: Vec::new(),
             };
         }
-        self.new_contacts
-            .pairs
-            .extend(pairs.iter().map(|&[i, j]| (i, [j as i32])));
+        // Without contacts there is no pair list to wait for.
+        if self.terms.pairs {
+            self.new_contacts
+                .pairs
+                .extend(pairs.iter().map(|&[i, j]| (i, [j as i32])));
+        }
         self.broken.extend(pairs);
         let n = self.bonds.offsets.len().saturating_sub(1);
         self.terms = BpmTerms::of(&self.field, self.bonds.is_empty());
@@ -745,7 +748,13 @@ impl ParticleModel for BpmModel {
     }
 
     fn save_state(&self) -> Result<ciborium::Value, EngineError> {
-        let failing = self.terms.failure.then(|| FailingState {
+        // Whatever changed the bonds since the scene was loaded, even if
+        // the rule is off now (every bond broke, or a later stage's field
+        // has none).
+        let changed = self.terms.failure
+            || !self.broken.is_empty()
+            || self.bonds.plastic.iter().any(|&e| e != 0.0);
+        let failing = changed.then(|| FailingState {
             bonds: self
                 .bonds
                 .entries
@@ -807,9 +816,11 @@ impl ParticleModel for BpmModel {
                 }
                 self.bonds.r0 = state.r0;
                 self.bonds.plastic.fill(0.0);
+                self.broken.clear();
+                self.new_contacts = NewContacts::default();
             }
         }
-        self.set_coefficients(state.field, n);
+        self.set_force_field(state.field, n);
         Ok(())
     }
 

@@ -35,7 +35,7 @@ use std::time::{Duration, Instant};
 const MAGIC: &[u8] = b"bpm checkpoint ";
 
 /// The layout of [`RunCheckpoint`]; raised whenever it changes.
-pub const CHECKPOINT_FORMAT: u32 = 1;
+pub const CHECKPOINT_FORMAT: u32 = 2;
 
 /// Why a checkpoint could not be written, read or used.
 #[derive(Debug, thiserror::Error)]

@@ -20,6 +20,9 @@ use std::path::Path;
 /// Time step of every pull (tau).
 const DT: f64 = 0.01;
 
+/// The bond's length at the start (d), as `pull.in` creates it.
+const R0: f64 = 1.0;
+
 /// A bond style, its coefficients and the legs of the pull.
 #[derive(Clone, Debug)]
 pub struct PullCase {
@@ -154,7 +157,7 @@ fn pull_scene(case: &PullCase) -> Scene {
     let scene = serde_json::json!({
         "seed": 1,
         "box": {"lo": [-4, -4, -4], "lengths": [8, 8, 8], "periodic": [false, false, false]},
-        "particles": {"positions": [[0, 0, 0], [1, 0, 0]]},
+        "particles": {"positions": [[0.0, 0.0, 0.0], [R0, 0.0, 0.0]]},
         "bonds": {"pairs": [[0, 1]]},
         "force_field": force_field,
         "stages": [{"name": "pull", "steps": case.steps(), "dt": DT}]
@@ -294,7 +297,7 @@ pub fn compare_pull(
     if let Some(eps_p) = case.failure.plastic_strain {
         // The end of the first leg lies on the plateau k eps_p r0.
         let end = case.legs[0].1 as usize;
-        let plateau = case.k * eps_p;
+        let plateau = case.k * eps_p * R0;
         let dev = (native.force[end] - plateau)
             .abs()
             .max((upstream.force[end] - plateau).abs())
