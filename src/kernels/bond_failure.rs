@@ -317,28 +317,32 @@ impl<S: Separation> FailingPass<'_, S> {
             result.pass.tally = lanes.total();
         }
         for (k, out) in out.iter_mut().enumerate().skip(full) {
-            let row = range.start + k;
-            let e_p = out[3];
-            match self.row::<MB, DAMPED>(row, e_p) {
-                Some(intact) => {
-                    settle_checked_row::<TALLY>(
-                        self.rows,
-                        row,
-                        self.rows.r0(row),
-                        &intact.force,
-                        &mut result.pass,
-                        out,
-                    );
-                    result.yielded += usize::from(intact.e_p != e_p);
-                    out[3] = intact.e_p;
-                }
-                None => {
-                    *out = BROKEN_ROW;
-                    result.broken += 1;
-                }
-            }
+            self.settle::<MB, DAMPED, TALLY>(range.start + k, out, &mut result);
         }
         result
+    }
+
+    /// Row `row` into `out` (its plastic strain read from and written back
+    /// to `out[3]`), counted in `result` (tallied there with `TALLY`);
+    /// returns its force if it held.
+    #[inline(always)]
+    fn settle<const MB: bool, const DAMPED: bool, const TALLY: bool>(
+        &self,
+        row: usize,
+        out: &mut [f64; 4],
+        result: &mut FailurePass,
+    ) -> Option<RowForce> {
+        let e_p = out[3];
+        let Some(intact) = self.row::<MB, DAMPED>(row, e_p) else {
+            *out = BROKEN_ROW;
+            result.broken += 1;
+            return None;
+        };
+        let r0 = self.rows.r0(row);
+        settle_checked_row::<TALLY>(self.rows, row, r0, &intact.force, &mut result.pass, out);
+        result.yielded += usize::from(intact.e_p != e_p);
+        out[3] = intact.e_p;
+        Some(intact.force)
     }
 
     #[inline(always)]
@@ -360,28 +364,9 @@ impl<S: Separation> FailingPass<'_, S> {
         let _ = isa;
         let mut result = FailurePass::default();
         for (k, out) in out.iter_mut().enumerate() {
-            let row = range.start + k;
-            let e_p = out[3];
-            match self.row::<MB, DAMPED>(row, e_p) {
-                Some(intact) => {
-                    settle_checked_row::<false>(
-                        self.rows,
-                        row,
-                        self.rows.r0(row),
-                        &intact.force,
-                        &mut result.pass,
-                        out,
-                    );
-                    result.yielded += usize::from(intact.e_p != e_p);
-                    out[3] = intact.e_p;
-                    if TALLY {
-                        lanes.add(k % 4, &intact.force);
-                    }
-                }
-                None => {
-                    *out = BROKEN_ROW;
-                    result.broken += 1;
-                }
+            let force = self.settle::<MB, DAMPED, false>(range.start + k, out, &mut result);
+            if let Some(force) = force.filter(|_| TALLY) {
+                lanes.add(k % 4, &force);
             }
         }
         result
