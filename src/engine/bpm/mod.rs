@@ -10,7 +10,7 @@
 //!
 //! Bonds that break ([`BondFailure`]) leave the bond arrays at the end of
 //! the step in which they break; their particles then interact through the
-//! contact law from the next step, through a short list of new contacts
+//! contact law from the next force evaluation, through a short list of new contacts
 //! until the pair list is next rebuilt without their exclusion. The
 //! volume proxies `V` and `V0` sum over intact bonds, and `V0` over their
 //! rest lengths (docs/model.md, "Breaking and yielding").
