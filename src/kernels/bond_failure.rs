@@ -464,9 +464,9 @@ mod avx2 {
 
     use super::super::bond_rows::avx2::differences;
     use super::super::bond_rows::avx2::{
-        cube_roots, dot, lengths_of, separations, to_rows_with, LaneImage,
+        cube_roots, dot, in_range, lengths_of, separations, tally_terms, to_rows_with, LaneImage,
     };
-    use super::super::fault::{Fault, COLLAPSED_BELOW, OVERSTRETCHED_ABOVE};
+    use super::super::fault::Fault;
     use super::*;
     use std::arch::x86_64::*;
 
@@ -501,10 +501,6 @@ mod avx2 {
         let inverse_critical = _mm256_set1_pd(1.0 / rule.critical_strain);
         let plastic = _mm256_set1_pd(rule.plastic_strain.unwrap_or(0.0));
         let magnitude = _mm256_castsi256_pd(_mm256_set1_epi64x(i64::MAX));
-        let (collapsed, torn) = (
-            _mm256_set1_pd(COLLAPSED_BELOW),
-            _mm256_set1_pd(OVERSTRETCHED_ABOVE),
-        );
         let infinity = _mm256_set1_pd(f64::INFINITY);
         let image = sep.minimum_image().map(|m| LaneImage::new(m));
         let mut result = FailurePass::default();
@@ -609,30 +605,13 @@ mod avx2 {
                 if rule.normalize {
                     energy = _mm256_mul_pd(energy, inv_r0);
                 }
-                let energy = _mm256_and_pd(energy, intact);
-                let terms = [
-                    energy,
-                    _mm256_mul_pd(force[0], del[0]),
-                    _mm256_mul_pd(force[1], del[1]),
-                    _mm256_mul_pd(force[2], del[2]),
-                    _mm256_mul_pd(force[0], del[1]),
-                    _mm256_mul_pd(force[0], del[2]),
-                    _mm256_mul_pd(force[1], del[2]),
-                ];
                 // Broken lanes add +0 (their force is masked, and so is
                 // the product with a separation that may not be finite).
-                for (sum, term) in sums.iter_mut().zip(terms) {
+                for (sum, term) in sums.iter_mut().zip(tally_terms(energy, &force, &del)) {
                     *sum = _mm256_add_pd(*sum, _mm256_and_pd(term, intact));
                 }
             }
-            let in_range = _mm256_and_pd(
-                _mm256_and_pd(
-                    _mm256_cmp_pd::<_CMP_GT_OQ>(r, _mm256_mul_pd(collapsed, r0)),
-                    _mm256_cmp_pd::<_CMP_LT_OQ>(r, _mm256_mul_pd(torn, r0)),
-                ),
-                _mm256_cmp_pd::<_CMP_LT_OQ>(_mm256_and_pd(fpair, magnitude), infinity),
-            );
-            let faulty = !_mm256_movemask_pd(in_range) & !broken_lanes & 0b1111;
+            let faulty = !_mm256_movemask_pd(in_range(r, r0, fpair)) & !broken_lanes & 0b1111;
             if faulty != 0 && result.pass.fault.is_none() {
                 let l = faulty.trailing_zeros() as usize;
                 let lane = |v: __m256d| {

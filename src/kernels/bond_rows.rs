@@ -1067,12 +1067,6 @@ pub(super) mod avx2 {
             _mm256_set1_pd(0.5 * c.k),
         );
         let one = _mm256_set1_pd(1.0);
-        let (collapsed, torn) = (
-            _mm256_set1_pd(COLLAPSED_BELOW),
-            _mm256_set1_pd(OVERSTRETCHED_ABOVE),
-        );
-        let infinity = _mm256_set1_pd(f64::INFINITY);
-        let magnitude = _mm256_castsi256_pd(_mm256_set1_epi64x(i64::MAX));
         let image = sep.minimum_image().map(|m| LaneImage::new(m));
         let mut fault = None;
         let full = range.len();
@@ -1130,27 +1124,11 @@ pub(super) mod avx2 {
             }
             if TALLY {
                 let energy = _mm256_mul_pd(_mm256_mul_pd(half_k, dstretch), dstretch);
-                let terms = [
-                    energy,
-                    _mm256_mul_pd(force[0], del[0]),
-                    _mm256_mul_pd(force[1], del[1]),
-                    _mm256_mul_pd(force[2], del[2]),
-                    _mm256_mul_pd(force[0], del[1]),
-                    _mm256_mul_pd(force[0], del[2]),
-                    _mm256_mul_pd(force[1], del[2]),
-                ];
-                for (sum, term) in sums.iter_mut().zip(terms) {
+                for (sum, term) in sums.iter_mut().zip(tally_terms(energy, &force, &del)) {
                     *sum = _mm256_add_pd(*sum, term);
                 }
             }
-            let in_range = _mm256_and_pd(
-                _mm256_and_pd(
-                    _mm256_cmp_pd::<_CMP_GT_OQ>(r, _mm256_mul_pd(collapsed, r0)),
-                    _mm256_cmp_pd::<_CMP_LT_OQ>(r, _mm256_mul_pd(torn, r0)),
-                ),
-                _mm256_cmp_pd::<_CMP_LT_OQ>(_mm256_and_pd(fpair, magnitude), infinity),
-            );
-            if _mm256_movemask_pd(in_range) != 0b1111 && fault.is_none() {
+            if _mm256_movemask_pd(in_range(r, r0, fpair)) != 0b1111 && fault.is_none() {
                 for l in 0..4 {
                     let force = scalar_row::<S, MB, DAMPED>(sep, rows, row + l, inputs);
                     let mut scratch = [0.0; 4];
@@ -1169,6 +1147,54 @@ pub(super) mod avx2 {
             }
         }
         fault
+    }
+
+    /// A block's energy and virial terms, in [`LaneTally`]'s order.
+    #[target_feature(enable = "avx2")]
+    #[inline]
+    pub(in crate::kernels) unsafe fn tally_terms(
+        energy: __m256d,
+        force: &[__m256d; 3],
+        del: &[__m256d; 3],
+    ) -> [__m256d; 7] {
+        [
+            energy,
+            _mm256_mul_pd(force[0], del[0]),
+            _mm256_mul_pd(force[1], del[1]),
+            _mm256_mul_pd(force[2], del[2]),
+            _mm256_mul_pd(force[0], del[1]),
+            _mm256_mul_pd(force[0], del[2]),
+            _mm256_mul_pd(force[1], del[2]),
+        ]
+    }
+
+    /// Lanes whose length `r` lies between [`COLLAPSED_BELOW`] and
+    /// [`OVERSTRETCHED_ABOVE`] times `reference` and whose `fpair` is
+    /// finite: the fault check of [`super::settle_checked_row`].
+    #[target_feature(enable = "avx2")]
+    #[inline]
+    pub(in crate::kernels) unsafe fn in_range(
+        r: __m256d,
+        reference: __m256d,
+        fpair: __m256d,
+    ) -> __m256d {
+        let magnitude = _mm256_castsi256_pd(_mm256_set1_epi64x(i64::MAX));
+        _mm256_and_pd(
+            _mm256_and_pd(
+                _mm256_cmp_pd::<_CMP_GT_OQ>(
+                    r,
+                    _mm256_mul_pd(_mm256_set1_pd(COLLAPSED_BELOW), reference),
+                ),
+                _mm256_cmp_pd::<_CMP_LT_OQ>(
+                    r,
+                    _mm256_mul_pd(_mm256_set1_pd(OVERSTRETCHED_ABOVE), reference),
+                ),
+            ),
+            _mm256_cmp_pd::<_CMP_LT_OQ>(
+                _mm256_and_pd(fpair, magnitude),
+                _mm256_set1_pd(f64::INFINITY),
+            ),
+        )
     }
 
     #[target_feature(enable = "avx2")]
