@@ -26,15 +26,14 @@ fn main() {
              or set BPM_LAMMPS_INCLUDE"
         );
     }
-    let sources = [
-        "bond_bpm_multibody.cpp",
-        "pair_bpm_contact.cpp",
-        "fix_bpm_reference.cpp",
-        "pair_bpm_granular.cpp",
-        "fix_bpm_contacts.cpp",
-        "fix_bpm_granular_wall.cpp",
-        "bpm_plugin.cpp",
-    ];
+    // Every source and header of the shim: the plugin build scripts take
+    // the same folder whole.
+    let mut shim: Vec<_> = std::fs::read_dir("lammps-plugin")
+        .expect("lammps-plugin/ is part of the crate")
+        .filter_map(|entry| entry.ok().map(|e| e.path()))
+        .filter(|path| path.extension().is_some_and(|x| x == "cpp" || x == "h"))
+        .collect();
+    shim.sort();
     let mut build = cc::Build::new();
     build
         .cpp(true)
@@ -45,23 +44,12 @@ fn main() {
         .include(format!("{mpi_include}/openmpi"))
         .warnings(false)
         .flag_if_supported("-Wno-unused-parameter");
-    for s in sources {
-        let path = format!("lammps-plugin/{s}");
-        println!("cargo:rerun-if-changed={path}");
-        build.file(path);
-    }
-    for h in [
-        "bpm_kernels.h",
-        "fmt_compat.h",
-        "bond_bpm_multibody.h",
-        "pair_bpm_contact.h",
-        "fix_bpm_reference.h",
-        "pair_bpm_granular.h",
-        "fix_bpm_contacts.h",
-        "fix_bpm_granular_wall.h",
-        "fault_message.h",
-    ] {
-        println!("cargo:rerun-if-changed=lammps-plugin/{h}");
+    println!("cargo:rerun-if-changed=lammps-plugin");
+    for path in shim {
+        println!("cargo:rerun-if-changed={}", path.display());
+        if path.extension().is_some_and(|x| x == "cpp") {
+            build.file(path);
+        }
     }
     build.compile("bpm_lammps_shim");
 

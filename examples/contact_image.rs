@@ -67,6 +67,7 @@ fn main() -> anyhow::Result<()> {
         coeffs: &coeffs,
         special: [1.0; 4],
         tally: false,
+        damping_taper: false,
     };
     let n = x.len();
     let touching = (0..n)

@@ -67,6 +67,48 @@ int bpm_bond_forces(const double *x, const double *v, int64_t nall, const bpm_bo
                     const double *vol, const double *vol0, int64_t n_owned, int32_t newton, double *f,
                     bpm_tally *tally, bpm_fault *fault);
 
+/* Bonds that break and yield (bond styles bpm/spring/rs and
+ * bpm/spring/plastic/rs; docs/model.md, "Breaking and yielding"): how the
+ * bonds of one type fail. A bond breaks when |r - r0| / r0 exceeds
+ * critical_strain (if breaks); smooth multiplies its force by
+ * 1 - (e / critical_strain)^8; with yields, its plastic strain e_p moves so
+ * that |e - e_p| <= plastic_strain; normalize puts the spring on strain. */
+typedef struct {
+  double critical_strain, plastic_strain;
+  int32_t breaks, smooth, normalize, yields;
+} bpm_bond_failure;
+
+/* What a failing pass found: bonds broken, bonds whose e_p moved. */
+typedef struct { int64_t broken, yielded; } bpm_failure_counts;
+
+/* BPM_OK if the model can use rule; else BPM_ERR_STOPPED and why, naming
+ * the value, in message (len bytes). */
+int bpm_check_bond_failure(const bpm_bond_failure *rule, char *message, int64_t len);
+
+/* As bpm_bond_volumes over the intact bonds (type > 0), with the rest
+ * lengths (1 + e_p) r0 in vol0 (plastic == NULL: e_p = 0); vol0 required. */
+int bpm_intact_bond_volumes(const double *x, int64_t nall, const bpm_bond_entry *bonds,
+                            int64_t nbonds, const double *r0, const double *plastic,
+                            int64_t n_owned, int32_t newton, double *vol, double *vol0);
+
+/* As bpm_bond_forces for bonds that break and yield (rules[type - 1]):
+ * entries of type 0 are skipped; a bond that breaks gets type 0 and its
+ * list index goes to broken (nbonds slots); plastic (NULL when no rule
+ * yields) holds each bond's e_p, updated; may_break == 0 keeps every bond
+ * (a run's set-up). Counts to found (if not NULL). */
+int bpm_failing_bond_forces(const double *x, const double *v, int64_t nall, bpm_bond_entry *bonds,
+                            int64_t nbonds, const double *r0, double *plastic,
+                            const bpm_bond_coeffs *coeffs, const bpm_bond_failure *rules,
+                            int64_t ncoeffs, int32_t may_break, const double *vol,
+                            const double *vol0, int64_t n_owned, int32_t newton, double *f,
+                            int32_t *broken, bpm_failure_counts *found, bpm_tally *tally,
+                            bpm_fault *fault);
+
+/* Force over distance (to fforce) and spring-proxy energy of one intact
+ * bond with plastic strain e_p, without damping or multibody term. */
+double bpm_failing_bond_single(double r, double r0, double e_p, const bpm_bond_coeffs *coeffs,
+                               const bpm_bond_failure *rule, double *fforce);
+
 /* Zero-net-multibody variant, first pass: adds each bond's multibody force
  * and a count of 1 to sums[4 i .. 4 i + 3] = (Mx, My, Mz, N) of its atoms
  * (owned ones only with newton == 0). vol, vol0: complete volumes. */
@@ -86,12 +128,15 @@ int bpm_balance_multibody(const double *x, int64_t nall, const bpm_bond_entry *b
  * firstneigh; special bits in the top two bits of each neighbour index).
  * types == NULL: every atom is type 1. coeffs is ntypes x ntypes, row-major,
  * 0-based ((ti-1) * ntypes + (tj-1)). special holds LAMMPS's special_lj[4].
+ * damping_taper != 0: the damping fades as 1 - (r/d)^8 (upstream's
+ * pair_style bpm/spring; the model's contact has no such factor).
  * Energy and virial go to tally; tally == NULL: not summed or written.
  * BPM_ERR_UNSTABLE and fault as for bpm_bond_forces (a non-finite pair force). */
 int bpm_pair_forces(const double *x, const double *v, const int32_t *types, int64_t nall,
                     int64_t ntypes, const bpm_pair_coeffs *coeffs, int64_t inum, const int32_t *ilist,
                     const int32_t *numneigh, const int32_t *const *firstneigh, const double *special,
-                    int64_t n_owned, int32_t newton, double *f, bpm_tally *tally,
+                    int32_t damping_taper, int64_t n_owned, int32_t newton, double *f,
+                    bpm_tally *tally,
                     bpm_fault *fault);
 
 /* The message for a fault (what happened at step, naming the atoms name_i and

@@ -5,11 +5,15 @@
 #include "fmt_compat.h"
 
 #include "bond_bpm_multibody.h"
+#include "bond_bpm_spring_rs.h"
+#include "fix_bpm_broken_pairs.h"
 #include "fix_bpm_contacts.h"
 #include "fix_bpm_granular_wall.h"
 #include "fix_bpm_reference.h"
+#include "fix_bpm_store_local.h"
 #include "pair_bpm_contact.h"
 #include "pair_bpm_granular.h"
+#include "pair_bpm_spring_rs.h"
 
 #include "force.h"
 #include "input.h"
@@ -23,6 +27,31 @@ using namespace LAMMPS_NS;
 static Bond *bond_creator(LAMMPS *lmp)
 {
   return new BondBPMMultibody(lmp);
+}
+
+static Bond *spring_rs_creator(LAMMPS *lmp)
+{
+  return new BondBPMSpringRS(lmp, false);
+}
+
+static Bond *spring_plastic_rs_creator(LAMMPS *lmp)
+{
+  return new BondBPMSpringRS(lmp, true);
+}
+
+static Pair *pair_spring_rs_creator(LAMMPS *lmp)
+{
+  return new PairBPMSpringRS(lmp);
+}
+
+static Fix *broken_pairs_creator(LAMMPS *lmp, int narg, char **arg)
+{
+  return new FixBPMBrokenPairs(lmp, narg, arg);
+}
+
+static Fix *store_local_creator(LAMMPS *lmp, int narg, char **arg)
+{
+  return new FixBPMStoreLocal(lmp, narg, arg);
 }
 
 static Pair *pair_creator(LAMMPS *lmp)
@@ -54,6 +83,11 @@ extern "C" void bpm_register_styles(void *handle)
 {
   auto lmp = static_cast<LAMMPS *>(handle);
   (*lmp->force->bond_map)["bpm/multibody"] = &bond_creator;
+  (*lmp->force->bond_map)["bpm/spring/rs"] = &spring_rs_creator;
+  (*lmp->force->bond_map)["bpm/spring/plastic/rs"] = &spring_plastic_rs_creator;
+  (*lmp->force->pair_map)["bpm/spring/rs"] = &pair_spring_rs_creator;
+  (*lmp->modify->fix_map)["BPM/BROKEN/PAIRS"] = &broken_pairs_creator;
+  (*lmp->modify->fix_map)["BPM/STORE/LOCAL"] = &store_local_creator;
   (*lmp->force->pair_map)["bpm/contact"] = &pair_creator;
   (*lmp->force->pair_map)["bpm/granular"] = &granular_creator;
   (*lmp->modify->fix_map)["BPM/REFERENCE"] = &fix_creator;
@@ -95,7 +129,19 @@ extern "C" void lammpsplugin_init(void *lmp, void *handle, void *regfunc)
   plugin.info = "bonded particle model bond with multibody volume term";
   plugin.creator.v1 = (lammpsplugin_factory1 *) &bond_creator;
   register_plugin(&plugin, lmp);
+  plugin.name = "bpm/spring/rs";
+  plugin.info = "upstream's bpm/spring bond (break, smooth, volume/factor) on our kernels";
+  plugin.creator.v1 = (lammpsplugin_factory1 *) &spring_rs_creator;
+  register_plugin(&plugin, lmp);
+  plugin.name = "bpm/spring/plastic/rs";
+  plugin.info = "upstream's bpm/spring/plastic bond, with volume/factor, on our kernels";
+  plugin.creator.v1 = (lammpsplugin_factory1 *) &spring_plastic_rs_creator;
+  register_plugin(&plugin, lmp);
   plugin.style = "pair";
+  plugin.name = "bpm/spring/rs";
+  plugin.info = "upstream's bpm/spring pair style on our kernels";
+  plugin.creator.v1 = (lammpsplugin_factory1 *) &pair_spring_rs_creator;
+  register_plugin(&plugin, lmp);
   plugin.name = "bpm/contact";
   plugin.info = "bonded particle model contact pair style";
   plugin.creator.v1 = (lammpsplugin_factory1 *) &pair_creator;
@@ -112,6 +158,14 @@ extern "C" void lammpsplugin_init(void *lmp, void *handle, void *regfunc)
   plugin.name = "BPM/CONTACTS";
   plugin.info = "contact rows of pair_style bpm/granular (internal)";
   plugin.creator.v2 = (lammpsplugin_factory2 *) &contacts_creator;
+  register_plugin(&plugin, lmp);
+  plugin.name = "BPM/BROKEN/PAIRS";
+  plugin.info = "broken bonds' pairs become contacts (internal)";
+  plugin.creator.v2 = (lammpsplugin_factory2 *) &broken_pairs_creator;
+  register_plugin(&plugin, lmp);
+  plugin.name = "BPM/STORE/LOCAL";
+  plugin.info = "rows of broken bonds for store/local (internal)";
+  plugin.creator.v2 = (lammpsplugin_factory2 *) &store_local_creator;
   register_plugin(&plugin, lmp);
   plugin.name = "bpm/granular/wall";
   plugin.info = "flat wall of pair_style bpm/granular (a contact of the closure)";

@@ -18,10 +18,15 @@ using namespace LAMMPS_NS;
 using namespace FixConst;
 
 FixBPMReference::FixBPMReference(LAMMPS *lmp, int narg, char **arg) :
-    Fix(lmp, narg, arg), vol(nullptr), vol0(nullptr), multibody_sums(nullptr), r0(nullptr), captured(0), nmax_vol(0),
-    nmax_sums(0), nmax_r0(0), list_built_at(-1), list_size(-1), max_r0_all(0.0), comm_sums(false)
+    Fix(lmp, narg, arg), vol(nullptr), vol0(nullptr), multibody_sums(nullptr),
+    owner("bond_style bpm/multibody"), r0(nullptr), ep(nullptr), with_plastic(false),
+    breaking(false), restored(false), restored_breaking(false), captured(0), nmax_vol(0),
+    nmax_sums(0), nmax_r0(0), slots_stale(false), list_built_at(-1), list_size(-1),
+    max_r0_all(0.0), comm_sums(false)
 {
-  if (narg != 3) error->all(FLERR, std::string("Illegal fix BPM/REFERENCE command: it takes no arguments"));
+  with_plastic = narg == 4 && strcmp(arg[3], "plastic") == 0;
+  if (narg != 3 && !with_plastic)
+    error->all(FLERR, std::string("Illegal fix BPM/REFERENCE command: it takes no arguments or 'plastic'"));
   if (!atom->molecular) error->all(FLERR, std::string("Fix BPM/REFERENCE requires an atom style with bonds"));
   stride = atom->bond_per_atom;
   restart_global = 1;
@@ -29,6 +34,7 @@ FixBPMReference::FixBPMReference(LAMMPS *lmp, int narg, char **arg) :
   create_attribute = 1;
   comm_forward = 4;    // volumes: V, V0; multibody sums: Mx, My, Mz, N
   comm_reverse = 4;
+  maxexchange = (with_plastic ? 2 : 1) * stride;
   grow_arrays(atom->nmax);
   atom->add_callback(Atom::GROW);
   atom->add_callback(Atom::RESTART);
@@ -39,6 +45,7 @@ FixBPMReference::~FixBPMReference()
   atom->delete_callback(id, Atom::GROW);
   atom->delete_callback(id, Atom::RESTART);
   memory->destroy(r0);
+  memory->destroy(ep);
   memory->destroy(vol);
   memory->destroy(vol0);
   memory->destroy(multibody_sums);
@@ -57,7 +64,7 @@ void FixBPMReference::setup_pre_force(int)
     for (int m = 0; m < atom->num_bond[i]; m++) local = std::fmax(local, r0[i][m]);
   MPI_Allreduce(&local, &max_r0_all, 1, MPI_DOUBLE, MPI_MAX, world);
   if (max_r0_all > comm->cutghostuser && max_r0_all > neighbor->cutneighmax)
-    error->all(FLERR, "bond_style bpm/multibody: a reference length (" + std::to_string(max_r0_all) +
+    error->all(FLERR, owner + ": a reference length (" + std::to_string(max_r0_all) +
                           ") exceeds the communication cutoff (" +
                           std::to_string(neighbor->cutneighmax) + "): use comm_modify cutoff");
   list_built_at = -1;
@@ -72,13 +79,14 @@ void FixBPMReference::capture()
     for (int m = 0; m < atom->num_bond[i]; m++) {
       int j = atom->map(bond_atom[i][m]);
       if (j < 0)
-        error->one(FLERR, "bond_style bpm/multibody: partner " + std::to_string(bond_atom[i][m]) +
+        error->one(FLERR, owner + ": partner " + std::to_string(bond_atom[i][m]) +
                               " of atom " + std::to_string(atom->tag[i]) +
                               " is not on this rank: the bond is longer than the communication "
                               "cutoff (use comm_modify cutoff)");
       j = domain->closest_image(i, j);
       double dx = x[i][0] - x[j][0], dy = x[i][1] - x[j][1], dz = x[i][2] - x[j][2];
       r0[i][m] = std::sqrt(dx * dx + dy * dy + dz * dz);
+      if (with_plastic) ep[i][m] = 0.0;
       if (!given.empty()) {
         tagint a = atom->tag[i], b = bond_atom[i][m];
         auto it = given.find(a < b ? std::make_pair(a, b) : std::make_pair(b, a));
@@ -142,36 +150,94 @@ int FixBPMReference::modify_param(int narg, char **arg)
 const double *FixBPMReference::bondlist_r0()
 {
   int n = neighbor->nbondlist;
-  if (list_built_at == neighbor->lastcall && list_size == n) return list_r0.data();
+  if (list_built_at == neighbor->lastcall && list_size == n) {
+    if (slots_stale) find_slots();
+    return list_r0.data();
+  }
   int **bondlist = neighbor->bondlist;
   tagint *tag = atom->tag;
-  list_r0.resize(n);
+  list_r0.assign(n, 0.0);
+  list_ep.assign(with_plastic ? n : 0, 0.0);
+  find_slots();
   for (int k = 0; k < n; k++) {
-    double value = r0_between(bondlist[k][0], bondlist[k][1]);
+    if (bondlist[k][2] <= 0) continue;
+    long slot = list_slot_i[k] >= 0 ? list_slot_i[k] : list_slot_j[k];
+    double value = slot >= 0 ? r0[0][slot] : -1.0;
     if (!(value > 0.0))
-      error->one(FLERR, "bond_style bpm/multibody: bond " + std::to_string(tag[bondlist[k][0]]) + "-" +
+      error->one(FLERR, owner + ": bond " + std::to_string(tag[bondlist[k][0]]) + "-" +
                             std::to_string(tag[bondlist[k][1]]) +
                             " has no reference length (created after the reference was taken? "
                             "use fix_modify BPM_REFERENCE reset)");
     list_r0[k] = value;
+    if (with_plastic) list_ep[k] = ep[0][slot];
   }
   list_built_at = neighbor->lastcall;
   list_size = n;
   return list_r0.data();
 }
 
+// The slots of each listed bond in its owned atoms' rows (the bond is
+// stored on one of its atoms, on both with newton_bond off).
+void FixBPMReference::find_slots()
+{
+  int n = neighbor->nbondlist;
+  int **bondlist = neighbor->bondlist;
+  list_slot_i.assign(n, -1);
+  list_slot_j.assign(n, -1);
+  for (int k = 0; k < n; k++) {
+    if (bondlist[k][2] <= 0) continue;
+    list_slot_i[k] = slot_of(bondlist[k][0], bondlist[k][1]);
+    list_slot_j[k] = slot_of(bondlist[k][1], bondlist[k][0]);
+  }
+  slots_stale = false;
+}
+
+// The flat index a * stride + m of the slot of owned atom a that holds its
+// bond to b, or -1. The rows of r0 and ep are one contiguous block.
+long FixBPMReference::slot_of(int a, int b) const
+{
+  if (a >= atom->nlocal) return -1;
+  for (int m = 0; m < atom->num_bond[a]; m++)
+    if (atom->bond_atom[a][m] == atom->tag[b]) return (long) a * stride + m;
+  return -1;
+}
+
+void FixBPMReference::store_plastic()
+{
+  if (!with_plastic) return;
+  for (size_t k = 0; k < list_ep.size(); k++) {
+    if (list_slot_i[k] >= 0) ep[0][list_slot_i[k]] = list_ep[k];
+    if (list_slot_j[k] >= 0) ep[0][list_slot_j[k]] = list_ep[k];
+  }
+}
+
+void FixBPMReference::remove_slot(int i, int m)
+{
+  int last = atom->num_bond[i] - 1;
+  r0[i][m] = r0[i][last];
+  r0[i][last] = 0.0;
+  if (with_plastic) {
+    ep[i][m] = ep[i][last];
+    ep[i][last] = 0.0;
+  }
+  slots_stale = true;
+}
+
+bool FixBPMReference::bond_values(int i, int j, double &r0_value, double &ep_value)
+{
+  long slot = slot_of(i, j);
+  if (slot < 0) slot = slot_of(j, i);
+  if (slot < 0) return false;
+  r0_value = r0[0][slot];
+  ep_value = with_plastic ? ep[0][slot] : 0.0;
+  return true;
+}
+
 double FixBPMReference::r0_between(int i, int j)
 {
-  tagint *tag = atom->tag;
-  int nlocal = atom->nlocal;
-  // The bond is stored on one of its atoms (both with newton_bond off).
-  for (int side = 0; side < 2; side++) {
-    int a = side ? j : i, b = side ? i : j;
-    if (a >= nlocal) continue;
-    for (int m = 0; m < atom->num_bond[a]; m++)
-      if (atom->bond_atom[a][m] == tag[b]) return r0[a][m];
-  }
-  return -1.0;
+  long slot = slot_of(i, j);
+  if (slot < 0) slot = slot_of(j, i);
+  return slot >= 0 ? r0[0][slot] : -1.0;
 }
 
 void FixBPMReference::clear_volumes(int nall)
@@ -281,63 +347,81 @@ void FixBPMReference::grow_arrays(int nmax)
 {
   // New rows start at 0 ("no reference length"), never at stale memory.
   memory->grow(r0, nmax, stride, "bpm/reference:r0");
+  if (with_plastic) memory->grow(ep, nmax, stride, "bpm/reference:ep");
   for (int i = nmax_r0; i < nmax; i++)
-    for (int m = 0; m < stride; m++) r0[i][m] = 0.0;
+    for (int m = 0; m < stride; m++) {
+      r0[i][m] = 0.0;
+      if (with_plastic) ep[i][m] = 0.0;
+    }
   if (nmax > nmax_r0) nmax_r0 = nmax;
 }
 
 void FixBPMReference::copy_arrays(int i, int j, int)
 {
-  for (int m = 0; m < stride; m++) r0[j][m] = r0[i][m];
+  for (int m = 0; m < stride; m++) {
+    r0[j][m] = r0[i][m];
+    if (with_plastic) ep[j][m] = ep[i][m];
+  }
 }
 
+// Per atom: r0 of its bonds, then (plastic) their e_p.
 int FixBPMReference::pack_exchange(int i, double *buf)
 {
   int n = atom->num_bond[i];
   for (int m = 0; m < n; m++) buf[m] = r0[i][m];
-  return n;
+  if (!with_plastic) return n;
+  for (int m = 0; m < n; m++) buf[n + m] = ep[i][m];
+  return 2 * n;
 }
 
 int FixBPMReference::unpack_exchange(int nlocal, double *buf)
 {
   int n = atom->num_bond[nlocal];
-  for (int m = 0; m < n; m++) r0[nlocal][m] = buf[m];
-  for (int m = n; m < stride; m++) r0[nlocal][m] = 0.0;
-  return n;
+  for (int m = 0; m < stride; m++) {
+    r0[nlocal][m] = m < n ? buf[m] : 0.0;
+    if (with_plastic) ep[nlocal][m] = m < n ? buf[n + m] : 0.0;
+  }
+  return with_plastic ? 2 * n : n;
 }
 
 int FixBPMReference::pack_restart(int i, double *buf)
 {
-  int n = atom->num_bond[i];
+  int n = pack_exchange(i, buf + 1);
   buf[0] = n + 1;    // LAMMPS convention: first value is the count including itself
-  for (int m = 0; m < n; m++) buf[m + 1] = r0[i][m];
   return n + 1;
 }
 
+// A file written without e_p (elastic styles) leaves them at 0.
 void FixBPMReference::unpack_restart(int nlocal, int nth)
 {
   double **extra = atom->extra;
   int m = 0;
   for (int k = 0; k < nth; k++) m += static_cast<int>(extra[nlocal][m]);
-  int n = static_cast<int>(extra[nlocal][m]) - 1;
-  for (int b = 0; b < n && b < stride; b++) r0[nlocal][b] = extra[nlocal][m + 1 + b];
+  int count = static_cast<int>(extra[nlocal][m]) - 1;
+  int n = atom->num_bond[nlocal];
+  bool has_plastic = count == 2 * n && n > 0;
+  for (int b = 0; b < stride; b++) {
+    r0[nlocal][b] = b < n && b < count ? extra[nlocal][m + 1 + b] : 0.0;
+    if (with_plastic) ep[nlocal][b] = b < n && has_plastic ? extra[nlocal][m + 1 + n + b] : 0.0;
+  }
 }
 
 int FixBPMReference::size_restart(int i)
 {
-  return atom->num_bond[i] + 1;
+  return (with_plastic ? 2 : 1) * atom->num_bond[i] + 1;
 }
 
 int FixBPMReference::maxsize_restart()
 {
-  return stride + 1;
+  return (with_plastic ? 2 : 1) * stride + 1;
 }
 
+// One double: captured + 2 breaking (files of older versions hold 0 or 1).
 void FixBPMReference::write_restart(FILE *fp)
 {
   if (comm->me == 0) {
     int size = sizeof(double);
-    double flag = captured;
+    double flag = captured + (breaking ? 2 : 0);
     fwrite(&size, sizeof(int), 1, fp);
     fwrite(&flag, sizeof(double), 1, fp);
   }
@@ -345,11 +429,15 @@ void FixBPMReference::write_restart(FILE *fp)
 
 void FixBPMReference::restart(char *buf)
 {
-  captured = static_cast<int>(reinterpret_cast<double *>(buf)[0]);
+  int flag = static_cast<int>(reinterpret_cast<double *>(buf)[0]);
+  captured = flag & 1;
+  restored = true;
+  restored_breaking = (flag & 2) != 0;
 }
 
 double FixBPMReference::memory_usage()
 {
-  return (double) atom->nmax * stride * sizeof(double) + 2.0 * nmax_vol * sizeof(double) +
+  return (with_plastic ? 2.0 : 1.0) * atom->nmax * stride * sizeof(double) +
+         2.0 * nmax_vol * sizeof(double) +
          4.0 * nmax_sums * sizeof(double);
 }

@@ -1,13 +1,15 @@
-/* Internal fix of bond_style bpm/multibody: per-bond reference lengths r0,
- * stored per atom beside atom->bond_atom so they move with atoms between
- * ranks and go into restart files, and the volume proxies V, V0 with their
- * ghost communication, and the multibody sums of the zero-net variant.
- * Created by the bond style with ID BPM_REFERENCE. */
+/* Internal fix of our bond styles: per-bond reference lengths r0 (and,
+ * created with the word "plastic", plastic strains e_p), stored per atom
+ * beside atom->bond_atom so they move with atoms between ranks and go into
+ * restart files, and the volume proxies V, V0 with their ghost
+ * communication, and the multibody sums of the zero-net variant. Created
+ * by the bond style with ID BPM_REFERENCE. */
 #ifndef LMP_FIX_BPM_REFERENCE_H
 #define LMP_FIX_BPM_REFERENCE_H
 
 #include "fix.h"
 #include <map>
+#include <string>
 #include <utility>
 #include <vector>
 
@@ -38,8 +40,24 @@ class FixBPMReference : public Fix {
   void unpack_reverse_comm(int, int *, double *) override;
   double memory_usage() override;
 
-  // r0 of each entry of neighbor->bondlist, rebuilt when the list changes.
+  // r0 of each entry of neighbor->bondlist, rebuilt when the list changes
+  // (0 for entries of broken bonds, type 0).
   const double *bondlist_r0();
+  // e_p of each entry of neighbor->bondlist, for the kernels to update
+  // (fixes created with "plastic"); call bondlist_r0 first.
+  double *bondlist_plastic() { return list_ep.data(); }
+  // Writes the list's e_p back to the slots of the bonds' owned atoms.
+  void store_plastic();
+  // Forgets slot m of owned atom i: the last slot moves into it, as the
+  // bond style moves the atom's last bond into a broken bond's place.
+  void remove_slot(int i, int m);
+  bool plastic() const { return with_plastic; }
+  // Read from a restart file written by a style whose bonds never break.
+  bool restored_unbreakable() const { return restored && !restored_breaking; }
+  // Recorded in restart files: whether the owning style breaks bonds.
+  void set_breaking(bool on) { breaking = on; }
+  // The owning style in messages, e.g. "bond_style bpm/multibody".
+  std::string owner;
   // Zeroed V and V0 arrays for nall atoms.
   void clear_volumes(int nall);
   // Sums ghost parts into owners (newton_bond on), then copies owners to ghosts.
@@ -50,6 +68,8 @@ class FixBPMReference : public Fix {
   void communicate_multibody_sums(int newton_bond);
   // r0 of the bond between local atoms i and j (-1 if none).
   double r0_between(int i, int j);
+  // r0 and e_p (0 without plastic strains) of that bond; false if none.
+  bool bond_values(int i, int j, double &r0_value, double &ep_value);
   double max_r0() const { return max_r0_all; }
 
   double *vol, *vol0;
@@ -57,12 +77,17 @@ class FixBPMReference : public Fix {
 
  private:
   double **r0;    // [nmax][bond_per_atom], aligned with atom->bond_atom
+  double **ep;    // likewise, e_p (with_plastic only)
+  bool with_plastic;
+  bool breaking, restored, restored_breaking;
   int captured;
   int nmax_vol;
   int nmax_sums;
   int nmax_r0;
   int stride;
-  std::vector<double> list_r0;
+  std::vector<double> list_r0, list_ep;
+  std::vector<long> list_slot_i, list_slot_j;    // i * stride + m of the owned atoms' slots, or -1
+  bool slots_stale;
   bigint list_built_at;
   int list_size;
   double max_r0_all;
@@ -70,6 +95,8 @@ class FixBPMReference : public Fix {
   void communicate(int newton_bond);
   std::map<std::pair<tagint, tagint>, double> given;    // from "lengths FILE"
   void capture();
+  void find_slots();
+  long slot_of(int a, int b) const;
   void read_lengths(const char *path);
 };
 

@@ -16,7 +16,8 @@
 
 using namespace LAMMPS_NS;
 
-PairBPMContact::PairBPMContact(LAMMPS *lmp) : Pair(lmp), damped(false)
+PairBPMContact::PairBPMContact(LAMMPS *lmp) :
+    Pair(lmp), damped(false), damping_taper(false), style("pair_style bpm/contact")
 {
   writedata = 1;
   restartinfo = 1;
@@ -53,10 +54,6 @@ void PairBPMContact::coeff(int narg, char **arg)
   if (narg != 6)
     error->all(FLERR, "pair_coeff for pair_style bpm/contact takes 6 values: I J k_P d a_P gamma "
                       "(got " + std::to_string(narg) + ")");
-  if (!allocated) allocate();
-  int ilo, ihi, jlo, jhi;
-  utils::bounds(FLERR, arg[0], 1, atom->ntypes, ilo, ihi, error);
-  utils::bounds(FLERR, arg[1], 1, atom->ntypes, jlo, jhi, error);
   double k = utils::numeric(FLERR, arg[2], false, lmp);
   double d = utils::numeric(FLERR, arg[3], false, lmp);
   double a = utils::numeric(FLERR, arg[4], false, lmp);
@@ -66,30 +63,44 @@ void PairBPMContact::coeff(int narg, char **arg)
   if (a < 0.0) error->all(FLERR, "pair_style bpm/contact: a_P must be >= 0, got " + std::string(arg[4]));
   if (gamma < 0.0)
     error->all(FLERR, "pair_style bpm/contact: gamma must be >= 0, got " + std::string(arg[5]));
+  set_coeffs(narg, arg, bpm_pair_coeffs{k, d, a, gamma});
+}
+
+// The type pairs named by arg[0] and arg[1] get c.
+void PairBPMContact::set_coeffs(int, char **arg, const bpm_pair_coeffs &c)
+{
+  if (!allocated) allocate();
+  int ilo, ihi, jlo, jhi;
+  utils::bounds(FLERR, arg[0], 1, atom->ntypes, ilo, ihi, error);
+  utils::bounds(FLERR, arg[1], 1, atom->ntypes, jlo, jhi, error);
   int n = atom->ntypes;
   for (int i = ilo; i <= ihi; i++)
     for (int j = (jlo > i ? jlo : i); j <= jhi; j++) {
-      table[(i - 1) * n + (j - 1)] = table[(j - 1) * n + (i - 1)] = bpm_pair_coeffs{k, d, a, gamma};
+      table[(i - 1) * n + (j - 1)] = table[(j - 1) * n + (i - 1)] = c;
       setflag[i][j] = 1;
     }
+}
+
+void PairBPMContact::check_ghost_velocities()
+{
+  damped = false;
+  for (auto &c : table) damped = damped || c.gamma != 0.0;
+  if (damped && !comm->ghost_velocity)
+    error->all(FLERR, style + " with gamma != 0 needs ghost velocities: add 'comm_modify vel yes'");
 }
 
 void PairBPMContact::init_style()
 {
   if (force->special_lj[1] != 0.0)
     error->all(FLERR, std::string("pair_style bpm/contact excludes bonded pairs: use 'special_bonds lj 0 1 1'"));
-  damped = false;
-  for (auto &c : table) damped = damped || c.gamma != 0.0;
-  if (damped && !comm->ghost_velocity)
-    error->all(FLERR, std::string("pair_style bpm/contact with gamma != 0 needs ghost velocities: add "
-                      "'comm_modify vel yes'"));
+  check_ghost_velocities();
   neighbor->request(this, instance_me);
 }
 
 double PairBPMContact::init_one(int i, int j)
 {
   if (setflag[i][j] == 0 && setflag[j][i] == 0)
-    error->all(FLERR, "pair_style bpm/contact: coefficients for types " + std::to_string(i) + " " +
+    error->all(FLERR, style + ": coefficients for types " + std::to_string(i) + " " +
                           std::to_string(j) + " were never set (no mixing)");
   setflag[i][j] = setflag[j][i] = 1;
   return table[(i - 1) * atom->ntypes + (j - 1)].d;
@@ -99,18 +110,18 @@ void PairBPMContact::compute(int eflag, int vflag)
 {
   ev_init(eflag, vflag);
   if (eflag_atom || vflag_atom)
-    error->all(FLERR, std::string("pair_style bpm/contact does not compute per-atom energy or virial"));
+    error->all(FLERR, style + " does not compute per-atom energy or virial");
   int nlocal = atom->nlocal;
   int nall = nlocal + atom->nghost;
   bpm_tally tally{};
   bpm_fault fault{};
   int status = bpm_pair_forces(atom->x[0], damped ? atom->v[0] : nullptr, atom->type, nall,
                                atom->ntypes, table.data(), list->inum, list->ilist, list->numneigh,
-                               list->firstneigh, force->special_lj, nlocal, force->newton_pair,
+                               list->firstneigh, force->special_lj, damping_taper ? 1 : 0, nlocal,
+                               force->newton_pair,
                                atom->f[0], (eflag_global || vflag_global) ? &tally : nullptr, &fault);
-  if (status == BPM_ERR_UNSTABLE) bpm_stop_on_fault(lmp, "pair_style bpm/contact", fault, nullptr);
-  if (status != BPM_OK)
-    error->one(FLERR, "pair_style bpm/contact: kernel failed with status " + std::to_string(status));
+  if (status == BPM_ERR_UNSTABLE) bpm_stop_on_fault(lmp, style.c_str(), fault, nullptr);
+  if (status != BPM_OK) error->one(FLERR, style + ": kernel failed with status " + std::to_string(status));
   if (eflag_global) eng_vdwl += tally.energy;
   if (vflag_global)
     for (int k = 0; k < 6; k++) virial[k] += tally.virial[k];

@@ -6,6 +6,7 @@
 
 #include "pair.h"
 #include "bpm_kernels.h"
+#include <string>
 #include <vector>
 
 namespace LAMMPS_NS {
@@ -27,7 +28,11 @@ class PairBPMContact : public Pair {
  protected:
   std::vector<bpm_pair_coeffs> table;    // (i-1) * ntypes + (j-1)
   bool damped;
+  bool damping_taper;    // upstream's fading contact damping (bpm/spring/rs)
+  std::string style;     // in messages: "pair_style bpm/contact"
   void allocate();
+  void set_coeffs(int, char **, const bpm_pair_coeffs &);
+  void check_ghost_velocities();
 };
 
 }    // namespace LAMMPS_NS

@@ -45,9 +45,10 @@ mkdir -p "$out"
 profile="${BPM_CARGO_PROFILE:-release}"
 cargo rustc --profile "$profile" --quiet --lib --no-default-features --crate-type staticlib
 objs=()
-for f in bond_bpm_multibody fix_bpm_reference pair_bpm_contact pair_bpm_granular fix_bpm_contacts fix_bpm_granular_wall bpm_plugin; do
+for src in lammps-plugin/*.cpp; do
+  f=$(basename "$src" .cpp)
   g++ -std=c++17 -O2 -fPIC -DBPM_MODERN_LAMMPS -Ilammps-plugin -I"$include" ${mpi_include:+-I"$mpi_include"} \
-    -c "lammps-plugin/$f.cpp" -o "$out/$f.o"
+    -c "$src" -o "$out/$f.o"
   objs+=("$out/$f.o")
 done
 # LAMMPS symbols resolve against the host lmp at `plugin load`.

@@ -255,7 +255,7 @@ proptest! {
         let st = unsafe {
             bpm_pair_forces(x.as_ptr() as *const f64, std::ptr::null(), std::ptr::null(), nall, 1,
                 pc.as_ptr(), n as i64, ilist.as_ptr(), numneigh.as_ptr(), firstneigh.as_ptr(),
-                special.as_ptr(), n_owned, newton, f.as_mut_ptr() as *mut f64, &mut tally,
+                special.as_ptr(), 0, n_owned, newton, f.as_mut_ptr() as *mut f64, &mut tally,
                 std::ptr::null_mut())
         };
         prop_assert!(known.contains(&st), "pair status {}", st);

@@ -448,6 +448,7 @@ fn bond_split_into_interior_and_boundary_matches_minimum_image_after_wraps() {
         coeffs: &pcoeffs,
         special: [1.0; 4],
         tally: true,
+        damping_taper: false,
     };
     pair_forces(
         &sep,

@@ -157,6 +157,7 @@ fn pairs_fault_only_on_non_finite_values_not_on_deep_overlap() {
         coeffs: &coeffs,
         special: [1.0; 4],
         tally: false,
+        damping_taper: false,
     };
     // The fault of particle 0's contact with `partner`.
     let fault_with = |partner: i32| {

@@ -180,6 +180,7 @@ fn pair_abi_reads_a_lammps_style_neighbour_list() {
                 numneigh.as_ptr(),
                 firstneigh.as_ptr(),
                 special.as_ptr(),
+                0,
                 3,
                 1,
                 f.as_mut_ptr() as *mut f64,
@@ -307,4 +308,229 @@ fn single_bond_abi_equals_the_bulk_bond_loop_without_damping() {
         largest[0],
         largest[1]
     );
+}
+
+/// Three bonds of one type along x (k = 2, eps_c = 0.1, eps_p = 0.02, no
+/// smoothing, no damping, no multibody term): stretched 5% (yields to
+/// e_p = 0.03), stretched 15% (breaks), compressed 4% (yields to
+/// e_p = -0.02); and a fourth, already broken (type 0), skipped.
+#[test]
+fn failing_bond_abi_breaks_yields_and_skips_broken_entries() {
+    let x = [
+        [0.0, 0.0, 0.0],
+        [1.05, 0.0, 0.0],
+        [10.0, 0.0, 0.0],
+        [11.15, 0.0, 0.0],
+        [20.0, 0.0, 0.0],
+        [20.96, 0.0, 0.0],
+    ];
+    let mut bonds = [
+        BondEntry { i: 0, j: 1, ty: 1 },
+        BondEntry { i: 2, j: 3, ty: 1 },
+        BondEntry { i: 4, j: 5, ty: 1 },
+        BondEntry { i: 0, j: 5, ty: 0 },
+    ];
+    let r0 = [1.0, 1.0, 1.0, 1.0];
+    let mut plastic = [0.0; 4];
+    let coeffs = [BondCoeffs {
+        k: 2.0,
+        a: 0.0,
+        gamma: 0.0,
+    }];
+    let rule = RawBondFailure {
+        critical_strain: 0.1,
+        plastic_strain: 0.02,
+        breaks: 1,
+        smooth: 0,
+        normalize: 0,
+        yields: 1,
+    };
+    let mut f = [[0.0f64; 3]; 6];
+    let mut broken = [-1i32; 4];
+    let mut found = FailureCounts::default();
+    let call = |bonds: &mut [BondEntry; 4],
+                plastic: *mut f64,
+                rule: &RawBondFailure,
+                f: &mut [[f64; 3]; 6],
+                broken: &mut [i32; 4],
+                found: &mut FailureCounts| unsafe {
+        bpm_failing_bond_forces(
+            x.as_ptr() as *const f64,
+            std::ptr::null(),
+            6,
+            bonds.as_mut_ptr(),
+            4,
+            r0.as_ptr(),
+            plastic,
+            coeffs.as_ptr(),
+            rule,
+            1,
+            1,
+            std::ptr::null(),
+            std::ptr::null(),
+            6,
+            1,
+            f.as_mut_ptr() as *mut f64,
+            broken.as_mut_ptr(),
+            found,
+            std::ptr::null_mut(),
+            std::ptr::null_mut(),
+        )
+    };
+    let st = call(
+        &mut bonds,
+        plastic.as_mut_ptr(),
+        &rule,
+        &mut f,
+        &mut broken,
+        &mut found,
+    );
+    assert_eq!(st, BPM_OK);
+    assert_eq!((found.broken, found.yielded), (1, 2));
+    assert_eq!(broken[0], 1);
+    assert_eq!(
+        bonds.iter().map(|b| b.ty).collect::<Vec<_>>(),
+        vec![1, 0, 1, 0]
+    );
+    assert!((plastic[0] - 0.03).abs() < 1e-15 && (plastic[2] + 0.02).abs() < 1e-15);
+    assert_eq!(plastic[1], 0.0);
+    // Spring at the moved rest length: -k (r - r_eq) along +x on atom i.
+    assert!((f[0][0] - 2.0 * (1.05 - 1.03)).abs() < 1e-14, "{:?}", f[0]);
+    assert!((f[1][0] + f[0][0]).abs() < 1e-15);
+    assert_eq!((f[2], f[3]), ([0.0; 3], [0.0; 3]));
+    assert!((f[4][0] - 2.0 * (0.96 - 0.98)).abs() < 1e-14, "{:?}", f[4]);
+    // Bad input: yielding without plastic strains, a rule the model
+    // refuses, an atom out of range.
+    let mut fresh = [
+        BondEntry { i: 0, j: 1, ty: 1 },
+        BondEntry { i: 2, j: 3, ty: 1 },
+        BondEntry { i: 4, j: 5, ty: 1 },
+        BondEntry { i: 0, j: 9, ty: 1 },
+    ];
+    let mut g = [[0.0; 3]; 6];
+    let st = call(
+        &mut fresh,
+        std::ptr::null_mut(),
+        &rule,
+        &mut g,
+        &mut broken,
+        &mut found,
+    );
+    assert_eq!(st, BPM_ERR_NULL);
+    let past = RawBondFailure {
+        plastic_strain: 0.2,
+        ..rule
+    };
+    let st = call(
+        &mut fresh,
+        plastic.as_mut_ptr(),
+        &past,
+        &mut g,
+        &mut broken,
+        &mut found,
+    );
+    assert_eq!(st, BPM_ERR_TYPE);
+    let st = call(
+        &mut fresh,
+        plastic.as_mut_ptr(),
+        &rule,
+        &mut g,
+        &mut broken,
+        &mut found,
+    );
+    assert_eq!(st, BPM_ERR_INDEX);
+    // The refused rule's reason, naming the values.
+    let mut message = [0 as std::ffi::c_char; 256];
+    let st = unsafe { bpm_check_bond_failure(&past, message.as_mut_ptr(), 256) };
+    let text = unsafe { std::ffi::CStr::from_ptr(message.as_ptr()) }.to_string_lossy();
+    assert_eq!(st, BPM_ERR_STOPPED);
+    assert!(
+        text.contains("eps_p = 0.2") && text.contains("eps_c = 0.1"),
+        "{text}"
+    );
+    assert_eq!(
+        unsafe { bpm_check_bond_failure(&rule, std::ptr::null_mut(), 0) },
+        BPM_OK
+    );
+}
+
+/// The multibody term over intact bonds: in a solid whose bonds all sit
+/// at their rest lengths, yielded or not, it adds no force, and a broken
+/// entry (type 0) counts in neither volume.
+#[test]
+fn intact_volumes_leave_a_solid_at_its_rest_lengths_without_force() {
+    let (x0, mut bonds, r0) = random_network(60, 3.0, 1.5, 7);
+    let n = x0.len();
+    // Rest lengths r_eq = r0 (1 + e_p) equal to the lengths as they are.
+    let plastic: Vec<f64> = (0..bonds.len()).map(|k| 0.01 * (k % 5) as f64).collect();
+    let first: Vec<f64> = r0
+        .iter()
+        .zip(&plastic)
+        .map(|(r, e)| r / (1.0 + e))
+        .collect();
+    bonds[3].ty = 0;
+    let mut vol = vec![0.0; n];
+    let mut vol0 = vec![0.0; n];
+    let st = unsafe {
+        bpm_intact_bond_volumes(
+            x0.as_ptr() as *const f64,
+            n as i64,
+            bonds.as_ptr(),
+            bonds.len() as i64,
+            first.as_ptr(),
+            plastic.as_ptr(),
+            n as i64,
+            1,
+            vol.as_mut_ptr(),
+            vol0.as_mut_ptr(),
+        )
+    };
+    assert_eq!(st, BPM_OK);
+    for (v, v0) in vol.iter().zip(&vol0) {
+        assert!((v - v0).abs() <= 1e-13 * v0.max(1.0), "{v} {v0}");
+    }
+    let coeffs = [BondCoeffs {
+        k: 0.0,
+        a: -0.5,
+        gamma: 0.0,
+    }];
+    let rule = RawBondFailure {
+        critical_strain: 0.5,
+        plastic_strain: 0.1,
+        breaks: 1,
+        smooth: 1,
+        normalize: 0,
+        yields: 1,
+    };
+    let mut ep = plastic.clone();
+    let mut f = vec![[0.0f64; 3]; n];
+    let mut broken = vec![0i32; bonds.len()];
+    let st = unsafe {
+        bpm_failing_bond_forces(
+            x0.as_ptr() as *const f64,
+            std::ptr::null(),
+            n as i64,
+            bonds.as_mut_ptr(),
+            bonds.len() as i64,
+            first.as_ptr(),
+            ep.as_mut_ptr(),
+            coeffs.as_ptr(),
+            &rule,
+            1,
+            1,
+            vol.as_ptr(),
+            vol0.as_ptr(),
+            n as i64,
+            1,
+            f.as_mut_ptr() as *mut f64,
+            broken.as_mut_ptr(),
+            std::ptr::null_mut(),
+            std::ptr::null_mut(),
+            std::ptr::null_mut(),
+        )
+    };
+    assert_eq!(st, BPM_OK);
+    let largest = f.iter().flatten().fold(0.0f64, |m, c| m.max(c.abs()));
+    assert!(largest < 1e-12, "largest multibody force {largest:e}");
+    assert_eq!(ep, plastic);
 }

@@ -109,6 +109,7 @@ fn pair_on(
         coeffs: &coeffs,
         special,
         tally: true,
+        damping_taper: false,
     };
     let mut f = vec![[0.0; 3]; x.len()];
     let t = pair_forces(

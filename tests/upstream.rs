@@ -236,7 +236,7 @@ fn a_bond_pulled_to_failure_breaks_and_yields_as_upstreams() {
     let lmp = modern();
     let dir = workdir("bond-pull");
     let mut rows = Vec::new();
-    use bpm::studies::upstream::bond_pull::{compare_pull, native_pull, pull_cases};
+    use bpm::verify::upstream::bond_pull::{compare_pull, native_pull, pull_cases};
     for case in pull_cases() {
         assert!(
             native_pull(&case).break_step().is_some(),
@@ -248,7 +248,209 @@ fn a_bond_pulled_to_failure_breaks_and_yields_as_upstreams() {
     for r in &rows {
         eprintln!("{}", r.line());
     }
-    // Three pulls: force and break step each, and the plastic plateau.
-    assert_eq!(judged(&rows), 7);
+    // Three pulls, native and through the plugin (-sf rs): force and break
+    // step each, and the plastic plateau.
+    assert_eq!(judged(&rows), 14);
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// Upstream's block deck, unchanged, on upstream's styles and on ours
+/// (`-sf rs`): the same stress up to round-off until the first break, the
+/// first break in the same row, then peak stress and broken bonds within
+/// the issue's 1% and 10%; and our broken bonds the same on 4 ranks as on
+/// 1, with newton_bond off and (overlay/pair yes) on.
+#[test]
+fn a_block_pulled_to_fracture_breaks_as_upstreams_on_our_styles() {
+    use bpm::verify::upstream::block_tension::{compare_tension, tension_cases};
+    let lmp = modern();
+    let dir = workdir("block-tension");
+    let mut rows = Vec::new();
+    for case in tension_cases() {
+        compare_tension(&lmp, &case, &dir, &mut rows).unwrap();
+    }
+    for r in &rows {
+        eprintln!("{}", r.line());
+    }
+    assert_eq!(judged(&rows), 10);
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// A two-atom deck with our drop-in styles (`-sf rs`): `newton` as the
+/// `newton` command's words, `settings` the lines after the box and atoms,
+/// before `run 0`. The error LAMMPS stops with, or None if it ran.
+fn dropin_deck_error(dir: &Path, name: &str, newton: &str, settings: &str) -> Option<String> {
+    use bpm::verify::upstream::Styles;
+    let input = dir.join(format!("{name}.in"));
+    std::fs::write(
+        &input,
+        format!(
+            "units lj\natom_style bond\nnewton {newton}\nregion b block -4 4 -4 4 -4 4\n\
+             create_box 1 b bond/types 1 extra/bond/per/atom 1 extra/special/per/atom 1\n\
+             create_atoms 1 single 0 0 0\ncreate_atoms 1 single 1 0 0\nmass 1 1.0\n\
+             comm_modify vel yes\ncreate_bonds single/bond 1 1 2\n{settings}\nrun 0\n"
+        ),
+    )
+    .unwrap();
+    let work = bpm::verify::Work {
+        particles: 2,
+        steps: 0,
+    };
+    lmp_error(modern().run_styles(Styles::Ours, &input, &[], 1, work))
+}
+
+fn lmp_error<T>(result: Result<T, bpm::verify::upstream::UpstreamError>) -> Option<String> {
+    result.err().map(|e| format!("{e:#}"))
+}
+
+#[test]
+fn the_dropin_styles_refuse_bad_input_naming_the_value() {
+    let dir = workdir("dropin-errors");
+    let good_specials =
+        "special_bonds lj 0 1 1 coul 1 1 1\npair_style bpm/spring\npair_coeff * * 1 1 0";
+    let cases = [
+        (
+            "plastic past critical",
+            format!("{good_specials}\nbond_style bpm/spring/plastic\nbond_coeff 1 1 0.1 0 0.2"),
+            "the plastic strain eps_p = 0.2 must be below the critical strain eps_c = 0.1",
+        ),
+        (
+            "no critical strain",
+            format!("{good_specials}\nbond_style bpm/spring\nbond_coeff 1 1 0 0"),
+            "the critical strain eps_c = 0 must be positive",
+        ),
+        (
+            "overlay without weights",
+            format!(
+                "{good_specials}\nbond_style bpm/spring overlay/pair yes\nbond_coeff 1 1 0.1 0"
+            ),
+            "overlay/pair yes needs every special weight 1",
+        ),
+        (
+            "break with newton bond",
+            format!("{good_specials}\nbond_style bpm/spring\nbond_coeff 1 1 0.1 0"),
+            "needs newton_bond off",
+        ),
+        (
+            "smooth without break",
+            format!("{good_specials}\nbond_style bpm/spring break no\nbond_coeff 1 1 0.1 0"),
+            "smooth yes needs break yes",
+        ),
+        (
+            "unknown keyword",
+            format!("{good_specials}\nbond_style bpm/spring brake yes\nbond_coeff 1 1 0.1 0"),
+            "unknown keyword 'brake'",
+        ),
+        (
+            "a_v missing",
+            format!(
+                "{good_specials}\nbond_style bpm/spring volume/factor yes\nbond_coeff 1 1 0.1 0"
+            ),
+            "takes 5 values: type k epsilon_c gamma a_v",
+        ),
+    ];
+    for (name, settings, expected) in cases {
+        let newton = if name == "break with newton bond" {
+            "on on"
+        } else {
+            "on off"
+        };
+        let error = dropin_deck_error(&dir, &name.replace(' ', "_"), newton, &settings)
+            .unwrap_or_else(|| panic!("{name}: the deck ran"));
+        assert!(error.contains(expected), "{name}: {error}");
+    }
+    // The same deck with good values runs.
+    let fine = format!("{good_specials}\nbond_style bpm/spring/plastic\nbond_coeff 1 1 0.1 0 0.05");
+    assert_eq!(dropin_deck_error(&dir, "fine", "on off", &fine), None);
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// Restart files keep what breaking and yielding did: a run interrupted
+/// by write_restart and continued from the file ends where the run
+/// continued in memory ends, bit for bit; it had broken one bond and
+/// yielded the other. A file written without breaking is refused by a
+/// style that breaks.
+#[test]
+fn restarts_keep_broken_bonds_and_plastic_strains() {
+    use bpm::verify::upstream::Styles;
+    let dir = workdir("dropin-restart");
+    let file = dir.join("state.restart");
+    let setup = "units lj\natom_style bond\nnewton on off\nregion b block -4 4 -4 4 -4 4\n\
+                 create_box 1 b bond/types 2 extra/bond/per/atom 2 extra/special/per/atom 2\n\
+                 create_atoms 1 single 0 0 0\ncreate_atoms 1 single 1 0 0\n\
+                 create_atoms 1 single 2 0 0\nmass 1 1.0\ncomm_modify vel yes\n\
+                 create_bonds single/bond 1 1 2\ncreate_bonds single/bond 2 2 3\n\
+                 special_bonds lj 0 1 1 coul 1 1 1\n\
+                 pair_style bpm/spring\npair_coeff * * 1 1 0\n";
+    let bonds = |style: &str| {
+        format!("bond_style bpm/spring/plastic {style}\nbond_coeff 1 1 0.3 0 0.05\nbond_coeff 2 1 0.08 0 0.05\n")
+    };
+    let count = "compute nb all nbond/atom\ncompute bonds all reduce sum c_nb\n\
+                 thermo_style custom step c_bonds\nthermo 100\n";
+    let report = "print \"FINAL $(x[1]:%.17g) $(x[2]:%.17g) $(x[3]:%.17g) $(vx[1]:%.17g) $(vx[3]:%.17g) $(c_bonds)\"\n";
+    let run = |name: &str, text: String| {
+        let input = dir.join(format!("{name}.in"));
+        std::fs::write(&input, text).unwrap();
+        let work = bpm::verify::Work {
+            particles: 3,
+            steps: 500,
+        };
+        modern().run_styles(Styles::Ours, &input, &[], 1, work)
+    };
+    let final_line = |out: String| {
+        out.lines()
+            .find(|l| l.starts_with("FINAL"))
+            .unwrap_or_else(|| panic!("no FINAL line in:\n{out}"))
+            .to_string()
+    };
+    // Atom 1 moves away at 0.1 and atom 3 (set below) at 0.2.
+    let kick =
+        "group one id 1\ngroup three id 3\nvelocity one set -0.1 0 0\nvelocity three set 0.2 0 0\n";
+    let whole = run(
+        "whole",
+        format!(
+            "{setup}{}{kick}{count}fix nve all nve\ntimestep 0.01\nrun 200\nwrite_restart {}\n\
+             run 300\n{report}",
+            bonds(""),
+            file.display()
+        ),
+    )
+    .unwrap();
+    let resumed = run(
+        "resumed",
+        format!(
+            "read_restart {}\ncomm_modify vel yes\n{count}fix nve all nve\ntimestep 0.01\n\
+             run 300\n{report}",
+            file.display()
+        ),
+    )
+    .unwrap();
+    let (whole, resumed) = (final_line(whole), final_line(resumed));
+    assert_eq!(whole, resumed);
+    // One bond left (c_bonds counts it on both atoms).
+    assert!(whole.ends_with(" 2"), "{whole}");
+    // An elastic file, read by a breaking style.
+    let elastic = dir.join("elastic.restart");
+    run(
+        "elastic",
+        format!(
+            "{setup}bond_style bpm/spring/rs break no smooth no\nbond_coeff * 1 0.3 0\n\
+             fix nve all nve\nrun 10\nwrite_restart {}\n",
+            elastic.display()
+        )
+        .replace("bpm/spring/rs", "bpm/spring"),
+    )
+    .unwrap();
+    let error = lmp_error(run(
+        "breaking",
+        format!(
+            "read_restart {}\ncomm_modify vel yes\nbond_style bpm/spring\nbond_coeff * 1 0.3 0\nrun 1\n",
+            elastic.display()
+        ),
+    ))
+    .expect("the breaking style refuses the elastic file");
+    assert!(
+        error.contains("written with bonds that do not break"),
+        "{error}"
+    );
     let _ = std::fs::remove_dir_all(&dir);
 }

@@ -8,7 +8,8 @@
 //! comes back as a status and a message naming atoms by their IDs.
 
 use super::{
-    counts, guard, half_list, list, rows, BPM_ERR_INDEX, BPM_ERR_NULL, BPM_ERR_STOPPED, BPM_OK,
+    counts, guard, half_list, list, rows, write_message, BPM_ERR_INDEX, BPM_ERR_NULL,
+    BPM_ERR_STOPPED, BPM_OK,
 };
 use crate::engine::MultiContact;
 use crate::kernels::{
@@ -277,17 +278,6 @@ impl GranularStyle {
             fresh: Vec::new(),
         }
     }
-}
-
-/// Writes `message` into `buf` (`len` bytes), NUL-terminated and cut.
-unsafe fn write_message(message: &str, buf: *mut c_char, len: i64) {
-    if buf.is_null() || len <= 0 {
-        return;
-    }
-    let bytes = message.as_bytes();
-    let n = bytes.len().min(len as usize - 1);
-    std::ptr::copy_nonoverlapping(bytes.as_ptr(), buf as *mut u8, n);
-    *buf.add(n) = 0;
 }
 
 /// The `nwords` C strings of `words`, copied.

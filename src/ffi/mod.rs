@@ -31,7 +31,12 @@ pub const BPM_ERR_UNSTABLE: i32 = 5;
 /// a bad coefficient).
 pub const BPM_ERR_STOPPED: i32 = 6;
 
+mod bond_failure;
 mod granular;
+pub use bond_failure::{
+    bpm_check_bond_failure, bpm_failing_bond_forces, bpm_failing_bond_single,
+    bpm_intact_bond_volumes, FailureCounts, RawBondFailure,
+};
 pub use granular::{parse_coeffs, GranularStyle, GranularStyleCoeffs, DEFAULT_SLOTS};
 
 /// Writes the first fault of `pass` to `fault` (if not null) and returns
@@ -120,15 +125,34 @@ pub(crate) unsafe fn half_list<'a>(
 }
 
 fn check_bonds(bonds: &[BondEntry], nall: usize, ntypes: usize) -> i32 {
-    for b in bonds {
-        if b.i < 0 || b.j < 0 || b.i as usize >= nall || b.j as usize >= nall {
-            return BPM_ERR_INDEX;
-        }
-        if b.ty < 1 || b.ty as usize > ntypes {
-            return BPM_ERR_TYPE;
-        }
+    let status = check_bond_atoms(bonds, nall);
+    if status == BPM_OK && bonds.iter().any(|b| b.ty < 1 || b.ty as usize > ntypes) {
+        return BPM_ERR_TYPE;
+    }
+    status
+}
+
+fn check_bond_atoms(bonds: &[BondEntry], nall: usize) -> i32 {
+    let outside = |a: i32| a < 0 || a as usize >= nall;
+    if bonds.iter().any(|b| outside(b.i) || outside(b.j)) {
+        return BPM_ERR_INDEX;
     }
     BPM_OK
+}
+
+/// Writes `message` into `buf` (`len` bytes) as a NUL-terminated string,
+/// cut to fit.
+///
+/// # Safety
+/// `buf` is null or holds `len` bytes.
+pub(crate) unsafe fn write_message(message: &str, buf: *mut std::ffi::c_char, len: i64) {
+    if buf.is_null() || len <= 0 {
+        return;
+    }
+    let bytes = message.as_bytes();
+    let n = bytes.len().min(len as usize - 1);
+    std::ptr::copy_nonoverlapping(bytes.as_ptr(), buf as *mut u8, n);
+    *buf.add(n) = 0;
 }
 
 pub(crate) fn counts(values: &[i64]) -> Option<Vec<usize>> {
@@ -375,7 +399,8 @@ pub unsafe extern "C" fn bpm_balance_multibody(
 /// energy and virial to `tally` (a null `tally` skips summing and writing
 /// them); see
 /// [`pair_forces`]. A null `v` drops damping; a null `types` means all
-/// atoms are type 1.
+/// atoms are type 1. `damping_taper != 0` fades the damping as upstream
+/// LAMMPS's `pair_style bpm/spring` does ([`PairInputs::damping_taper`]).
 ///
 /// # Safety
 /// `ilist` and `numneigh` hold `inum` entries, `firstneigh[ilist[k]]`
@@ -394,6 +419,7 @@ pub unsafe extern "C" fn bpm_pair_forces(
     numneigh: *const i32,
     firstneigh: *const *const i32,
     special: *const f64,
+    damping_taper: i32,
     n_owned: i64,
     newton: i32,
     f: *mut f64,
@@ -438,6 +464,7 @@ pub unsafe extern "C" fn bpm_pair_forces(
             coeffs: list(coeffs, ntypes * ntypes),
             special: [special[0], special[1], special[2], special[3]],
             tally: !tally.is_null(),
+            damping_taper: damping_taper != 0,
         };
         let own = Ownership {
             n_owned,

@@ -14,6 +14,7 @@ mod bond_failure;
 mod bond_rows;
 mod closure_lanes;
 mod diagnosis;
+mod failing_bond_list;
 mod fault;
 mod geometry;
 mod granular;
@@ -41,6 +42,9 @@ pub use bond_rows::{
 };
 pub use closure_lanes::SurfaceCorrections;
 pub use diagnosis::{stable_timestep, verlet_limit, LIMIT_MARGIN, MULTIBODY_LIMIT, STIFFEST_MODE};
+pub use failing_bond_list::{
+    accumulate_intact_volumes, failing_list_forces, FailingListInputs, ListFailures,
+};
 pub use fault::{Fault, FaultKind, ForcePass, COLLAPSED_BELOW, DEEP_OVERLAP, OVERSTRETCHED_ABOVE};
 pub use geometry::{BoxImage, MinimumImage, OrthogonalImage, Separation, Unwrapped};
 pub use granular::{

@@ -54,6 +54,10 @@ pub struct PairInputs<'a> {
     pub special: [f64; 4],
     /// Whether to sum energy and virial.
     pub tally: bool,
+    /// Whether the damping fades as `1 - (r / d)^8` towards the contact
+    /// distance, as in upstream LAMMPS's `pair_style bpm/spring` (the
+    /// plugin's drop-in `bpm/spring/rs`); the model's contact has none.
+    pub damping_taper: bool,
 }
 
 /// Adds the contact forces of a half neighbour list to `f`.
@@ -73,16 +77,23 @@ where
     S: Separation,
     I: Iterator<Item = (usize, &'n [i32])>,
 {
+    let taper = inputs.damping_taper;
     match (inputs.v.is_some(), inputs.tally) {
-        (true, true) => pair_loop::<S, I, true, true>(sep, inputs, neighbours, own, f),
-        (true, false) => pair_loop::<S, I, true, false>(sep, inputs, neighbours, own, f),
-        (false, true) => pair_loop::<S, I, false, true>(sep, inputs, neighbours, own, f),
-        (false, false) => pair_loop::<S, I, false, false>(sep, inputs, neighbours, own, f),
+        (true, true) if taper => {
+            pair_loop::<S, I, true, true, true>(sep, inputs, neighbours, own, f)
+        }
+        (true, false) if taper => {
+            pair_loop::<S, I, true, false, true>(sep, inputs, neighbours, own, f)
+        }
+        (true, true) => pair_loop::<S, I, true, true, false>(sep, inputs, neighbours, own, f),
+        (true, false) => pair_loop::<S, I, true, false, false>(sep, inputs, neighbours, own, f),
+        (false, true) => pair_loop::<S, I, false, true, false>(sep, inputs, neighbours, own, f),
+        (false, false) => pair_loop::<S, I, false, false, false>(sep, inputs, neighbours, own, f),
     }
 }
 
 #[inline(always)]
-fn pair_loop<'n, S, I, const DAMPED: bool, const TALLY: bool>(
+fn pair_loop<'n, S, I, const DAMPED: bool, const TALLY: bool, const TAPER: bool>(
     sep: &S,
     inputs: &PairInputs,
     neighbours: I,
@@ -114,12 +125,17 @@ where
             }
             let r = rsq.sqrt();
             let rinv = 1.0 / r;
-            let n_dot_dv = if DAMPED {
+            let mut n_dot_dv = if DAMPED {
                 let v = inputs.v.unwrap_or(&[]);
                 dot(&del, &sub(&v[i], &v[j])) * rinv
             } else {
                 0.0
             };
+            if TAPER {
+                let s = rsq / (c.d * c.d);
+                let s2 = s * s;
+                n_dot_dv *= 1.0 - s2 * s2;
+            }
             let fpair = weight * pair_force_magnitude(r, n_dot_dv, c) * rinv;
             if !fpair.is_finite() {
                 fault = fault.or(Fault::of_pair(i, j, r, c.d, fpair));

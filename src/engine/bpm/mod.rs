@@ -623,6 +623,7 @@ impl BpmModel {
                     coeffs: &coeffs,
                     special: [1.0; 4],
                     tally,
+                    damping_taper: false,
                 };
                 // A half list (`j > i`) split by `i` into parts of about
                 // as many pairs: chunk c writes from its first `i` on.

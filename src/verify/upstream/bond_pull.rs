@@ -7,7 +7,7 @@
 //! native engine evaluates its forces at the same prescribed positions and
 //! velocities, so both see the same bond history step by step.
 
-use super::{ModernLammps, Result, UpstreamError, UpstreamRow};
+use super::{ModernLammps, Result, Styles, UpstreamError, UpstreamRow};
 use crate::engine::{BpmModel, StageDrivers, System};
 use crate::file_error::FileError;
 use crate::kernels::{BondCoeffs, BondFailure, PairCoeffs};
@@ -201,10 +201,16 @@ fn record(sys: &System, step: u64, trace: &mut PullTrace) {
     trace.bonds.push(bonds as u32);
 }
 
-/// The pull in upstream LAMMPS (`pull.in` with upstream's styles).
-pub fn upstream_pull(lammps: &ModernLammps, case: &PullCase, dir: &Path) -> Result<PullTrace> {
+/// The pull in LAMMPS: `pull.in` with upstream's styles, or with our
+/// drop-ins (`-sf rs`).
+pub fn deck_pull(
+    lammps: &ModernLammps,
+    case: &PullCase,
+    styles: Styles,
+    dir: &Path,
+) -> Result<PullTrace> {
     let inputs = write_templates(dir).map_err(|cause| UpstreamError::Templates { cause })?;
-    let tag = case.name.replace(' ', "_");
+    let tag = format!("{}-{}", case.name.replace(' ', "_"), styles.name());
     let out = dir.join(format!("{tag}.txt"));
     let leg = |k: usize| case.legs.get(k).copied().unwrap_or((0.0, 0));
     let mut vars = vec![
@@ -222,7 +228,7 @@ pub fn upstream_pull(lammps: &ModernLammps, case: &PullCase, dir: &Path) -> Resu
         particles: 2,
         steps: case.steps(),
     };
-    lammps.run(&inputs.join("bond_pull/pull.in"), &vars, 1, work)?;
+    lammps.run_styles(styles, &inputs.join("bond_pull/pull.in"), &vars, 1, work)?;
     let text = std::fs::read_to_string(&out).map_err(FileError::on("reading", &out))?;
     parse_rows(&text).map_err(|e| UpstreamError::Output(format!("{}: {e}", out.display())))
 }
@@ -250,7 +256,8 @@ fn parse_rows(text: &str) -> std::result::Result<PullTrace, String> {
     Ok(trace)
 }
 
-/// Compares `case` in both engines; pushes its verdict rows (judged by the
+/// Compares `case` in the native engine and in LAMMPS with our drop-in
+/// styles against upstream LAMMPS; pushes its verdict rows (judged by the
 /// tolerance entries `upstream bond pull ...`).
 pub fn compare_pull(
     lammps: &ModernLammps,
@@ -258,20 +265,35 @@ pub fn compare_pull(
     dir: &Path,
     rows: &mut Vec<UpstreamRow>,
 ) -> Result<()> {
+    let upstream = deck_pull(lammps, case, Styles::Upstream, dir)?;
     let native = native_pull(case);
-    let upstream = upstream_pull(lammps, case, dir)?;
-    if native.step != upstream.step {
-        return Err(UpstreamError::Output(format!(
-            "{}: upstream printed {} steps, the native pull has {}",
-            case.name,
-            upstream.step.len(),
-            native.step.len()
-        )));
+    let dropin = deck_pull(lammps, case, Styles::Ours, dir)?;
+    for (engine, trace) in [("native", &native), ("plugin -sf rs", &dropin)] {
+        if trace.step != upstream.step {
+            return Err(UpstreamError::Output(format!(
+                "{} ({engine}): upstream printed {} steps, ours {}",
+                case.name,
+                upstream.step.len(),
+                trace.step.len()
+            )));
+        }
+        judge_pull(case, engine, trace, &upstream, rows);
     }
+    Ok(())
+}
+
+/// The rows of one engine's pull against upstream's.
+fn judge_pull(
+    case: &PullCase,
+    engine: &str,
+    ours: &PullTrace,
+    upstream: &PullTrace,
+    rows: &mut Vec<UpstreamRow>,
+) {
     let mut push = |observable: &str, dev: f64, what: &str| {
         let tol = tolerance(&format!("{} bond pull {what}", super::TOLERANCE_PREFIX));
         rows.push(UpstreamRow {
-            configuration: case.name.into(),
+            configuration: format!("{} ({engine})", case.name),
             ranks: 1,
             pair_gamma: 0.0,
             observable: observable.into(),
@@ -281,14 +303,14 @@ pub fn compare_pull(
         });
     };
     let scale = upstream.force.iter().fold(0.0f64, |m, f| m.max(f.abs()));
-    let force_dev = native
+    let force_dev = ours
         .force
         .iter()
         .zip(&upstream.force)
         .fold(0.0f64, |m, (a, b)| m.max((a - b).abs()))
         / scale;
     push("force against strain", force_dev, "forces");
-    let break_dev = match (native.break_step(), upstream.break_step()) {
+    let break_dev = match (ours.break_step(), upstream.break_step()) {
         (Some(a), Some(b)) => a.abs_diff(b) as f64,
         (None, None) => 0.0,
         _ => f64::INFINITY,
@@ -298,13 +320,12 @@ pub fn compare_pull(
         // The end of the first leg lies on the plateau k eps_p r0.
         let end = case.legs[0].1 as usize;
         let plateau = case.k * eps_p * R0;
-        let dev = (native.force[end] - plateau)
+        let dev = (ours.force[end] - plateau)
             .abs()
             .max((upstream.force[end] - plateau).abs())
             / plateau;
         push("plateau k eps_p r0", dev, "plateau");
     }
-    Ok(())
 }
 
 #[cfg(test)]
