@@ -48,6 +48,7 @@ void BondBPMSpringRS::allocate()
   for (int i = 1; i <= n; i++) setflag[i] = 0;
   coeffs.assign(n, bpm_bond_coeffs{0.0, 0.0, 0.0});
   rules.assign(n, bpm_bond_failure{1.0, 0.0, 1, 1, 0, 0});
+  with_volume.assign(n, 0);
 }
 
 // Upstream's keywords, in any order; store/local takes every value word
@@ -138,6 +139,7 @@ void BondBPMSpringRS::coeff(int narg, char **arg)
   for (int i = ilo; i <= ihi; i++) {
     coeffs[i - 1] = bpm_bond_coeffs{k, a, gamma};
     rules[i - 1] = rule;
+    with_volume[i - 1] = volume;
     setflag[i] = 1;
   }
 }
@@ -155,9 +157,9 @@ void BondBPMSpringRS::ensure_fixes()
   reference = dynamic_cast<FixBPMReference *>(modify->fix[ifix]);
   if (!reference) error->all(FLERR, std::string("fix ID BPM_REFERENCE is taken by another fix"));
   if (plastic && !reference->plastic())
-    error->all(FLERR, style + ": the bonds' reference lengths were set up by an elastic bond style "
-                              "(no plastic strains kept): set " + style.substr(11) +
-                              " before the first run");
+    error->all(FLERR, style + ": the bonds' reference lengths are kept by an elastic bond style's "
+                              "fix (no plastic strains): the deck's first bond_style must be the "
+                              "plastic one, or 'unfix BPM_REFERENCE' first");
   reference->owner = style;
 
   broken_pairs = nullptr;
@@ -179,9 +181,9 @@ void BondBPMSpringRS::ensure_fixes()
       ifix = modify->find_fix(store_id);
     }
     store = dynamic_cast<FixBPMStoreLocal *>(modify->fix[ifix]);
-    if (!store || store->values() != (int) store_values.size())
+    if (!store || store->values() != (int) store_values.size() || store->every() != store_every)
       error->all(FLERR, style + ": store/local fix ID " + store_id +
-                            " is taken by another fix (or one with other values)");
+                            " is taken by another fix (or one with another N or other values)");
   }
 }
 
@@ -199,6 +201,17 @@ void BondBPMSpringRS::init_style()
                               "epsilon_c would all break at the first step. Continue with "
                               "break no, or start the breaking run from a data file");
   reference->set_breaking(break_flag != 0);
+  // A later bond_style can change the flags under coefficients checked
+  // with the old ones: each type is checked again as it now stands.
+  char why[512];
+  for (int i = 1; i <= atom->nbondtypes; i++) {
+    if (!setflag[i]) continue;
+    if (bpm_check_bond_failure(&rules[i - 1], why, sizeof(why)) != BPM_OK)
+      error->all(FLERR, style + ": bond type " + std::to_string(i) + ": " + why);
+    if (volume && !with_volume[i - 1])
+      error->all(FLERR, style + ": bond type " + std::to_string(i) +
+                            " has no a_v: give its bond_coeff after 'volume/factor yes'");
+  }
   damped = false;
   live = break_flag || plastic || normalize;
   for (auto &c : coeffs) damped = damped || c.gamma != 0.0;
@@ -272,7 +285,10 @@ void BondBPMSpringRS::compute(int eflag, int vflag)
   bpm_failure_counts found{0, 0};
   if (live) {
     broken.resize(nbonds > 0 ? nbonds : 1);
-    // Upstream's plastic style lets no bond break while a run is set up.
+    // Upstream's plastic style lets no bond break while a run is set up
+    // (its source gates breaks on update->setupflag); its elastic style
+    // has no such gate, so neither has ours. A bond past epsilon_c in
+    // such a set-up gets a negative smoothing factor, as upstream's does.
     int may_break = plastic ? !update->setupflag : 1;
     status = bpm_failing_bond_forces(x, v, nall, bonds, nbonds, r0, plastic_strains, coeffs.data(),
                                      rules.data(), (int64_t) coeffs.size(), may_break, vol, vol0,
@@ -301,7 +317,8 @@ void BondBPMSpringRS::compute(int eflag, int vflag)
 void BondBPMSpringRS::process_broken(int i, int j)
 {
   if (store) {
-    double row[6];
+    std::vector<double> &row = store_row;
+    row.resize(store_values.size());
     double **x = atom->x;
     for (size_t n = 0; n < store_values.size(); n++) {
       const std::string &value = store_values[n];
@@ -312,7 +329,7 @@ void BondBPMSpringRS::process_broken(int i, int j)
                : value == "y"    ? 0.5 * (x[i][1] + x[j][1])
                                  : 0.5 * (x[i][2] + x[j][2]);
     }
-    store->add(row, i, j);
+    store->add(row.data(), i, j);
   }
   if (broken_pairs && !overlay) broken_pairs->add(i, j);
   forget_bond(i, j);
@@ -379,6 +396,7 @@ void BondBPMSpringRS::read_restart(FILE *fp)
   normalize = flags[2];
   volume = flags[3];
   overlay = flags[4];
+  with_volume.assign(atom->nbondtypes, volume);
   for (int i = 1; i <= atom->nbondtypes; i++) setflag[i] = 1;
 }
 

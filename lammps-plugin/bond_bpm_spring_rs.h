@@ -43,11 +43,13 @@ class BondBPMSpringRS : public Bond {
   int break_flag, smooth, normalize, volume, overlay;
   std::vector<bpm_bond_coeffs> coeffs;    // index: type - 1
   std::vector<bpm_bond_failure> rules;    // index: type - 1
+  std::vector<char> with_volume;          // index: type - 1: a_v was given
   bool damped, live;
   std::vector<int32_t> broken;
   std::string store_id;                   // store/local: fix ID, interval, values
   int store_every;
   std::vector<std::string> store_values;
+  std::vector<double> store_row;
   class FixBPMReference *reference;
   class FixBPMBrokenPairs *broken_pairs;
   class FixBPMStoreLocal *store;

@@ -92,7 +92,7 @@ int bpm_intact_bond_volumes(const double *x, int64_t nall, const bpm_bond_entry 
                             int64_t n_owned, int32_t newton, double *vol, double *vol0);
 
 /* As bpm_bond_forces for bonds that break and yield (rules[type - 1]):
- * entries of type 0 are skipped; a bond that breaks gets type 0 and its
+ * entries of type 0 or below are skipped; a bond that breaks gets type 0 and its
  * list index goes to broken (nbonds slots); plastic (NULL when no rule
  * yields) holds each bond's e_p, updated; may_break == 0 keeps every bond
  * (a run's set-up). Counts to found (if not NULL). */
@@ -104,8 +104,9 @@ int bpm_failing_bond_forces(const double *x, const double *v, int64_t nall, bpm_
                             int32_t *broken, bpm_failure_counts *found, bpm_tally *tally,
                             bpm_fault *fault);
 
-/* Force over distance (to fforce) and spring-proxy energy of one intact
- * bond with plastic strain e_p, without damping or multibody term. */
+/* Force over distance (to fforce) and spring-proxy energy (k (r - r_eq)^2
+ * / 2, over r0 with normalize) of one intact bond with plastic strain e_p,
+ * without damping or multibody term; both 0 past the critical strain. */
 double bpm_failing_bond_single(double r, double r0, double e_p, const bpm_bond_coeffs *coeffs,
                                const bpm_bond_failure *rule, double *fforce);
 

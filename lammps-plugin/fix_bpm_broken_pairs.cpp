@@ -3,7 +3,6 @@
 #include "fix_bpm_broken_pairs.h"
 
 #include "atom.h"
-#include "comm.h"
 #include "error.h"
 #include "neigh_list.h"
 #include "neighbor.h"
@@ -16,12 +15,11 @@ using namespace FixConst;
 FixBPMBrokenPairs::FixBPMBrokenPairs(LAMMPS *lmp, int narg, char **arg) : Fix(lmp, narg, arg)
 {
   if (narg != 3) error->all(FLERR, std::string("Illegal fix BPM/BROKEN/PAIRS command: it takes no arguments"));
-  restart_global = 1;    // so write_restart flushes the special lists first
 }
 
 int FixBPMBrokenPairs::setmask()
 {
-  return PRE_EXCHANGE | PRE_FORCE;
+  return PRE_EXCHANGE | PRE_FORCE | MIN_PRE_EXCHANGE | MIN_PRE_FORCE;
 }
 
 void FixBPMBrokenPairs::add(int i, int j)
@@ -62,29 +60,19 @@ void FixBPMBrokenPairs::pre_force(int)
   const int special_bits = 3 << SBBITS;
   for (int l = 0; l < neighbor->nlist; l++) {
     NeighList *list = neighbor->lists[l];
-    // A copy shares its original's rows; an occasional list may not be built yet.
-    if (list->copy || !list->numneigh || !list->firstneigh) continue;
+    // A copy shares its original's rows; an occasional list holds the
+    // atoms of its last build (rebuilt, with the special lists, when used).
+    if (list->copy || list->occasional || !list->numneigh || !list->firstneigh) continue;
     for (auto &pair : unlisted) {
       for (int side = 0; side < 2; side++) {
         int i = atom->map(side ? pair.second : pair.first);
         tagint partner = side ? pair.first : pair.second;
         if (i < 0 || i >= nlocal) continue;
         int *row = list->firstneigh[i];
-        for (int k = 0; k < list->numneigh[i]; k++) {
-          int j = row[k] & ~special_bits;
-          if (tag[j] == partner) row[k] = j;
-        }
+        for (int k = 0; k < list->numneigh[i]; k++)
+          if (tag[row[k] & NEIGHMASK] == partner) row[k] &= ~special_bits;
       }
     }
   }
   unlisted.clear();
-}
-
-void FixBPMBrokenPairs::write_restart(FILE *fp)
-{
-  pre_exchange();
-  if (comm->me == 0) {
-    int size = 0;
-    fwrite(&size, sizeof(int), 1, fp);
-  }
 }

@@ -21,7 +21,12 @@ class FixBPMBrokenPairs : public Fix {
   int setmask() override;
   void pre_exchange() override;
   void pre_force(int) override;
-  void write_restart(FILE *) override;
+  // A run's set-up rebuilds the lists: breaks since the last reneighbouring
+  // must leave the special lists first, and the lists after.
+  void setup_pre_exchange() override { pre_exchange(); }
+  void setup_pre_force(int vflag) override { pre_force(vflag); }
+  void min_pre_exchange() override { pre_exchange(); }
+  void min_pre_force(int vflag) override { pre_force(vflag); }
 
   // The bond between atoms i and j (local or ghost) broke.
   void add(int i, int j);

@@ -58,6 +58,11 @@ int FixBPMReference::setmask()
 
 void FixBPMReference::setup_pre_force(int)
 {
+  if (stride != atom->bond_per_atom)
+    error->all(FLERR, owner + ": the atoms' bond slots grew from " + std::to_string(stride) + " to " +
+                          std::to_string(atom->bond_per_atom) +
+                          " after the bond style was set (read_data ... extra/bond/per/atom?): "
+                          "set the bond style after every command that adds bond slots");
   if (!captured) capture();
   double local = 0.0;
   for (int i = 0; i < atom->nlocal; i++)
@@ -136,12 +141,14 @@ int FixBPMReference::modify_param(int narg, char **arg)
 {
   if (strcmp(arg[0], "reset") == 0) {
     captured = 0;    // the next run's setup takes the current lengths
+    restored = false;
     given.clear();
     return 1;
   }
   if (strcmp(arg[0], "lengths") == 0) {
     if (narg < 2) error->all(FLERR, std::string("fix_modify BPM_REFERENCE lengths needs a file name"));
     read_lengths(arg[1]);
+    restored = false;
     return 2;
   }
   return 0;

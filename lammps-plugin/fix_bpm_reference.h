@@ -53,7 +53,7 @@ class FixBPMReference : public Fix {
   void remove_slot(int i, int m);
   bool plastic() const { return with_plastic; }
   // Read from a restart file written by a style whose bonds never break.
-  bool restored_unbreakable() const { return restored && !restored_breaking; }
+  bool restored_unbreakable() const { return restored && captured && !restored_breaking; }
   // Recorded in restart files: whether the owning style breaks bonds.
   void set_breaking(bool on) { breaking = on; }
   // The owning style in messages, e.g. "bond_style bpm/multibody".

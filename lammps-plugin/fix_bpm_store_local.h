@@ -20,6 +20,7 @@ class FixBPMStoreLocal : public Fix {
   double memory_usage() override;
 
   int values() const { return nvalues; }
+  int every() const { return nreset; }
   // One row of values() numbers for the bond between atoms i and j (kept
   // only if both are in the fix's group).
   void add(const double *row, int i, int j);

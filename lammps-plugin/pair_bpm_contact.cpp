@@ -63,11 +63,11 @@ void PairBPMContact::coeff(int narg, char **arg)
   if (a < 0.0) error->all(FLERR, "pair_style bpm/contact: a_P must be >= 0, got " + std::string(arg[4]));
   if (gamma < 0.0)
     error->all(FLERR, "pair_style bpm/contact: gamma must be >= 0, got " + std::string(arg[5]));
-  set_coeffs(narg, arg, bpm_pair_coeffs{k, d, a, gamma});
+  set_coeffs(arg, bpm_pair_coeffs{k, d, a, gamma});
 }
 
 // The type pairs named by arg[0] and arg[1] get c.
-void PairBPMContact::set_coeffs(int, char **arg, const bpm_pair_coeffs &c)
+void PairBPMContact::set_coeffs(char **arg, const bpm_pair_coeffs &c)
 {
   if (!allocated) allocate();
   int ilo, ihi, jlo, jhi;

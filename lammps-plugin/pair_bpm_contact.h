@@ -31,7 +31,7 @@ class PairBPMContact : public Pair {
   bool damping_taper;    // upstream's fading contact damping (bpm/spring/rs)
   std::string style;     // in messages: "pair_style bpm/contact"
   void allocate();
-  void set_coeffs(int, char **, const bpm_pair_coeffs &);
+  void set_coeffs(char **, const bpm_pair_coeffs &);
   void check_ghost_velocities();
 };
 

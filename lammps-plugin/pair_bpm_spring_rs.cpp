@@ -46,7 +46,7 @@ void PairBPMSpringRS::coeff(int narg, char **arg)
   if (cut <= 0.0) error->all(FLERR, style + ": r_c must be > 0, got " + std::string(arg[3]));
   if (gamma < 0.0) error->all(FLERR, style + ": gamma must be >= 0, got " + std::string(arg[4]));
   if (ka < 0.0) error->all(FLERR, style + ": k_a must be >= 0, got " + std::string(arg[5]));
-  set_coeffs(narg, arg, bpm_pair_coeffs{k, cut, ka, gamma});
+  set_coeffs(arg, bpm_pair_coeffs{k, cut, ka, gamma});
 }
 
 // Upstream's pair style needs ghost velocities whatever gamma is, and

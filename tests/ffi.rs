@@ -348,12 +348,15 @@ fn failing_bond_abi_breaks_yields_and_skips_broken_entries() {
     let mut f = [[0.0f64; 3]; 6];
     let mut broken = [-1i32; 4];
     let mut found = FailureCounts::default();
-    let call = |bonds: &mut [BondEntry; 4],
-                plastic: *mut f64,
-                rule: &RawBondFailure,
-                f: &mut [[f64; 3]; 6],
-                broken: &mut [i32; 4],
-                found: &mut FailureCounts| unsafe {
+    let mut tally = Tally::default();
+    let call_with = |bonds: &mut [BondEntry; 4],
+                     plastic: *mut f64,
+                     rule: &RawBondFailure,
+                     may_break: i32,
+                     f: &mut [[f64; 3]; 6],
+                     broken: &mut [i32; 4],
+                     found: &mut FailureCounts,
+                     tally: *mut Tally| unsafe {
         bpm_failing_bond_forces(
             x.as_ptr() as *const f64,
             std::ptr::null(),
@@ -365,7 +368,7 @@ fn failing_bond_abi_breaks_yields_and_skips_broken_entries() {
             coeffs.as_ptr(),
             rule,
             1,
-            1,
+            may_break,
             std::ptr::null(),
             std::ptr::null(),
             6,
@@ -373,19 +376,42 @@ fn failing_bond_abi_breaks_yields_and_skips_broken_entries() {
             f.as_mut_ptr() as *mut f64,
             broken.as_mut_ptr(),
             found,
-            std::ptr::null_mut(),
+            tally,
             std::ptr::null_mut(),
         )
     };
-    let st = call(
+    let call = |bonds: &mut [BondEntry; 4],
+                plastic: *mut f64,
+                rule: &RawBondFailure,
+                f: &mut [[f64; 3]; 6],
+                broken: &mut [i32; 4],
+                found: &mut FailureCounts| {
+        call_with(
+            bonds,
+            plastic,
+            rule,
+            1,
+            f,
+            broken,
+            found,
+            std::ptr::null_mut(),
+        )
+    };
+    let st = call_with(
         &mut bonds,
         plastic.as_mut_ptr(),
         &rule,
+        1,
         &mut f,
         &mut broken,
         &mut found,
+        &mut tally,
     );
     assert_eq!(st, BPM_OK);
+    // Spring proxies k (r - r_eq)^2 / 2 of the two intact bonds, and their
+    // virial r_x F_x: -1.05 x -0.04/1.05 ... summed, -0.042 + 0.0384.
+    assert!((tally.energy - 8e-4).abs() < 1e-15, "{tally:?}");
+    assert!((tally.virial[0] + 0.0036).abs() < 1e-15, "{tally:?}");
     assert_eq!((found.broken, found.yielded), (1, 2));
     assert_eq!(broken[0], 1);
     assert_eq!(
@@ -399,6 +425,52 @@ fn failing_bond_abi_breaks_yields_and_skips_broken_entries() {
     assert!((f[1][0] + f[0][0]).abs() < 1e-15);
     assert_eq!((f[2], f[3]), ([0.0; 3], [0.0; 3]));
     assert!((f[4][0] - 2.0 * (0.96 - 0.98)).abs() < 1e-14, "{:?}", f[4]);
+    // While a run is set up (may_break 0) the 15% bond holds, its force
+    // smoothing-free: -k (r - r_eq) with e_p moved to 0.13.
+    let mut held = [
+        BondEntry { i: 0, j: 1, ty: 1 },
+        BondEntry { i: 2, j: 3, ty: 1 },
+        BondEntry { i: 4, j: 5, ty: 1 },
+        BondEntry { i: 0, j: 5, ty: 0 },
+    ];
+    let mut ep = [0.0; 4];
+    let mut h = [[0.0; 3]; 6];
+    let st = call_with(
+        &mut held,
+        ep.as_mut_ptr(),
+        &rule,
+        0,
+        &mut h,
+        &mut broken,
+        &mut found,
+        std::ptr::null_mut(),
+    );
+    assert_eq!((st, found.broken, held[1].ty), (BPM_OK, 0, 1));
+    assert!((h[2][0] - 2.0 * (1.15 - 1.13)).abs() < 1e-14, "{:?}", h[2]);
+    // One bond for LAMMPS's single(): r = 2.1, r0 = 2, e_p = 0.03.
+    let mut fforce = f64::NAN;
+    let energy =
+        unsafe { bpm_failing_bond_single(2.1, 2.0, 0.03, coeffs.as_ptr(), &rule, &mut fforce) };
+    assert!(
+        (fforce + 2.0 * (2.1 - 2.06) / 2.1).abs() < 1e-15,
+        "{fforce}"
+    );
+    assert!((energy - 0.0016).abs() < 1e-15, "{energy}");
+    let strain = RawBondFailure {
+        normalize: 1,
+        ..rule
+    };
+    let energy =
+        unsafe { bpm_failing_bond_single(2.1, 2.0, 0.03, coeffs.as_ptr(), &strain, &mut fforce) };
+    assert!(
+        (fforce + 2.0 * (0.05 - 0.03) / 2.1).abs() < 1e-15,
+        "{fforce}"
+    );
+    assert!((energy - 0.0008).abs() < 1e-15, "{energy}");
+    // Past the critical strain, and for a refused rule: nothing.
+    let past_critical =
+        unsafe { bpm_failing_bond_single(2.3, 2.0, 0.0, coeffs.as_ptr(), &rule, &mut fforce) };
+    assert_eq!((past_critical, fforce), (0.0, 0.0));
     // Bad input: yielding without plastic strains, a rule the model
     // refuses, an atom out of range.
     let mut fresh = [
@@ -456,19 +528,21 @@ fn failing_bond_abi_breaks_yields_and_skips_broken_entries() {
 
 /// The multibody term over intact bonds: in a solid whose bonds all sit
 /// at their rest lengths, yielded or not, it adds no force, and a broken
-/// entry (type 0) counts in neither volume.
+/// entry (type 0, given a rest length far from its length) counts in
+/// neither volume.
 #[test]
 fn intact_volumes_leave_a_solid_at_its_rest_lengths_without_force() {
     let (x0, mut bonds, r0) = random_network(60, 3.0, 1.5, 7);
     let n = x0.len();
     // Rest lengths r_eq = r0 (1 + e_p) equal to the lengths as they are.
     let plastic: Vec<f64> = (0..bonds.len()).map(|k| 0.01 * (k % 5) as f64).collect();
-    let first: Vec<f64> = r0
+    let mut first: Vec<f64> = r0
         .iter()
         .zip(&plastic)
         .map(|(r, e)| r / (1.0 + e))
         .collect();
     bonds[3].ty = 0;
+    first[3] *= 0.5;
     let mut vol = vec![0.0; n];
     let mut vol0 = vec![0.0; n];
     let st = unsafe {

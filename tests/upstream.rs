@@ -258,7 +258,8 @@ fn a_bond_pulled_to_failure_breaks_and_yields_as_upstreams() {
 /// (`-sf rs`): the same stress up to round-off until the first break, the
 /// first break in the same row, then peak stress and broken bonds within
 /// the issue's 1% and 10%; and our broken bonds the same on 4 ranks as on
-/// 1, with newton_bond off and (overlay/pair yes) on.
+/// 1, with newton_bond off and (overlay/pair yes) on, and for plastic
+/// bonds.
 #[test]
 fn a_block_pulled_to_fracture_breaks_as_upstreams_on_our_styles() {
     use bpm::verify::upstream::block_tension::{compare_tension, tension_cases};
@@ -271,7 +272,21 @@ fn a_block_pulled_to_fracture_breaks_as_upstreams_on_our_styles() {
     for r in &rows {
         eprintln!("{}", r.line());
     }
-    assert_eq!(judged(&rows), 10);
+    // 3 blocks x (4 observables against upstream, 2 across rank counts).
+    assert_eq!(judged(&rows), 18);
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// Upstream's impact deck, unchanged, on upstream's styles and on ours:
+/// the broken bonds against time within the issue's 5%.
+#[test]
+fn a_projectile_breaks_a_plate_as_upstreams_on_our_styles() {
+    let lmp = modern();
+    let dir = workdir("impact");
+    let mut rows = Vec::new();
+    bpm::verify::upstream::impact::compare_impact(&lmp, &dir, &mut rows).unwrap();
+    eprintln!("{}", rows[0].line());
+    assert_eq!(judged(&rows), 1);
     let _ = std::fs::remove_dir_all(&dir);
 }
 
@@ -452,5 +467,54 @@ fn restarts_keep_broken_bonds_and_plastic_strains() {
         error.contains("written with bonds that do not break"),
         "{error}"
     );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// A bond broken in compression near the end of one run is a contact at
+/// the next run's set-up: the set-up's list build must not restore the
+/// pair's special bits (the breaks leave the special lists first).
+#[test]
+fn a_pair_broken_in_one_run_is_a_contact_in_the_next() {
+    use bpm::verify::upstream::Styles;
+    let dir = workdir("dropin-second-run");
+    let input = dir.join("second.in");
+    // Atom 2 moves towards atom 1 at 0.5: the bond breaks below r = 0.9
+    // (step 21 of 0.01 tau) and no list is rebuilt in the run.
+    std::fs::write(
+        &input,
+        "units lj\natom_style bond\nnewton on off\nregion b block -4 4 -4 4 -4 4\n\
+         create_box 1 b bond/types 1 extra/bond/per/atom 1 extra/special/per/atom 1\n\
+         create_atoms 1 single 0 0 0\ncreate_atoms 1 single 1 0 0\nmass 1 1.0\n\
+         comm_modify vel yes\ncreate_bonds single/bond 1 1 2\n\
+         special_bonds lj 0 1 1 coul 1 1 1\npair_style bpm/spring\npair_coeff * * 1 1 0\n\
+         bond_style bpm/spring smooth no\nbond_coeff 1 1 0.1 0\n\
+         neigh_modify every 1000 delay 0 check no\ngroup two id 2\ngroup one id 1\n\
+         velocity two set -0.5 0 0\nfix move two move linear -0.5 0 0\n\
+         compute nb all nbond/atom\ncompute bonds all reduce sum c_nb\n\
+         thermo_style custom step c_bonds\ntimestep 0.01\nrun 30\nunfix move\nfix hold all setforce NULL NULL NULL\n\
+         run 0\nprint \"SECOND $(x[2]-x[1]:%.17g) $(fx[1]:%.17g) $(c_bonds)\"\n",
+    )
+    .unwrap();
+    let work = bpm::verify::Work {
+        particles: 2,
+        steps: 30,
+    };
+    let out = modern()
+        .run_styles(Styles::Ours, &input, &[], 1, work)
+        .unwrap();
+    let line = out
+        .lines()
+        .find(|l| l.starts_with("SECOND"))
+        .unwrap_or_else(|| panic!("no SECOND line in:\n{out}"));
+    let v: Vec<f64> = line
+        .split_whitespace()
+        .skip(1)
+        .map(|w| w.parse().unwrap())
+        .collect();
+    let (r, fx, bonds) = (v[0], v[1], v[2]);
+    assert_eq!(bonds, 0.0, "{line}");
+    assert!(r < 0.9, "{line}");
+    // The contact k (r_c - r) pushes atom 1 away from atom 2 (along -x).
+    assert!((fx + (1.0 - r)).abs() < 1e-12, "{line}");
     let _ = std::fs::remove_dir_all(&dir);
 }

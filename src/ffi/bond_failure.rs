@@ -5,8 +5,8 @@
 use super::{check_bond_atoms, counts, guard, list, opt_rows, report, rows, write_message};
 use super::{BPM_ERR_NULL, BPM_ERR_STOPPED, BPM_ERR_TYPE, BPM_OK};
 use crate::kernels::{
-    accumulate_intact_volumes, failing_bond_force, failing_list_forces, BondCoeffs, BondEntry,
-    BondFailure, FailingListInputs, Fault, Ownership, Tally, Unwrapped,
+    accumulate_intact_volumes, failing_bond_energy, failing_bond_force, failing_list_forces,
+    BondCoeffs, BondEntry, BondFailure, FailingListInputs, Fault, Ownership, Tally, Unwrapped,
 };
 use std::ffi::c_char;
 use std::slice;
@@ -204,7 +204,7 @@ pub unsafe extern "C" fn bpm_failing_bond_forces(
         if status != BPM_OK {
             return status;
         }
-        if bonds.iter().any(|b| b.ty as usize > ncoeffs) {
+        if bonds.iter().any(|b| b.ty > 0 && b.ty as usize > ncoeffs) {
             return BPM_ERR_TYPE;
         }
         let inputs = FailingListInputs {
@@ -222,16 +222,17 @@ pub unsafe extern "C" fn bpm_failing_bond_forces(
         } else {
             &mut [][..]
         };
-        let mut indices = vec![0usize; bonds.len()];
+        let broken = if nbonds == 0 {
+            &mut [][..]
+        } else {
+            slice::from_raw_parts_mut(broken, nbonds)
+        };
         let own = Ownership {
             n_owned,
             newton: newton != 0,
         };
         let f = slice::from_raw_parts_mut(f as *mut [f64; 3], nall);
-        let pass = failing_list_forces(&Unwrapped, &inputs, bonds, plastic, own, f, &mut indices);
-        for (k, &n) in indices[..pass.broken].iter().enumerate() {
-            *broken.add(k) = n as i32;
-        }
+        let pass = failing_list_forces(&Unwrapped, &inputs, bonds, plastic, own, f, broken);
         if let Some(found) = found.as_mut() {
             *found = FailureCounts {
                 broken: pass.broken as i64,
@@ -242,12 +243,13 @@ pub unsafe extern "C" fn bpm_failing_bond_forces(
     })
 }
 
-/// Force over distance (to `fforce`) and spring-proxy energy of one
-/// intact bond without damping or multibody term, for LAMMPS's
-/// `Bond::single`: 0 for a bond past its critical strain.
+/// Force over distance (to `fforce`) and spring-proxy energy
+/// ([`failing_bond_energy`]) of one intact bond without damping or
+/// multibody term, for LAMMPS's `Bond::single`; both 0 for a bond past its
+/// critical strain, a rule the model refuses, or a length not above 0.
 ///
 /// # Safety
-/// `coeffs`, `rule` and `fforce` must be valid pointers.
+/// `coeffs` and `rule` are null or valid; `fforce` is null or valid.
 #[no_mangle]
 pub unsafe extern "C" fn bpm_failing_bond_single(
     r: f64,
@@ -257,16 +259,22 @@ pub unsafe extern "C" fn bpm_failing_bond_single(
     rule: *const RawBondFailure,
     fforce: *mut f64,
 ) -> f64 {
-    if coeffs.is_null() || rule.is_null() || fforce.is_null() || !(r > 0.0 && r0 > 0.0) {
-        return 0.0;
-    }
-    let (c, rule) = (&*coeffs, (*rule).rule());
-    let mut e_p = plastic_strain;
-    let Some(force) = failing_bond_force(r, r0, &mut e_p, None, 0.0, c, &rule) else {
-        *fforce = 0.0;
+    let Some(fforce) = fforce.as_mut() else {
         return 0.0;
     };
-    *fforce = force / r;
-    let stretch = r - r0 * (1.0 + e_p);
-    0.5 * c.k * stretch * stretch
+    *fforce = 0.0;
+    let (Some(c), Some(rule)) = (coeffs.as_ref(), rule.as_ref().map(|r| r.rule())) else {
+        return 0.0;
+    };
+    if !(r > 0.0 && r0 > 0.0) || rule.check().is_err() {
+        return 0.0;
+    }
+    let mut e_p = plastic_strain;
+    match failing_bond_force(r, r0, &mut e_p, None, 0.0, c, &rule) {
+        Some(force) => {
+            *fforce = force / r;
+            failing_bond_energy(r, r0, e_p, c, &rule)
+        }
+        None => 0.0,
+    }
 }

@@ -190,6 +190,19 @@ pub fn failing_bond_force(
     Some(f)
 }
 
+/// A failing bond's spring-proxy energy at length `r`: `k (r - r_eq)^2 / 2`,
+/// over `r0` with `normalize` (the energy of the spring in strain).
+#[inline(always)]
+pub fn failing_bond_energy(r: f64, r0: f64, e_p: f64, c: &BondCoeffs, rule: &BondFailure) -> f64 {
+    let stretch = r - r0 * (1.0 + e_p);
+    let energy = 0.5 * c.k * stretch * stretch;
+    if rule.normalize {
+        energy / r0
+    } else {
+        energy
+    }
+}
+
 /// What a pass over failing bonds found besides forces.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct FailurePass {

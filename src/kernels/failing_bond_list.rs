@@ -11,7 +11,7 @@
 //! `r_eq = (1 + e_p) r0`, as in the native engine.
 
 use super::bond::{dilation, BondCoeffs, BondEntry};
-use super::bond_failure::{failing_bond_force, BondFailure};
+use super::bond_failure::{failing_bond_energy, failing_bond_force, BondFailure};
 use super::fault::{Fault, ForcePass};
 use super::tally::{apply_pair_force, Ownership, Tally};
 use super::{dot, sub, Separation};
@@ -55,8 +55,8 @@ pub struct ListFailures {
 ///
 /// `plastic` holds each bond's plastic strain `e_p` (read, and written
 /// where it yields); it may be empty when no rule yields. A bond that
-/// breaks gets type 0 and its index goes to `broken`, which must hold a
-/// slot per bond.
+/// breaks gets type 0 and its list index goes to `broken`, which must hold
+/// a slot per bond (an `i32`, as the list's atom indices).
 ///
 /// # Panics
 /// If a slice is shorter than the list needs, an index is out of range or
@@ -68,7 +68,7 @@ pub fn failing_list_forces<S: Separation>(
     plastic: &mut [f64],
     own: Ownership,
     f: &mut [[f64; 3]],
-    broken: &mut [usize],
+    broken: &mut [i32],
 ) -> ListFailures {
     let yields = inputs.rules.iter().any(|r| r.plastic_strain.is_some());
     assert!(
@@ -113,7 +113,7 @@ pub fn failing_list_forces<S: Separation>(
         let mut e_p = before;
         let Some(fmag) = failing_bond_force(r, r0, &mut e_p, dilation, damping, c, &rule) else {
             bond.ty = 0;
-            broken[out.broken] = n;
+            broken[out.broken] = n as i32;
             out.broken += 1;
             continue;
         };
@@ -128,12 +128,7 @@ pub fn failing_list_forces<S: Separation>(
         let (on_i, on_j, frac) = own.split(i, j);
         apply_pair_force(f, i, j, on_i, on_j, &del, fpair);
         if inputs.tally {
-            let stretch = r - r0 * (1.0 + e_p);
-            let mut energy = 0.5 * c.k * stretch * stretch;
-            if rule.normalize {
-                energy /= r0;
-            }
-            tally.add(frac, energy, &del, fpair);
+            tally.add(frac, failing_bond_energy(r, r0, e_p, c, &rule), &del, fpair);
         }
     }
     out.pass.tally = tally;

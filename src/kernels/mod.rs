@@ -33,8 +33,9 @@ pub use bond::{
     BondEntry, BondInputs,
 };
 pub use bond_failure::{
-    failing_bond_force, failing_row_forces, failing_row_forces_on, gather_rest_volumes,
-    plastic_strain_after, row_broke, smoothing, BondFailure, BondFailureError, FailurePass,
+    failing_bond_energy, failing_bond_force, failing_row_forces, failing_row_forces_on,
+    gather_rest_volumes, plastic_strain_after, row_broke, smoothing, BondFailure, BondFailureError,
+    FailurePass,
 };
 pub use bond_rows::{
     gather_forces, gather_forces_on, gather_volumes, row_forces, row_forces_on, row_volumes,

@@ -25,6 +25,7 @@ templates![
     "bond_pull/pull.in",
     "block_tension/block.in",
     "block_tension/tension.in",
+    "impact/impact.in",
     "compaction.in",
     "hertz_squeeze.in",
     "plugin_load_example.in",

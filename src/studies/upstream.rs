@@ -426,6 +426,67 @@ pub fn speed(
     })
 }
 
+/// Times upstream's `bpm/spring` and our drop-in (`-sf rs`) on the block
+/// pulled to fracture, `cells` fcc cells a side, for `steps` steps at a
+/// pull speed that breaks bonds from about the middle of the run on;
+/// alternates them `repeats` times and keeps each one's fastest run.
+pub fn breaking_speed(
+    lammps: &ModernLammps,
+    cells: u32,
+    steps: u64,
+    repeats: usize,
+    dir: &Path,
+) -> Result<SpeedRow> {
+    let case = block_tension::TensionCase {
+        name: "speed",
+        cells,
+        steps,
+        // About 6% strain by the end, past the peak (4.4%).
+        speed: 0.06 * cells as f64 * std::f64::consts::SQRT_2 / (steps as f64 * 0.01),
+        every: steps / 10,
+        ..block_tension::tension_cases().remove(0)
+    };
+    let data = block_tension::make_block(lammps, &case, dir)?;
+    let mut fastest = [(f64::INFINITY, LoopSections::UNTIMED, 0); 2];
+    for _ in 0..repeats.max(1) {
+        for (kept, styles) in fastest.iter_mut().zip([Styles::Ours, Styles::Upstream]) {
+            let (trace, screen) =
+                block_tension::run_tension_screen(lammps, &case, styles, 1, &data, dir)?;
+            let seconds = screen
+                .lines()
+                .rfind(|l| l.starts_with("Loop time of"))
+                .and_then(|l| l.split_whitespace().nth(3))
+                .and_then(|t| t.parse::<f64>().ok())
+                .ok_or_else(|| UpstreamError::Output("no loop time in the LAMMPS output".into()))?;
+            if seconds < kept.0 {
+                *kept = (seconds, LoopSections::of_log(&screen), trace.broken_count());
+            }
+        }
+    }
+    let atoms = std::fs::read_to_string(&data)
+        .map_err(FileError::on("reading", &data))?
+        .lines()
+        .find_map(|l| {
+            l.strip_suffix(" atoms")
+                .and_then(|n| n.trim().parse::<f64>().ok())
+        })
+        .ok_or_else(|| UpstreamError::Output(format!("no atom count in {}", data.display())))?;
+    let [(ours, ours_sections, ours_broken), (upstream, upstream_sections, upstream_broken)] =
+        fastest;
+    let per = 1e9 / (atoms * steps as f64);
+    Ok(SpeedRow {
+        configuration: format!(
+            "block pulled to fracture, {cells} cells, bonds broken {ours_broken} (ours) {upstream_broken} (upstream)"
+        ),
+        particles: atoms as usize,
+        ours_ns: ours * per,
+        upstream_ns: upstream * per,
+        ratio: ours / upstream,
+        ours_sections: ours_sections.scaled(per),
+        upstream_sections: upstream_sections.scaled(per),
+    })
+}
+
 /// Per atom, the part of our contact damping that upstream's smoothing
 /// factor removes: upstream damps a contact with `gamma (1 - (r/r_c)^8)
 /// (v_ij . n) n`, docs/model.md (and we) with `gamma (v_ij . n) n`, so ours
@@ -595,6 +656,8 @@ pub fn run_upstream_check(
         block_tension::compare_tension(&lammps, &case, &work, &mut rows)?;
         flush(&rows);
     }
+    crate::verify::upstream::impact::compare_impact(&lammps, &work, &mut rows)?;
+    flush(&rows);
     let mut speeds = Vec::new();
     if opts.speed_size > 0.0 {
         // The squeeze sets the volume strain, which picks the cube-root
@@ -612,6 +675,10 @@ pub fn run_upstream_check(
             log(&row.line());
             speeds.push(row);
         }
+        // Bonds that break: upstream's bpm/spring against our drop-in.
+        let row = breaking_speed(&lammps, 10, 4000, 3, &work)?;
+        log(&row.line());
+        speeds.push(row);
     }
     let report = serde_json::json!({
         "program": "bpm upstream-check",

