@@ -3,6 +3,7 @@
 #include "bond_bpm_multibody.h"
 #include "fault_message.h"
 #include "fix_bpm_reference.h"
+#include "internal_fix.h"
 
 #include "atom.h"
 #include "comm.h"
@@ -94,13 +95,7 @@ void BondBPMMultibody::settings(int narg, char **arg)
 void BondBPMMultibody::ensure_reference()
 {
   if (!atom->molecular) error->all(FLERR, std::string("bond_style bpm/multibody requires an atom style with bonds"));
-  int ifix = modify->find_fix(REFERENCE_ID);
-  if (ifix < 0) {
-    modify->add_fix(std::string(REFERENCE_ID) + " all BPM/REFERENCE");
-    ifix = modify->find_fix(REFERENCE_ID);
-  }
-  reference = dynamic_cast<FixBPMReference *>(modify->fix[ifix]);
-  if (!reference) error->all(FLERR, std::string("fix ID BPM_REFERENCE is taken by another fix"));
+  reference = bpm_internal_fix<FixBPMReference>(lmp, REFERENCE_ID, "BPM/REFERENCE");
 }
 
 void BondBPMMultibody::compute(int eflag, int vflag)

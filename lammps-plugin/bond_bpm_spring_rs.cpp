@@ -5,6 +5,7 @@
 #include "fix_bpm_broken_pairs.h"
 #include "fix_bpm_reference.h"
 #include "fix_bpm_store_local.h"
+#include "internal_fix.h"
 #include "keyword_value.h"
 
 #include "atom.h"
@@ -149,13 +150,8 @@ void BondBPMSpringRS::coeff(int narg, char **arg)
 void BondBPMSpringRS::ensure_fixes()
 {
   if (!atom->molecular) error->all(FLERR, style + " requires an atom style with bonds");
-  int ifix = modify->find_fix(REFERENCE_ID);
-  if (ifix < 0) {
-    modify->add_fix(std::string(REFERENCE_ID) + " all BPM/REFERENCE" + (plastic ? " plastic" : ""));
-    ifix = modify->find_fix(REFERENCE_ID);
-  }
-  reference = dynamic_cast<FixBPMReference *>(modify->fix[ifix]);
-  if (!reference) error->all(FLERR, std::string("fix ID BPM_REFERENCE is taken by another fix"));
+  reference = bpm_internal_fix<FixBPMReference>(
+      lmp, REFERENCE_ID, std::string("BPM/REFERENCE") + (plastic ? " plastic" : ""));
   if (plastic && !reference->plastic())
     error->all(FLERR, style + ": the bonds' reference lengths are kept by an elastic bond style's "
                               "fix (no plastic strains): the deck's first bond_style must be the "
@@ -163,27 +159,18 @@ void BondBPMSpringRS::ensure_fixes()
   reference->owner = style;
 
   broken_pairs = nullptr;
-  if (break_flag) {
-    ifix = modify->find_fix(BROKEN_PAIRS_ID);
-    if (ifix < 0) {
-      modify->add_fix(std::string(BROKEN_PAIRS_ID) + " all BPM/BROKEN/PAIRS");
-      ifix = modify->find_fix(BROKEN_PAIRS_ID);
-    }
-    broken_pairs = dynamic_cast<FixBPMBrokenPairs *>(modify->fix[ifix]);
-  }
+  if (break_flag)
+    broken_pairs = bpm_internal_fix<FixBPMBrokenPairs>(lmp, BROKEN_PAIRS_ID, "BPM/BROKEN/PAIRS");
 
   store = nullptr;
   if (!store_id.empty()) {
-    ifix = modify->find_fix(store_id);
-    if (ifix < 0) {
-      modify->add_fix(store_id + " all BPM/STORE/LOCAL " + std::to_string(store_every) + " " +
-                      std::to_string(store_values.size()));
-      ifix = modify->find_fix(store_id);
-    }
-    store = dynamic_cast<FixBPMStoreLocal *>(modify->fix[ifix]);
-    if (!store || store->values() != (int) store_values.size() || store->every() != store_every)
+    store = bpm_internal_fix<FixBPMStoreLocal>(
+        lmp, store_id,
+        "BPM/STORE/LOCAL " + std::to_string(store_every) + " " + std::to_string(store_values.size()));
+    if (store->values() != (int) store_values.size() || store->every() != store_every)
       error->all(FLERR, style + ": store/local fix ID " + store_id +
-                            " is taken by another fix (or one with another N or other values)");
+                            " holds another N or other values (a store/local of an earlier "
+                            "bond_style?): give it another ID");
   }
 }
 

@@ -2,6 +2,7 @@
 
 #include "pair_bpm_granular.h"
 #include "fix_bpm_contacts.h"
+#include "internal_fix.h"
 #include "fix_bpm_granular_wall.h"
 
 #include "atom.h"
@@ -94,13 +95,8 @@ void PairBPMGranular::create_style()
 void PairBPMGranular::ensure_contacts()
 {
   int slots = (int) bpm_granular_slots(style);
-  int ifix = modify->find_fix(CONTACTS_ID);
-  if (ifix < 0) {
-    modify->add_fix(std::string(CONTACTS_ID) + " all BPM/CONTACTS " + std::to_string(slots));
-    ifix = modify->find_fix(CONTACTS_ID);
-  }
-  contacts = dynamic_cast<FixBPMContacts *>(modify->fix[ifix]);
-  if (!contacts) error->all(FLERR, std::string("fix ID BPM_CONTACTS is taken by another fix"));
+  contacts = bpm_internal_fix<FixBPMContacts>(lmp, CONTACTS_ID,
+                                              "BPM/CONTACTS " + std::to_string(slots));
   if (contacts->slots() != slots)
     error->all(FLERR, "pair_style bpm/granular: slots " + std::to_string(slots) +
                           " differs from the " + std::to_string(contacts->slots()) +

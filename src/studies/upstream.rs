@@ -260,12 +260,7 @@ pub fn run_style(
             .map(|r| [r[c], r[c + 1], r[c + 2]])
             .collect::<Vec<_>>()
     };
-    let loop_seconds = out
-        .lines()
-        .rfind(|l| l.starts_with("Loop time of"))
-        .and_then(|l| l.split_whitespace().nth(3))
-        .and_then(|t| t.parse::<f64>().ok())
-        .ok_or_else(|| UpstreamError::Output("no loop time in the LAMMPS output".into()))?;
+    let loop_seconds = loop_seconds(&out)?;
     Ok(StyleResult {
         forces: [cols(&d0, 0), cols(&d1, 0)],
         positions: [cols(&d0, 3), cols(&d1, 3)],
@@ -426,6 +421,16 @@ pub fn speed(
     })
 }
 
+/// The loop time (s) of the last run in LAMMPS's screen output.
+fn loop_seconds(screen: &str) -> Result<f64> {
+    screen
+        .lines()
+        .rfind(|l| l.starts_with("Loop time of"))
+        .and_then(|l| l.split_whitespace().nth(3))
+        .and_then(|t| t.parse::<f64>().ok())
+        .ok_or_else(|| UpstreamError::Output("no loop time in the LAMMPS output".into()))
+}
+
 /// Times upstream's `bpm/spring` and our drop-in (`-sf rs`) on the block
 /// pulled to fracture, `cells` fcc cells a side, for `steps` steps at a
 /// pull speed that breaks bonds from about the middle of the run on;
@@ -452,12 +457,7 @@ pub fn breaking_speed(
         for (kept, styles) in fastest.iter_mut().zip([Styles::Ours, Styles::Upstream]) {
             let (trace, screen) =
                 block_tension::run_tension_screen(lammps, &case, styles, 1, &data, dir)?;
-            let seconds = screen
-                .lines()
-                .rfind(|l| l.starts_with("Loop time of"))
-                .and_then(|l| l.split_whitespace().nth(3))
-                .and_then(|t| t.parse::<f64>().ok())
-                .ok_or_else(|| UpstreamError::Output("no loop time in the LAMMPS output".into()))?;
+            let seconds = loop_seconds(&screen)?;
             if seconds < kept.0 {
                 *kept = (seconds, LoopSections::of_log(&screen), trace.broken_count());
             }
