@@ -94,6 +94,7 @@ fn kernels(c: &mut Criterion) {
         }
         bond_rows_cases(c, name, &inputs);
     }
+    failing_list_cases(c, &x, &v, &bonds, &r0, (&vol, &vol0));
     // The same network squeezed by 1% and 3% (linear): every volume ratio
     // leaves the cube root's series range (|q - 1| > 1/32; 0.033 and
     // 0.09 against the references 0.1% long), in its second range and
@@ -118,6 +119,102 @@ fn kernels(c: &mut Criterion) {
         };
         bond_rows_cases(c, &format!("bond::multibody_squeezed_{squeeze}"), &inputs);
     }
+}
+
+/// The drop-in styles' pass over a LAMMPS bond list with bonds that break
+/// (none does here: the cost of checking), beside the elastic list pass
+/// on the same bonds, with the multibody term, damping and sums, as
+/// LAMMPS runs them with `newton_bond off`.
+fn failing_list_cases(
+    c: &mut Criterion,
+    x: &[[f64; 3]],
+    v: &[[f64; 3]],
+    bonds: &[BondEntry],
+    r0: &[f64],
+    volumes: (&[f64], &[f64]),
+) {
+    let coeffs = [BondCoeffs {
+        k: 1.0,
+        a: -0.5,
+        gamma: 1.0,
+    }];
+    let own = Ownership {
+        n_owned: x.len(),
+        newton: false,
+    };
+    let mut f = vec![[0.0; 3]; x.len()];
+    let elastic = BondInputs {
+        x,
+        v: Some(v),
+        bonds,
+        r0,
+        coeffs: &coeffs,
+        volumes: Some(volumes),
+        tally: false,
+    };
+    for (name, rule) in [
+        ("breaking", BondFailure::breaking(0.5)),
+        (
+            "plastic",
+            BondFailure {
+                plastic_strain: Some(0.1),
+                ..BondFailure::breaking(0.5)
+            },
+        ),
+    ] {
+        let rules = [rule];
+        let inputs = FailingListInputs {
+            x,
+            v: Some(v),
+            r0,
+            coeffs: &coeffs,
+            rules: &rules,
+            may_break: true,
+            volumes: Some(volumes),
+            tally: false,
+        };
+        let mut list = bonds.to_vec();
+        let mut plastic = vec![0.0; bonds.len()];
+        let mut broken = vec![0; bonds.len()];
+        for isa in [Isa::Portable, Isa::Avx2] {
+            if !isa.available() {
+                continue;
+            }
+            c.bench_function(&format!("bond::failing_list_{name}/{}", isa.name()), |b| {
+                b.iter(|| {
+                    let found = failing_list_forces_on(
+                        isa,
+                        &Unwrapped,
+                        &inputs,
+                        &mut list,
+                        &mut plastic,
+                        own,
+                        &mut f,
+                        &mut broken,
+                    );
+                    assert_eq!(found.broken, 0);
+                })
+            });
+        }
+    }
+    let isa = Isa::detect().name();
+    c.bench_function(&format!("bond::elastic_list_newton_off/{isa}"), |b| {
+        b.iter(|| bond_forces_on(Isa::detect(), &Unwrapped, &elastic, own, &mut f))
+    });
+    let (mut vol, mut vol0) = (vec![0.0; x.len()], vec![0.0; x.len()]);
+    c.bench_function(&format!("bond::intact_volumes/{isa}"), |b| {
+        b.iter(|| {
+            accumulate_intact_volumes_on(
+                Isa::detect(),
+                &Unwrapped,
+                x,
+                bonds,
+                (r0, &[]),
+                own,
+                (&mut vol, &mut vol0),
+            )
+        })
+    });
 }
 
 /// The native engine's two-step bond pass on the same bonds, beside the

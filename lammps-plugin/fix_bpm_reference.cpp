@@ -184,18 +184,32 @@ const double *FixBPMReference::bondlist_r0()
 }
 
 // The slots of each listed bond in its owned atoms' rows (the bond is
-// stored on one of its atoms, on both with newton_bond off).
+// stored on one of its atoms, on both with newton_bond off), and for each
+// slot the entry that uses it, so that a removed slot updates two entries
+// instead of a search over the whole list.
 void FixBPMReference::find_slots()
 {
   int n = neighbor->nbondlist;
   int **bondlist = neighbor->bondlist;
   list_slot_i.assign(n, -1);
   list_slot_j.assign(n, -1);
+  slot_entry.assign((size_t) atom->nlocal * stride, -1);
+  bool unique = true;
+  auto note = [&](long slot, long entry) {
+    if (slot < 0) return;
+    unique = unique && slot_entry[slot] < 0;
+    slot_entry[slot] = entry;
+  };
   for (int k = 0; k < n; k++) {
     if (bondlist[k][2] <= 0) continue;
     list_slot_i[k] = slot_of(bondlist[k][0], bondlist[k][1]);
     list_slot_j[k] = slot_of(bondlist[k][1], bondlist[k][0]);
+    note(list_slot_i[k], 2L * k);
+    note(list_slot_j[k], 2L * k + 1);
   }
+  // A slot two entries use (a bond listed twice, as a data file may
+  // hold it) falls back to a search after each removal.
+  if (!unique) slot_entry.clear();
   slots_stale = false;
 }
 
@@ -227,7 +241,24 @@ void FixBPMReference::remove_slot(int i, int m)
     ep[i][m] = ep[i][last];
     ep[i][last] = 0.0;
   }
-  slots_stale = true;
+  bool mapped = !slots_stale && !slot_entry.empty() && list_built_at == neighbor->lastcall &&
+      slot_entry.size() == (size_t) atom->nlocal * stride;
+  if (!mapped) {
+    slots_stale = true;
+    return;
+  }
+  auto entry_slot = [&](long entry) -> long & {
+    return (entry & 1) ? list_slot_j[entry >> 1] : list_slot_i[entry >> 1];
+  };
+  long gone = (long) i * stride + m, moved = (long) i * stride + last;
+  if (slot_entry[gone] >= 0) entry_slot(slot_entry[gone]) = -1;
+  slot_entry[gone] = -1;
+  if (moved != gone) {
+    long entry = slot_entry[moved];
+    if (entry >= 0) entry_slot(entry) = gone;
+    slot_entry[gone] = entry;
+    slot_entry[moved] = -1;
+  }
 }
 
 bool FixBPMReference::bond_values(int i, int j, double &r0_value, double &ep_value)
@@ -445,6 +476,8 @@ void FixBPMReference::restart(char *buf)
 double FixBPMReference::memory_usage()
 {
   return (with_plastic ? 2.0 : 1.0) * atom->nmax * stride * sizeof(double) +
-         2.0 * nmax_vol * sizeof(double) +
-         4.0 * nmax_sums * sizeof(double);
+         2.0 * nmax_vol * sizeof(double) + 4.0 * nmax_sums * sizeof(double) +
+         (double) (list_r0.capacity() + list_ep.capacity()) * sizeof(double) +
+         (double) (list_slot_i.capacity() + list_slot_j.capacity() + slot_entry.capacity()) *
+             sizeof(long);
 }

@@ -87,6 +87,7 @@ class FixBPMReference : public Fix {
   int stride;
   std::vector<double> list_r0, list_ep;
   std::vector<long> list_slot_i, list_slot_j;    // i * stride + m of the owned atoms' slots, or -1
+  std::vector<long> slot_entry;    // per slot: 2 k + side of the list entry that uses it, or -1
   bool slots_stale;
   bigint list_built_at;
   int list_size;

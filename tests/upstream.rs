@@ -254,12 +254,12 @@ fn a_bond_pulled_to_failure_breaks_and_yields_as_upstreams() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
-/// Upstream's block deck, unchanged, on upstream's styles and on ours
-/// (`-sf rs`): the same stress up to round-off until the first break, the
-/// first break in the same row, then peak stress and broken bonds within
-/// the 1% and 10%; and our broken bonds the same on 4 ranks as on
-/// 1, with newton_bond off and (overlay/pair yes) on, and for plastic
-/// bonds.
+/// Upstream's block deck, unchanged, on upstream's styles, on ours
+/// (`-sf rs`) and in the native engine (from the same data file): the same
+/// stress up to round-off until the first break, the first break in the
+/// same step, then peak stress and broken bonds within the 1% and
+/// 10%; and our broken bonds the same on 4 ranks as on 1, with newton_bond
+/// off and (overlay/pair yes) on, and for plastic bonds.
 #[test]
 fn a_block_pulled_to_fracture_breaks_as_upstreams_on_our_styles() {
     use bpm::verify::upstream::block_tension::{compare_tension, tension_cases};
@@ -272,8 +272,15 @@ fn a_block_pulled_to_fracture_breaks_as_upstreams_on_our_styles() {
     for r in &rows {
         eprintln!("{}", r.line());
     }
-    // 3 blocks x (4 observables against upstream, 2 across rank counts).
-    assert_eq!(judged(&rows), 18);
+    // 3 blocks x (4 observables against upstream, 2 across rank counts),
+    // and 4 native observables for the 2 blocks without overlay/pair.
+    assert_eq!(judged(&rows), 26);
+    assert_eq!(
+        rows.iter()
+            .filter(|r| r.observable.starts_with("native"))
+            .count(),
+        8
+    );
     let _ = std::fs::remove_dir_all(&dir);
 }
 

@@ -9,12 +9,14 @@
 //!   [`dem`] (DEM spheres and the multi-contact closure); a new model is a
 //!   folder beside them implementing [`ParticleModel`];
 //! - drivers: [`external`] (walls, tether, viscous damping, gravity: terms
-//!   either model runs under), [`deform`] (box deformation, barostat);
+//!   either model runs under), [`deform`] (box deformation, barostat),
+//!   [`clamp`] (groups moved at a constant velocity);
 //! - [`state`]: everything a step changes, saved and restored whole, so a
 //!   run resumed from a checkpoint continues bit for bit;
 //! - [`parallel`] and [`timers`]: threads and per-part timing.
 
 pub mod bpm;
+pub mod clamp;
 pub mod deform;
 pub mod dem;
 pub mod external;
@@ -30,6 +32,7 @@ pub mod team;
 pub mod timers;
 
 pub use bpm::{BondTopology, BondWindow, BpmForceField, BpmModel, BpmTerms};
+pub use clamp::{Clamp, ClampError};
 pub use deform::{Barostat, Deformation, LeesEdwards, ShearRemap, TiltFactor};
 pub use dem::{
     ActiveGranularWall, BeyondReach, ClosurePass, ClosureReport, ContactStore, DemModel, DemReport,
@@ -52,6 +55,9 @@ pub use timers::{Stage, Timers};
 /// Failures of a running simulation.
 #[derive(Debug, thiserror::Error)]
 pub enum EngineError {
+    /// A stage's clamps cannot be held.
+    #[error(transparent)]
+    Clamp(#[from] ClampError),
     /// A position, velocity or force became NaN or infinite.
     #[error("simulation became unstable at step {step}: particle {particle} has a non-finite position, velocity or force (reduce dt or check the scene)")]
     NonFinite {

@@ -5,6 +5,7 @@
 //! half kick, then box changes (deformation, barostat) with affine remap
 //! (or, for Lees-Edwards shear, none: the images move instead).
 
+use super::clamp::{check_clamps, Clamp};
 use super::deform::{Barostat, Deformation, LeesEdwards};
 use super::external::{ExternalReport, ExternalTerms, Gravity};
 use super::integrator::Integrator;
@@ -28,6 +29,8 @@ pub struct StageDrivers {
     pub deformation: Option<Deformation>,
     /// Barostat.
     pub barostat: Option<Barostat>,
+    /// Groups moved at a constant velocity, out of the integrator's hands.
+    pub clamps: Vec<Clamp>,
     /// Sum energy and virial on stage steps that are multiples of this
     /// (0 = never); a barostat forces it on every step.
     pub tally_every: u64,
@@ -293,10 +296,18 @@ impl System {
         }
     }
 
-    /// Prepares a stage: hands the model the stage's granular walls (an
-    /// error if it cannot apply them), forces the list build and evaluates
-    /// forces once.
+    /// Prepares a stage: checks its clamps (an error if the engine cannot
+    /// hold them), hands the model the stage's granular walls (an error if
+    /// it cannot apply them), forces the list build and evaluates forces
+    /// once.
     pub fn setup(&mut self, drivers: &StageDrivers) -> Result<(), EngineError> {
+        let box_changes = drivers.deformation.is_some() || drivers.barostat.is_some();
+        check_clamps(
+            &drivers.clamps,
+            self.particles.len(),
+            self.simbox.periodic,
+            box_changes,
+        )?;
         self.stage_start_time = self.time;
         self.lees_edwards = drivers
             .deformation
@@ -322,8 +333,11 @@ impl System {
             let _t = self.timers.start(Stage::Integrate);
             self.integrator.initial(&mut self.particles, dt, &self.team);
         }
-        self.update_neighbours(false);
         let elapsed = stage_step as f64 * dt;
+        for clamp in &drivers.clamps {
+            clamp.place(elapsed, &mut self.particles);
+        }
+        self.update_neighbours(false);
         self.evaluate(drivers, elapsed, drivers.tally_at(stage_step), Some(dt));
         self.step += 1;
         self.check_faults(dt)?;
@@ -332,6 +346,9 @@ impl System {
             let _t = self.timers.start(Stage::Integrate);
             self.integrator
                 .final_half(&mut self.particles, dt, &self.team);
+        }
+        for clamp in &drivers.clamps {
+            clamp.hold_velocity(&mut self.particles);
         }
         // Stage start plus steps times dt, not a running sum: no round-off
         // grows with the step count, and LAMMPS's harness computes the same.

@@ -2,7 +2,9 @@
 //! `bpm/spring/rs` and `bpm/spring/plastic/rs` bond styles; see
 //! [`failing_list_forces`].
 
-use super::{check_bond_atoms, counts, guard, list, opt_rows, report, rows, write_message};
+use super::{
+    check_bond_atoms, check_bond_list, counts, guard, list, opt_rows, report, rows, write_message,
+};
 use super::{BPM_ERR_NULL, BPM_ERR_STOPPED, BPM_ERR_TYPE, BPM_OK};
 use crate::kernels::{
     accumulate_intact_volumes, failing_bond_energy, failing_bond_force, failing_list_forces,
@@ -135,6 +137,9 @@ pub unsafe extern "C" fn bpm_intact_bond_volumes(
     })
 }
 
+/// Bond types whose rules [`bpm_failing_bond_forces`] converts on the stack.
+const FEW_TYPES: usize = 16;
+
 /// Adds the forces of the intact bonds (type above 0) to `f`; see
 /// [`failing_list_forces`]. Bonds that break get type 0 in `bonds` and
 /// their indices go to `broken` (`nbonds` slots); `plastic` (null when no
@@ -177,17 +182,26 @@ pub unsafe extern "C" fn bpm_failing_bond_forces(
             return BPM_ERR_NULL;
         };
         if (nall > 0 && (x.is_null() || f.is_null()))
-            || (nbonds > 0
-                && (bonds.is_null()
-                    || r0.is_null()
-                    || coeffs.is_null()
-                    || rules.is_null()
-                    || broken.is_null()))
+            || (nbonds > 0 && (bonds.is_null() || r0.is_null() || broken.is_null()))
+            || (ncoeffs > 0 && (coeffs.is_null() || rules.is_null()))
             || (!vol.is_null() && vol0.is_null())
         {
             return BPM_ERR_NULL;
         }
-        let rules: Vec<BondFailure> = list(rules, ncoeffs).iter().map(|r| r.rule()).collect();
+        // The rules of the usual few bond types live on the stack: no
+        // allocation per step.
+        let raw = list(rules, ncoeffs);
+        let mut few = [BondFailure::breaking(1.0); FEW_TYPES];
+        let many: Vec<BondFailure>;
+        let rules: &[BondFailure] = if ncoeffs <= FEW_TYPES {
+            for (rule, raw) in few.iter_mut().zip(raw) {
+                *rule = raw.rule();
+            }
+            &few[..ncoeffs]
+        } else {
+            many = raw.iter().map(|r| r.rule()).collect();
+            &many
+        };
         if rules.iter().any(|r| r.check().is_err()) {
             return BPM_ERR_TYPE;
         }
@@ -200,19 +214,17 @@ pub unsafe extern "C" fn bpm_failing_bond_forces(
         } else {
             slice::from_raw_parts_mut(bonds, nbonds)
         };
-        let status = check_bond_atoms(bonds, nall);
+        // Types 0 and below are bonds already broken: skipped, not refused.
+        let status = check_bond_list(bonds, nall, i32::MIN, ncoeffs);
         if status != BPM_OK {
             return status;
-        }
-        if bonds.iter().any(|b| b.ty > 0 && b.ty as usize > ncoeffs) {
-            return BPM_ERR_TYPE;
         }
         let inputs = FailingListInputs {
             x: rows(x, nall),
             v: opt_rows(v, nall),
             r0: list(r0, nbonds),
             coeffs: list(coeffs, ncoeffs),
-            rules: &rules,
+            rules,
             may_break: may_break != 0,
             volumes: (!vol.is_null()).then(|| (list(vol, nall), list(vol0, nall))),
             tally: !tally.is_null(),

@@ -125,19 +125,41 @@ pub(crate) unsafe fn half_list<'a>(
 }
 
 fn check_bonds(bonds: &[BondEntry], nall: usize, ntypes: usize) -> i32 {
-    let status = check_bond_atoms(bonds, nall);
-    if status == BPM_OK && bonds.iter().any(|b| b.ty < 1 || b.ty as usize > ntypes) {
-        return BPM_ERR_TYPE;
-    }
-    status
+    check_bond_list(bonds, nall, 1, ntypes)
 }
 
 fn check_bond_atoms(bonds: &[BondEntry], nall: usize) -> i32 {
-    let outside = |a: i32| a < 0 || a as usize >= nall;
-    if bonds.iter().any(|b| outside(b.i) || outside(b.j)) {
-        return BPM_ERR_INDEX;
+    check_bond_list(bonds, nall, i32::MIN, usize::MAX)
+}
+
+/// `BPM_ERR_INDEX` if an atom index of `bonds` lies outside `0..nall`,
+/// else `BPM_ERR_TYPE` if a type lies outside `min_type..=max_type`, else
+/// `BPM_OK`. Runs every step on every bond, so it is one pass without a
+/// branch per bond: unsigned comparisons (a negative index wraps past any
+/// count) folded with `|`, which the compiler keeps in vector registers.
+pub(crate) fn check_bond_list(
+    bonds: &[BondEntry],
+    nall: usize,
+    min_type: i32,
+    max_type: usize,
+) -> i32 {
+    // Any i32 index is below 2^31 and any negative one, as u32, at or
+    // above it: a larger count changes nothing.
+    let nall = nall.min(1 << 31) as u32;
+    let max_type = i32::try_from(max_type).unwrap_or(i32::MAX);
+    let (outside, bad_type) = bonds.iter().fold((false, false), |(o, t), b| {
+        (
+            o | (b.i as u32 >= nall) | (b.j as u32 >= nall),
+            t | (b.ty < min_type) | (b.ty > max_type),
+        )
+    });
+    if outside {
+        BPM_ERR_INDEX
+    } else if bad_type {
+        BPM_ERR_TYPE
+    } else {
+        BPM_OK
     }
-    BPM_OK
 }
 
 /// Writes `message` into `buf` (`len` bytes) as a NUL-terminated string,
@@ -252,7 +274,8 @@ pub unsafe extern "C" fn bpm_bond_forces(
             return BPM_ERR_NULL;
         };
         if (nall > 0 && (x.is_null() || f.is_null()))
-            || (nbonds > 0 && (bonds.is_null() || r0.is_null() || coeffs.is_null()))
+            || (nbonds > 0 && (bonds.is_null() || r0.is_null()))
+            || (ncoeffs > 0 && coeffs.is_null())
             || (!vol.is_null() && vol0.is_null())
         {
             return BPM_ERR_NULL;
@@ -311,7 +334,8 @@ pub unsafe extern "C" fn bpm_multibody_sums(
             return BPM_ERR_NULL;
         };
         if (nall > 0 && (x.is_null() || vol.is_null() || vol0.is_null() || sums.is_null()))
-            || (nbonds > 0 && (bonds.is_null() || r0.is_null() || coeffs.is_null()))
+            || (nbonds > 0 && (bonds.is_null() || r0.is_null()))
+            || (ncoeffs > 0 && coeffs.is_null())
         {
             return BPM_ERR_NULL;
         }
@@ -577,4 +601,34 @@ pub unsafe extern "C" fn bpm_describe_fault(
     std::ptr::copy_nonoverlapping(bytes.as_ptr(), buf as *mut u8, n);
     *buf.add(n) = 0;
     bytes.len() as i64
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_bond_list_is_refused_for_the_first_index_or_type_out_of_range() {
+        let bond = |i, j, ty| BondEntry { i, j, ty };
+        let ok = [bond(0, 1, 1), bond(2, 1, 2)];
+        assert_eq!(check_bond_list(&ok, 3, 1, 2), BPM_OK);
+        assert_eq!(check_bond_list(&ok, 2, 1, 2), BPM_ERR_INDEX);
+        assert_eq!(check_bond_list(&ok, 3, 1, 1), BPM_ERR_TYPE);
+        // A negative index is outside whatever the count, even beyond i32.
+        for nall in [3, 1 << 31, usize::MAX] {
+            for bad in [-1, -2, i32::MIN] {
+                let list = [bond(0, 1, 1), bond(1, bad, 1)];
+                assert_eq!(
+                    check_bond_list(&list, nall, 1, 2),
+                    BPM_ERR_INDEX,
+                    "{nall} {bad}"
+                );
+            }
+        }
+        // An index error wins over a type error; broken bonds (type 0)
+        // pass where the minimum allows them.
+        assert_eq!(check_bond_list(&[bond(0, 5, 9)], 3, 1, 2), BPM_ERR_INDEX);
+        assert_eq!(check_bond_list(&[bond(0, 1, 0)], 3, 1, 2), BPM_ERR_TYPE);
+        assert_eq!(check_bond_list(&[bond(0, 1, 0)], 3, i32::MIN, 2), BPM_OK);
+    }
 }

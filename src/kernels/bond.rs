@@ -7,7 +7,7 @@
 
 use super::fault::{Fault, ForcePass, COLLAPSED_BELOW, OVERSTRETCHED_ABOVE};
 use super::isa::Isa;
-use super::tally::{apply_pair_force, Ownership, Tally};
+use super::tally::{apply_pair_force_in_run, Ownership, RunningSum, Tally};
 use super::{dot, sub, Separation};
 
 /// Coefficients of one bond type.
@@ -148,6 +148,45 @@ fn halley_cbrt_step(y: f64, q: f64) -> f64 {
     y * (y3 + 2.0 * q) / (2.0 * y3 + q)
 }
 
+/// [`cube_root`] of each lane of `q`, as the bond passes need it: the
+/// series for `|q - 1| <= 1/32` in every lane, and the other ranges only
+/// if some lane needs them.
+// Lane loops index several per-lane arrays at once; that form vectorises.
+#[allow(clippy::needless_range_loop)]
+#[inline(always)]
+pub(super) fn cube_roots(q: &[f64; LANES]) -> [f64; LANES] {
+    let mut far = false;
+    let mut roots = [0.0; LANES];
+    for l in 0..LANES {
+        let x = q[l] - 1.0;
+        far |= x.abs() > CLOSE_TO_ONE;
+        roots[l] = cube_root_near_one(x);
+    }
+    if !far {
+        return roots;
+    }
+    // The second range of `cube_root` in every lane, kept where a lane
+    // lies in it: a select the compiler can vectorise, instead of a branch
+    // per lane that a squeeze of a percent or more mispredicts.
+    let mut beyond = false;
+    for l in 0..LANES {
+        let x = q[l] - 1.0;
+        let stepped = halley_cbrt_step(series_to_degree_7(x), q[l]);
+        if x.abs() > CLOSE_TO_ONE {
+            roots[l] = stepped;
+        }
+        beyond |= x.abs() > SERIES_AND_STEP_UP_TO;
+    }
+    if beyond {
+        for l in 0..LANES {
+            if (q[l] - 1.0).abs() > SERIES_AND_STEP_UP_TO {
+                roots[l] = cube_root(q[l]);
+            }
+        }
+    }
+    roots
+}
+
 /// Everything a bond-force pass reads.
 #[derive(Clone, Copy, Debug)]
 pub struct BondInputs<'a> {
@@ -266,9 +305,9 @@ struct BondBlock {
     k: [f64; LANES],
     a: [f64; LANES],
     gamma: [f64; LANES],
-    /// `V_i + V_j` and `1 / (V0_i + V0_j)`.
+    /// `V_i + V_j` and `V0_i + V0_j`.
     vsum: [f64; LANES],
-    inv_v0sum: [f64; LANES],
+    v0sum: [f64; LANES],
     /// `n . dv` times r (the dot product of the separation and the
     /// velocity difference).
     del_dot_dv: [f64; LANES],
@@ -290,7 +329,7 @@ impl BondBlock {
             a: [0.0; LANES],
             gamma: [0.0; LANES],
             vsum: [0.0; LANES],
-            inv_v0sum: [0.0; LANES],
+            v0sum: [0.0; LANES],
             del_dot_dv: [0.0; LANES],
             fpair: [0.0; LANES],
             energy: [0.0; LANES],
@@ -319,6 +358,7 @@ fn bond_blocks<
     let mut tally = Tally::default();
     let mut fault = None;
     let mut b = BondBlock::new();
+    let mut run = RunningSum::new();
     // One bond type (the usual case): its coefficients fill every lane once
     // here instead of being looked up bond by bond.
     let single_type = inputs.coeffs.len() == 1;
@@ -341,7 +381,7 @@ fn bond_blocks<
                 b.dz[l] = 0.0;
                 b.r0[l] = 1.0;
                 b.vsum[l] = 1.0;
-                b.inv_v0sum[l] = 1.0;
+                b.v0sum[l] = 1.0;
                 b.del_dot_dv[l] = 0.0;
                 continue;
             }
@@ -363,45 +403,22 @@ fn bond_blocks<
             }
             if MULTIBODY {
                 b.vsum[l] = vol[i] + vol[j];
-                b.inv_v0sum[l] = 1.0 / (vol0[i] + vol0[j]);
+                b.v0sum[l] = vol0[i] + vol0[j];
             }
             if DAMPED {
                 b.del_dot_dv[l] = dot(&del, &sub(&v[i], &v[j]));
             }
         }
         // Arithmetic, lane by lane.
-        let mut far = false;
         let mut dilation = [0.0; LANES];
         if MULTIBODY {
+            let mut q = [0.0; LANES];
+            // The division here, lane by lane, not in the gather: there
+            // it would be a scalar division per bond on the critical path.
             for l in 0..LANES {
-                let x = b.vsum[l] * b.inv_v0sum[l] - 1.0;
-                far |= x.abs() > CLOSE_TO_ONE;
-                dilation[l] = cube_root_near_one(x);
+                q[l] = b.vsum[l] * (1.0 / b.v0sum[l]);
             }
-            if far {
-                // The second range of `cube_root` in every lane, kept
-                // where a lane lies in it: a select the compiler can
-                // vectorise, instead of a branch per lane that a squeeze
-                // of a percent or more mispredicts.
-                let mut beyond = false;
-                for l in 0..LANES {
-                    let q = b.vsum[l] * b.inv_v0sum[l];
-                    let x = q - 1.0;
-                    let stepped = halley_cbrt_step(series_to_degree_7(x), q);
-                    if x.abs() > CLOSE_TO_ONE {
-                        dilation[l] = stepped;
-                    }
-                    beyond |= x.abs() > SERIES_AND_STEP_UP_TO;
-                }
-                if beyond {
-                    for l in 0..LANES {
-                        let q = b.vsum[l] * b.inv_v0sum[l];
-                        if (q - 1.0).abs() > SERIES_AND_STEP_UP_TO {
-                            dilation[l] = cube_root(q);
-                        }
-                    }
-                }
-            }
+            dilation = cube_roots(&q);
         }
         let mut out_of_range = false;
         for l in 0..LANES {
@@ -441,12 +458,13 @@ fn bond_blocks<
             } else {
                 own.split(i, j)
             };
-            apply_pair_force(f, i, j, on_i, on_j, &del, b.fpair[l]);
+            apply_pair_force_in_run(&mut run, f, i, j, on_i, on_j, &del, b.fpair[l]);
             if TALLY {
                 tally.add(frac, b.energy[l], &del, b.fpair[l]);
             }
         }
         start += lanes;
     }
+    run.finish(f);
     ForcePass { tally, fault }
 }

@@ -21,7 +21,7 @@ use serde::Serialize;
 pub const COLLAPSED_BELOW: f64 = 0.2;
 
 /// A bond longer than this multiple of its reference length is torn apart
-/// (the model has no bond breaking, so only a blow-up gets there).
+/// (only a blow-up gets there: a bond that may break breaks long before).
 pub const OVERSTRETCHED_ABOVE: f64 = 3.0;
 
 /// Unbonded particles closer than this fraction of the contact distance

@@ -44,7 +44,8 @@ pub use bond_rows::{
 pub use closure_lanes::SurfaceCorrections;
 pub use diagnosis::{stable_timestep, verlet_limit, LIMIT_MARGIN, MULTIBODY_LIMIT, STIFFEST_MODE};
 pub use failing_bond_list::{
-    accumulate_intact_volumes, failing_list_forces, FailingListInputs, ListFailures,
+    accumulate_intact_volumes, accumulate_intact_volumes_on, failing_list_forces,
+    failing_list_forces_on, FailingListInputs, ListFailures,
 };
 pub use fault::{Fault, FaultKind, ForcePass, COLLAPSED_BELOW, DEEP_OVERLAP, OVERSTRETCHED_ABOVE};
 pub use geometry::{BoxImage, MinimumImage, OrthogonalImage, Separation, Unwrapped};

@@ -87,6 +87,97 @@ impl Tally {
     }
 }
 
+/// Per-atom sums (forces, volumes) of the first atom of a run of
+/// consecutive list entries, held in registers until the run ends.
+///
+/// LAMMPS lists a bond under its first atom, so a list is runs of entries
+/// that share it. Adding to memory entry by entry chains each addition to
+/// the last through a store and a reload; here the run's sum is loaded
+/// once and stored once. The additions are the same, in the same order,
+/// so the sums are the same bits.
+///
+/// Every entry must call [`RunningSum::first`] before it writes to any
+/// atom, and [`RunningSum::finish`] must follow the last. The first atom's
+/// value is loaded and stored back even where the entry does not own it
+/// (unchanged, the same bits), so the sums must cover every index.
+pub(crate) struct RunningSum<T> {
+    atom: usize,
+    sum: T,
+}
+
+impl<T: Copy + Default> RunningSum<T> {
+    const NONE: usize = usize::MAX;
+
+    pub(crate) fn new() -> Self {
+        Self {
+            atom: Self::NONE,
+            sum: T::default(),
+        }
+    }
+
+    /// The sum of `atom`, the entry's first atom: a new run if it is not
+    /// the current one (the current run stored first).
+    #[inline(always)]
+    pub(crate) fn first<'a>(&'a mut self, atom: usize, out: &mut [T]) -> &'a mut T {
+        if atom != self.atom {
+            self.finish(out);
+            self.atom = atom;
+            self.sum = out[atom];
+        }
+        &mut self.sum
+    }
+
+    /// The sum of `atom`, the entry's second atom: the run's if it is the
+    /// run's atom (an entry from an atom to itself), memory otherwise.
+    #[inline(always)]
+    pub(crate) fn second<'a>(&'a mut self, atom: usize, out: &'a mut [T]) -> &'a mut T {
+        if atom == self.atom {
+            &mut self.sum
+        } else {
+            &mut out[atom]
+        }
+    }
+
+    /// Stores the current run's sum.
+    #[inline(always)]
+    pub(crate) fn finish(&mut self, out: &mut [T]) {
+        if self.atom != Self::NONE {
+            out[self.atom] = self.sum;
+            self.atom = Self::NONE;
+        }
+    }
+}
+
+/// [`apply_pair_force`] with atom `i`'s sum held in `run`.
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+pub(crate) fn apply_pair_force_in_run(
+    run: &mut RunningSum<[f64; 3]>,
+    f: &mut [[f64; 3]],
+    i: usize,
+    j: usize,
+    on_i: bool,
+    on_j: bool,
+    del: &[f64; 3],
+    fpair: f64,
+) {
+    let fx = del[0] * fpair;
+    let fy = del[1] * fpair;
+    let fz = del[2] * fpair;
+    let fi = run.first(i, f);
+    if on_i {
+        fi[0] += fx;
+        fi[1] += fy;
+        fi[2] += fz;
+    }
+    if on_j {
+        let fj = run.second(j, f);
+        fj[0] -= fx;
+        fj[1] -= fy;
+        fj[2] -= fz;
+    }
+}
+
 /// Adds `fpair * del` to atom `i` and subtracts it from atom `j`, as owned.
 #[inline(always)]
 pub(crate) fn apply_pair_force(

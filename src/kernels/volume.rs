@@ -8,7 +8,7 @@
 
 use super::bond::{BondEntry, LANES};
 use super::isa::Isa;
-use super::tally::Ownership;
+use super::tally::{Ownership, RunningSum};
 use super::{dot, Separation};
 
 /// Adds `r^3` of every bond to both of its atoms' current volume proxy.
@@ -58,7 +58,8 @@ unsafe fn volumes_avx2<S: Separation>(
 
 /// Blocks of [`LANES`] bonds, as in the bond pass: separations gathered,
 /// `r^3` computed lane by lane (the square roots in vector instructions),
-/// then added to the atoms in bond order, as a scalar loop would.
+/// then added to the atoms in bond order, as a scalar loop would (each
+/// first atom's sum held over its run of bonds, [`RunningSum`]).
 #[inline(always)]
 fn volume_blocks<S: Separation>(
     sep: &S,
@@ -69,6 +70,7 @@ fn volume_blocks<S: Separation>(
 ) {
     let mut rsq = [0.0; LANES];
     let mut r3 = [0.0; LANES];
+    let mut run = RunningSum::new();
     for block in bonds.chunks(LANES) {
         for (l, bond) in block.iter().enumerate() {
             let del = sep.delta(&x[bond.i as usize], &x[bond.j as usize]);
@@ -78,9 +80,18 @@ fn volume_blocks<S: Separation>(
             r3[l] = rsq[l] * rsq[l].sqrt();
         }
         for (l, bond) in block.iter().enumerate() {
-            add_to_both(vol, bond.i as usize, bond.j as usize, r3[l], own);
+            let (i, j) = (bond.i as usize, bond.j as usize);
+            let (on_i, on_j, _) = own.split(i, j);
+            let vi = run.first(i, vol);
+            if on_i {
+                *vi += r3[l];
+            }
+            if on_j {
+                *run.second(j, vol) += r3[l];
+            }
         }
     }
+    run.finish(vol);
 }
 
 /// Adds `r0^3` of every bond to both of its atoms' reference volume proxy.

@@ -426,6 +426,9 @@ fn run_stage_from(
         },
         deformation: spec.deformation.clone(),
         barostat: spec.barostat.clone(),
+        // Scenes do not clamp yet: the engine's clamps serve the drivers
+        // of the cross-checks (the block pulled to fracture).
+        clamps: Vec::new(),
         tally_every: spec.record.every,
     };
     let dump = out_files.dump_schedule();

