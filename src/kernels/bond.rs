@@ -148,13 +148,28 @@ fn halley_cbrt_step(y: f64, q: f64) -> f64 {
     y * (y3 + 2.0 * q) / (2.0 * y3 + q)
 }
 
+/// The dilation `cbrt((V_i + V_j) / (V0_i + V0_j))` of each lane, from
+/// the sums `vsum` and `v0sum`, as [`dilation`] forms it. The division is
+/// here, lane by lane, not in a gather: there it would be a scalar
+/// division per bond on the critical path.
+// Lane loops index several per-lane arrays at once; that form vectorises.
+#[allow(clippy::needless_range_loop)]
+#[inline(always)]
+pub(super) fn dilations(vsum: &[f64; LANES], v0sum: &[f64; LANES]) -> [f64; LANES] {
+    let mut q = [0.0; LANES];
+    for l in 0..LANES {
+        q[l] = vsum[l] * reciprocal(v0sum[l]);
+    }
+    cube_roots(&q)
+}
+
 /// [`cube_root`] of each lane of `q`, as the bond passes need it: the
 /// series for `|q - 1| <= 1/32` in every lane, and the other ranges only
 /// if some lane needs them.
 // Lane loops index several per-lane arrays at once; that form vectorises.
 #[allow(clippy::needless_range_loop)]
 #[inline(always)]
-pub(super) fn cube_roots(q: &[f64; LANES]) -> [f64; LANES] {
+fn cube_roots(q: &[f64; LANES]) -> [f64; LANES] {
     let mut far = false;
     let mut roots = [0.0; LANES];
     for l in 0..LANES {
@@ -410,16 +425,11 @@ fn bond_blocks<
             }
         }
         // Arithmetic, lane by lane.
-        let mut dilation = [0.0; LANES];
-        if MULTIBODY {
-            let mut q = [0.0; LANES];
-            // The division here, lane by lane, not in the gather: there
-            // it would be a scalar division per bond on the critical path.
-            for l in 0..LANES {
-                q[l] = b.vsum[l] * (1.0 / b.v0sum[l]);
-            }
-            dilation = cube_roots(&q);
-        }
+        let dilation = if MULTIBODY {
+            dilations(&b.vsum, &b.v0sum)
+        } else {
+            [0.0; LANES]
+        };
         let mut out_of_range = false;
         for l in 0..LANES {
             let rsq = b.dx[l] * b.dx[l] + b.dy[l] * b.dy[l] + b.dz[l] * b.dz[l];

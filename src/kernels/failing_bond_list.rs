@@ -18,7 +18,7 @@
 //! operation, so every build and block size gives the same bits as a loop
 //! bond by bond.
 
-use super::bond::{cube_roots, BondCoeffs, BondEntry, LANES};
+use super::bond::{dilations, BondCoeffs, BondEntry, LANES};
 use super::bond_failure::{plastic_strain_after, smoothing, BondFailure};
 use super::fault::{Fault, ForcePass, COLLAPSED_BELOW, OVERSTRETCHED_ABOVE};
 use super::isa::Isa;
@@ -337,16 +337,11 @@ fn failing_blocks<S: Separation, const MULTIBODY: bool, const DAMPED: bool, cons
         // Arithmetic, lane by lane: failing_bond_force with its branches
         // as selects.
         b.e_p_before = b.e_p;
-        let mut dilation = [0.0; LANES];
-        if MULTIBODY {
-            let mut q = [0.0; LANES];
-            // The division here, lane by lane, not in the gather: there
-            // it would be a scalar division per bond on the critical path.
-            for l in 0..LANES {
-                q[l] = b.vsum[l] * (1.0 / b.v0sum[l]);
-            }
-            dilation = cube_roots(&q);
-        }
+        let dilation = if MULTIBODY {
+            dilations(&b.vsum, &b.v0sum)
+        } else {
+            [0.0; LANES]
+        };
         let mut out_of_range = false;
         for l in 0..LANES {
             let rsq = b.dx[l] * b.dx[l] + b.dy[l] * b.dy[l] + b.dz[l] * b.dz[l];
@@ -620,7 +615,6 @@ mod tests {
 
     fn scene(seed: u64, nbonds: usize, types: i32, strain: f64) -> Scene {
         let mut rng = ChaCha8Rng::seed_from_u64(seed);
-        let atoms = 2 * nbonds;
         let mut x = Vec::new();
         let mut r0 = Vec::new();
         let mut bonds = Vec::new();
@@ -654,23 +648,38 @@ mod tests {
                 ty,
             });
         }
+        with_motion_and_volumes(x, bonds, r0, &mut rng)
+    }
+
+    /// A scene of `x` and its list, with random velocities and volumes
+    /// (dilations from 3% to 40%: every range of the cube root) and
+    /// plastic strains from -0.02 to 0.02.
+    fn with_motion_and_volumes(
+        x: Vec<[f64; 3]>,
+        bonds: Vec<BondEntry>,
+        r0: Vec<f64>,
+        rng: &mut ChaCha8Rng,
+    ) -> Scene {
+        let atoms = x.len();
         let v = (0..atoms)
             .map(|_| [(); 3].map(|_| rng.gen_range(-0.1..0.1)))
             .collect();
         let vol0: Vec<f64> = (0..atoms).map(|_| rng.gen_range(5.0..7.0)).collect();
-        // Dilations from 3% to 40%: every range of the cube root.
         let vol = vol0
             .iter()
             .enumerate()
-            .map(|(n, v0)| v0 * (0.6 + 0.8 * (n % 7) as f64 / 6.0));
-        let plastic = (0..nbonds).map(|n| 0.01 * ((n % 5) as f64 - 2.0)).collect();
+            .map(|(n, v0)| v0 * (0.6 + 0.8 * (n % 7) as f64 / 6.0))
+            .collect();
+        let plastic = (0..bonds.len())
+            .map(|n| 0.01 * ((n % 5) as f64 - 2.0))
+            .collect();
         Scene {
             x,
             v,
             bonds,
             r0,
             plastic,
-            vol: vol.collect(),
+            vol,
             vol0,
         }
     }
@@ -706,27 +715,7 @@ mod tests {
                 });
             }
         }
-        let v = (0..atoms)
-            .map(|_| [(); 3].map(|_| rng.gen_range(-0.1..0.1)))
-            .collect();
-        let vol0: Vec<f64> = (0..atoms).map(|_| rng.gen_range(5.0..7.0)).collect();
-        let vol = vol0
-            .iter()
-            .enumerate()
-            .map(|(n, v0)| v0 * (0.6 + 0.8 * (n % 7) as f64 / 6.0))
-            .collect();
-        let plastic = (0..bonds.len())
-            .map(|n| 0.01 * ((n % 5) as f64 - 2.0))
-            .collect();
-        Scene {
-            x,
-            v,
-            bonds,
-            r0,
-            plastic,
-            vol,
-            vol0,
-        }
+        with_motion_and_volumes(x, bonds, r0, &mut rng)
     }
 
     const COEFFS: [BondCoeffs; 3] = [
