@@ -339,14 +339,9 @@ pub fn native_tension(case: &TensionCase, data: &Path) -> Result<Option<TensionT
         trace.stress.push(-pull / area);
         trace.bonds.push(bonds as u64);
     };
-    sys.setup(&drivers).map_err(|e| bad(e.to_string()))?;
-    let mut trace = TensionTrace::default();
-    record(&sys, 0, &mut trace);
-    let stage_box = sys.simbox.clone();
+    // Bonds broken since the last call, at `step` (a set-up's at 0).
     let mut seen = 0;
-    for step in 1..=case.steps {
-        sys.step(&drivers, step, &stage_box)
-            .map_err(|e| bad(e.to_string()))?;
+    let mut note_breaks = |sys: &System, step: u64, trace: &mut TensionTrace| {
         let broken = sys
             .model_as::<BpmModel>()
             .map_or(&[][..], |m| m.broken_bonds());
@@ -355,6 +350,16 @@ pub fn native_tension(case: &TensionCase, data: &Path) -> Result<Option<TensionT
             trace.broken.insert((step, a.min(b), a.max(b)));
         }
         seen = broken.len();
+    };
+    sys.setup(&drivers).map_err(|e| bad(e.to_string()))?;
+    let mut trace = TensionTrace::default();
+    note_breaks(&sys, 0, &mut trace);
+    record(&sys, 0, &mut trace);
+    let stage_box = sys.simbox.clone();
+    for step in 1..=case.steps {
+        sys.step(&drivers, step, &stage_box)
+            .map_err(|e| bad(e.to_string()))?;
+        note_breaks(&sys, step, &mut trace);
         if step % case.every == 0 {
             record(&sys, step, &mut trace);
         }
