@@ -275,6 +275,7 @@ const SUBCOMMANDS: &[&[&str]] = &[
     &["upstream-check", "-o", "{out}"],
     &["hertz", "-o", "{out}"],
     &["hertz-sweep", "-o", "{out}"],
+    &["crush", "-o", "{out}"],
     &["import", "{data}", "-o", "{out}"],
     &["export", "{scene}", "-o", "{out}"],
     &["bench-lammps"],

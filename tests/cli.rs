@@ -148,7 +148,7 @@ fn each_error_is_printed_once() {
 fn out_of_range_options_are_refused_with_the_argument_named() {
     let x = tmp("never.json");
     let x = x.to_str().unwrap();
-    let cases: [(&[&str], &str); 13] = [
+    let cases: [(&[&str], &str); 17] = [
         (&["--threads", "0", "bench"], "--threads must be at least 1"),
         (
             &["build", "bulk", "--time-scale", "0", "-o", x],
@@ -197,6 +197,22 @@ fn out_of_range_options_are_refused_with_the_argument_named() {
         (
             &["compact", "--model", "dem", "--moduli-states", "2", "-o", x],
             "--moduli-states must be 0 with --model dem: a modulus run restarts from a recorded state, which keeps positions but not the contacts' friction history",
+        ),
+        (
+            &["crush", "--no-break", "-o", x],
+            "--no-break without --plastic-strain: the bonds would neither break nor yield",
+        ),
+        (
+            &["crush", "--critical-strain", "0.05", "--plastic-strain", "0.06", "-o", x],
+            "the plastic strain eps_p = 0.06 must be below the critical strain eps_c = 0.05: a bond would break before it yields",
+        ),
+        (
+            &["compact", "--plastic-strain", "0.05", "-o", x],
+            "bonds that break need --critical-strain (or give --no-break)",
+        ),
+        (
+            &["compact", "--critical-strain", "0.1", "--engine", "lammps", "-o", x],
+            "--critical-strain, --plastic-strain run in the native engine only: the harness's LAMMPS runs do not record broken bonds (use --engine native)",
         ),
     ];
     for (args, message) in cases {

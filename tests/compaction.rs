@@ -205,6 +205,7 @@ fn packing_moduli_of_a_compressed_solid_match_its_calibration_in_both_engines() 
             .map(|x| std::array::from_fn(|d| lo[d] + (x[d] - lo[d]) * scale))
             .collect(),
         images: Vec::new(),
+        broken_bonds: Vec::new(),
     };
     let protocol = PackingModuliProtocol {
         relax_time: 200.0,
@@ -389,6 +390,7 @@ fn a_tiny_compaction_study_measures_moduli_and_writes_its_report() {
             },
         },
         dem: None,
+        bond_failure: None,
     };
     let report = run_compaction(&opts, &plain(), None, &dir, "test", &mut |_| {}).unwrap();
     let run = &report.runs[0];
@@ -764,6 +766,7 @@ fn tiny_study(
             ..ModuliOptions::default()
         },
         dem,
+        bond_failure: None,
     }
 }
 
@@ -1042,6 +1045,7 @@ fn the_moduli_loadings_branch_from_one_relaxation_as_three_full_runs() {
             .map(|(x, dx)| [0, 1, 2].map(|k| x[k] + dx[k]))
             .collect(),
         images: Vec::new(),
+        broken_bonds: Vec::new(),
     };
     let protocol = PackingModuliProtocol {
         dt: 0.05,
@@ -1111,4 +1115,124 @@ fn the_moduli_loadings_branch_from_one_relaxation_as_three_full_runs() {
             .store(true, std::sync::atomic::Ordering::SeqCst);
     }
     let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// Grains whose bonds break, compressed: every state counts the broken
+/// bonds and the grains' fragments. Bonds never mend, so the broken share
+/// and the loose particles only grow and the whole grains only dwindle,
+/// and grains in pieces are flagged. LAMMPS and modulus runs, which do
+/// not keep broken bonds, are refused.
+#[test]
+fn breakable_grains_come_apart_as_they_are_compressed() {
+    use bpm::kernels::BondFailure;
+    use bpm::studies::compaction::{run_compaction, CompactOptions, CompactionEngine};
+    let dir = common::scratch_dir("breakable-compaction");
+    let opts = CompactOptions {
+        bond_failure: Some(BondFailure::breaking(0.05)),
+        ..tiny_study(None, 5_000)
+    };
+    let report = run_compaction(&opts, &plain(), None, &dir, "test", &mut |_| {}).unwrap();
+    let run = &report.runs[0];
+    assert!(run.stopped.is_none(), "{:?}", run.stopped);
+    let fragments: Vec<_> = run.states.iter().map(|s| s.fragments.unwrap()).collect();
+    assert_eq!(fragments[0].broken_fraction, 0.0);
+    assert_eq!(fragments[0].whole_grains, 1.0);
+    for pair in fragments.windows(2) {
+        let (a, b) = (pair[0], pair[1]);
+        assert!(b.broken_fraction >= a.broken_fraction, "{a:?} then {b:?}");
+        assert!(b.whole_grains <= a.whole_grains, "{a:?} then {b:?}");
+        assert!(b.loose_particles >= a.loose_particles, "{a:?} then {b:?}");
+    }
+    let last = fragments.last().unwrap();
+    assert!(last.broken_fraction > 0.0, "no bond broke: {last:?}");
+    // Grains in pieces are flagged: their shape measures take a grain as
+    // one body.
+    let in_pieces = fragments.iter().any(|f| f.whole_grains < 1.0);
+    assert!(in_pieces, "no grain came apart: {last:?}");
+    assert_eq!(
+        report.warnings.iter().any(|w| w.contains("in pieces")),
+        in_pieces
+    );
+    assert!(last.largest_fragment > 0.0 && last.largest_fragment <= 1.0);
+    let (scene, _) = bpm::scene::read_scene(&dir.join("seed-3/scene.json")).unwrap();
+    assert_eq!(scene.force_field.bond_failure, opts.bond_failure);
+    assert!(dir.join("fragments.svg").is_file());
+    let text = std::fs::read_to_string(dir.join("compaction.txt")).unwrap();
+    assert!(text.contains("the grains' fragments against the pressure"));
+
+    let refused = |o: CompactOptions, said: &str| {
+        let e = o.validate().unwrap_err().to_string();
+        assert!(e.contains(said), "{e:?} lacks {said:?}");
+    };
+    refused(
+        CompactOptions {
+            engine: CompactionEngine::Lammps { ranks: 1 },
+            ..opts.clone()
+        },
+        "native engine only",
+    );
+    let mut with_moduli = opts.clone();
+    with_moduli.moduli.states = 2;
+    refused(with_moduli, "--moduli-states");
+    refused(
+        CompactOptions {
+            bond_failure: Some(BondFailure::breaking(-1.0)),
+            ..opts.clone()
+        },
+        "eps_c = -1",
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// Unloading after the compression: the box expands back to its jammed
+/// size and the packing rests. Elastic grains recover their volume;
+/// grains whose bonds yielded (eps_p = 0.02) keep most of their
+/// compression. The table shows it.
+#[test]
+fn yielding_grains_keep_a_strain_after_unloading() {
+    use bpm::kernels::BondFailure;
+    use bpm::studies::compaction::{run_compaction, CompactOptions};
+    let residual = |failure: Option<BondFailure>, name: &str| {
+        let dir = common::scratch_dir(name);
+        let mut opts = CompactOptions {
+            bond_failure: failure,
+            ..tiny_study(None, 5_000)
+        };
+        opts.protocol.unload_rate = 1e-4;
+        let report = run_compaction(&opts, &plain(), None, &dir, "test", &mut |_| {}).unwrap();
+        let run = &report.runs[0];
+        assert!(run.stopped.is_none(), "{:?}", run.stopped);
+        let stages: Vec<&str> = run.states.iter().map(|s| s.stage.as_str()).collect();
+        assert!(stages.contains(&"unload") && stages.last() == Some(&"rest"));
+        let loaded = run
+            .states
+            .iter()
+            .rev()
+            .find(|s| s.stage.starts_with("compress"))
+            .unwrap();
+        let rested = run.states.last().unwrap();
+        // Back at the jammed box: looser than the compressed packing.
+        assert!(rested.packing.phi_mc < loaded.packing.phi_mc);
+        let text = std::fs::read_to_string(dir.join("compaction.txt")).unwrap();
+        assert!(text.contains("# unloaded: the box expanded back"), "{text}");
+        let _ = std::fs::remove_dir_all(&dir);
+        (loaded.packing.eps_v_mean, rested.packing.eps_v_mean)
+    };
+    let plastic = BondFailure {
+        critical_strain: 1.0,
+        breaks: false,
+        smooth: false,
+        plastic_strain: Some(0.02),
+        normalize: false,
+    };
+    let (elastic_loaded, elastic_left) = residual(None, "unload-elastic");
+    let (plastic_loaded, plastic_left) = residual(Some(plastic), "unload-plastic");
+    // eps_V = 1 - V / V_0: positive when compressed.
+    let said = format!(
+        "eps_V loaded, left: elastic {elastic_loaded:.5}, {elastic_left:.5}; \
+         plastic {plastic_loaded:.5}, {plastic_left:.5}"
+    );
+    assert!(elastic_loaded > 0.01 && plastic_loaded > 0.01, "{said}");
+    assert!(elastic_left.abs() < 0.05 * elastic_loaded, "{said}");
+    assert!(plastic_left > 0.5 * plastic_loaded, "{said}");
 }

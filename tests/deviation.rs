@@ -32,6 +32,7 @@ fn stage(pxx: [f64; 4], positions: [[f64; 3]; 4]) -> StageOutput {
                 simbox: [[0.0; 3], [10.0; 3], [0.0; 3]],
                 positions: vec![positions[k], [5.0, 5.0, 5.0]],
                 images: vec![[0; 3]; 2],
+                broken_bonds: Vec::new(),
             })
             .collect(),
         wall_seconds: 0.0,

@@ -158,6 +158,13 @@ fn hertz_reports() {
 }
 
 #[test]
+fn crush_reports() {
+    for json in committed("results/crush", "crush.json") {
+        round_trip::<bpm::studies::crush::CrushReport>(&json);
+    }
+}
+
+#[test]
 fn compaction_reports() {
     for json in committed("results", "compaction.json") {
         round_trip::<bpm::studies::compaction::CompactionReport>(&json);

@@ -2,6 +2,7 @@
 
 pub mod distribution;
 pub mod fit;
+pub mod fragments;
 pub mod hertz;
 pub mod jamming;
 pub mod lid_force;

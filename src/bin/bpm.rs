@@ -12,6 +12,7 @@ use bpm::studies::accuracy::cli::AccuracyArgs;
 use bpm::studies::bench::cli::{BenchArgs, BenchLammpsArgs};
 use bpm::studies::calibration::cli::CalibrateArgs;
 use bpm::studies::compaction::cli::{AnalysePackingArgs, CompactArgs, CompareCompactionArgs};
+use bpm::studies::crush::cli::CrushArgs;
 use bpm::studies::hertz::cli::HertzArgs;
 use bpm::studies::hertz_sweep::cli::HertzSweepArgs;
 use bpm::studies::large_strain::cli::LargeStrainArgs;
@@ -82,6 +83,12 @@ enum Command {
     /// per radius, built once and squeezed at every a_B; writes
     /// DIR/sweep.json, DIR/sweep.svg, one folder per case and the grains.
     HertzSweep(HertzSweepArgs),
+    /// Grain crushing (docs/protocols.md "Grain crushing"): grains of
+    /// breakable (or yielding) bonds squeezed between flat walls past
+    /// failure, at each a_B: the force against the overlap, first break,
+    /// crushing force, broken bonds and fragments; writes DIR/crush.json
+    /// and DIR/crush.svg.
+    Crush(CrushArgs),
     /// Read a LAMMPS or LIGGGHTS data file as a scene, keeping its atom ids:
     /// atom_style bond (molecule ids become grains, reference lengths are
     /// the file's bond lengths), or atom_style sphere (DEM spheres: give
@@ -208,6 +215,7 @@ fn real_main() -> Result<()> {
         Command::UpstreamCheck(args) => args.run(),
         Command::Hertz(args) => args.run(threads),
         Command::HertzSweep(args) => args.run(threads),
+        Command::Crush(args) => args.run(threads),
         Command::Import(args) => args.run(),
         Command::Export(args) => args.run(),
         Command::BenchLammps(args) => args.run(threads),

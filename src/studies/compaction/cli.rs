@@ -5,7 +5,7 @@
 use crate::analysis::packing::AnalysisOptions;
 use crate::engine::dem::MultiContact;
 use crate::lammps::cli::EngineArg;
-use crate::scene::cli::GrainKindArg;
+use crate::scene::cli::{BondFailureArgs, GrainKindArg};
 use crate::scene::protocols;
 use crate::studies::compaction;
 use crate::studies::mcdem::Closures;
@@ -70,6 +70,10 @@ pub struct CompactArgs {
     /// Use the zero-net-multibody variant (docs/model.md).
     #[arg(long)]
     zero_net: bool,
+    /// Bonds that break or yield while the packing is compressed (the
+    /// native engine only; none given: elastic bonds).
+    #[command(flatten)]
+    failure: BondFailureArgs,
     /// Seeds: one packing and run per seed (comma separated).
     #[arg(long, value_delimiter = ',', default_value = "1")]
     seeds: Vec<u64>,
@@ -112,6 +116,11 @@ pub struct CompactArgs {
     /// Recorded (analysed) states per stage.
     #[arg(long, default_value_t = 4)]
     states_per_stage: u64,
+    /// After the compression, expand the box back to its jammed size at
+    /// this true strain rate (1/tau) and rest as long: the grains' strain
+    /// left unloaded (0: no unloading).
+    #[arg(long, default_value_t = 0.0)]
+    unload_rate: f64,
     /// Monte Carlo points per state for phi_MC.
     #[arg(long, default_value_t = 1_000_000)]
     mc_points: u64,
@@ -190,6 +199,7 @@ impl CompactArgs {
             packing,
             a_b,
             zero_net,
+            failure,
             seeds,
             engine,
             ranks,
@@ -204,6 +214,7 @@ impl CompactArgs {
             volumetric_strain,
             rows_per_stage,
             states_per_stage,
+            unload_rate,
             mc_points,
             moduli_states,
             moduli_relax_time,
@@ -292,6 +303,7 @@ impl CompactArgs {
                 })
             }
         };
+        let bond_failure = failure.failure(None)?;
         let opts = compaction::CompactOptions {
             source: match packing {
                 Some(path) => compaction::PackingSource::File { path },
@@ -319,6 +331,7 @@ impl CompactArgs {
                 volumetric_strain,
                 rows_per_stage,
                 states_per_stage,
+                unload_rate,
             },
             engine: match engine {
                 EngineArg::Native => compaction::CompactionEngine::Native,
@@ -329,9 +342,10 @@ impl CompactArgs {
                 ..Default::default()
             },
             moduli: compaction::ModuliOptions {
+                // A modulus run cannot restart with broken bonds.
                 states: moduli_states.unwrap_or(match model {
-                    CompactModel::Bpm => 6,
-                    CompactModel::Dem => 0,
+                    CompactModel::Bpm if bond_failure.is_none() => 6,
+                    CompactModel::Bpm | CompactModel::Dem => 0,
                 }),
                 protocol: protocols::PackingModuliProtocol {
                     dt,
@@ -342,6 +356,7 @@ impl CompactArgs {
                 },
             },
             dem,
+            bond_failure,
         };
         opts.validate()?;
         let exe = std::env::current_exe().context("locating the bpm executable")?;

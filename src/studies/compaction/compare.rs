@@ -359,7 +359,13 @@ pub fn comparison_table(studies: &[Study], command: &str) -> String {
             let phi_c = r.fits.pressure?.phi_c;
             super::report::poisson_minimum(r).map(|m| m.phi_mc - phi_c)
         }),
-        ("last phi_MC", |r| r.states.last().map(|s| s.packing.phi_mc)),
+        ("last phi_MC", |r| {
+            r.states
+                .iter()
+                .rev()
+                .find(|s| s.stage.starts_with("compress"))
+                .map(|s| s.packing.phi_mc)
+        }),
     ];
     for (name, pick) in rows {
         let _ = write!(t, "{name:<24}");

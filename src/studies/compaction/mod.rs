@@ -10,6 +10,7 @@
 //! With a [`DemContact`] the same template and protocol compact DEM
 //! spheres instead (one per grain, [`dem`]), the source study's comparison.
 
+use crate::analysis::fragments::GrainFragments;
 use crate::analysis::hertz::effective_modulus;
 use crate::analysis::jamming::{
     coordination_law, departure, power_law_at, power_law_with_jamming_point, PowerLaw,
@@ -21,6 +22,7 @@ use crate::analysis::plot::PlotError;
 use crate::analysis::slice::SliceFrame;
 use crate::engine::SimBox;
 use crate::file_error::FileError;
+use crate::kernels::BondFailure;
 use crate::options::InvalidOption;
 use crate::scene::builders::grain::GrainKind;
 use crate::scene::builders::packing::{
@@ -105,6 +107,10 @@ pub struct CompactOptions {
     /// DEM spheres (one per grain, this contact) instead of bonded grains.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub dem: Option<DemContact>,
+    /// Bonds that break or yield during the compaction (the packing is
+    /// built and stored elastic); absent, they stay elastic.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub bond_failure: Option<BondFailure>,
 }
 
 /// Why the study could not run (a run that stops is a result: it is
@@ -206,6 +212,23 @@ impl CompactOptions {
                 format!("must be at least --rate-start ({})", p.rate_start),
             ));
         }
+        if !(p.unload_rate.is_finite() && p.unload_rate >= 0.0) {
+            return Err(InvalidOption::new(
+                "--unload-rate",
+                format!("must be finite and >= 0, got {}", p.unload_rate),
+            ));
+        }
+        // As long as the compression at the most: a rate too slow would
+        // make a run without end.
+        if p.unload_rate > 0.0 && p.unload_rate < p.rate_start {
+            return Err(InvalidOption::new(
+                "--unload-rate",
+                format!(
+                    "must be 0 or at least --rate-start ({}), got {}",
+                    p.rate_start, p.unload_rate
+                ),
+            ));
+        }
         if p.rate_levels == 0 {
             return Err(InvalidOption::new("--rate-levels", "must be at least 1"));
         }
@@ -265,6 +288,38 @@ impl CompactOptions {
                 return Err(InvalidOption::new(
                     "--moduli-states",
                     "must be 0 with --model dem: a modulus run restarts from a recorded state, which keeps positions but not the contacts' friction history",
+                ));
+            }
+        }
+        if let Some(failure) = &self.bond_failure {
+            let option = "--critical-strain, --plastic-strain";
+            failure
+                .check()
+                .map_err(|e| InvalidOption::new(option, e.to_string()))?;
+            if self.dem.is_some() {
+                return Err(InvalidOption::new(
+                    option,
+                    "are bonded-grain options: DEM spheres have no bonds",
+                ));
+            }
+            if self.zero_net {
+                return Err(InvalidOption::new(
+                    "--zero-net",
+                    "does not combine with bonds that break or yield",
+                ));
+            }
+            if matches!(self.engine, CompactionEngine::Lammps { .. }) {
+                return Err(InvalidOption::new(
+                    option,
+                    "run in the native engine only: the harness's LAMMPS runs do not record \
+                     broken bonds (use --engine native)",
+                ));
+            }
+            if self.moduli.states > 0 {
+                return Err(InvalidOption::new(
+                    "--moduli-states",
+                    "must be 0 with bonds that break or yield: a modulus run restarts from \
+                     a recorded state with every bond intact and elastic",
                 ));
             }
         }
@@ -351,6 +406,14 @@ impl CompactOptions {
         ff.zero_net_multibody = self.zero_net;
         ff
     }
+
+    /// The compaction scene of `packing`: the protocol's stages, with the
+    /// bonds' failure rule if they break or yield.
+    fn scene(&self, packing: &Scene) -> Scene {
+        let mut scene = compaction_scene(packing, &self.protocol);
+        scene.force_field.bond_failure = self.bond_failure;
+        scene
+    }
 }
 
 /// One recorded state of a run.
@@ -373,6 +436,9 @@ pub struct StateRow {
     /// The packing measurements.
     #[serde(flatten)]
     pub packing: PackingState,
+    /// How far the grains have come apart, when bonds break.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub fragments: Option<GrainFragments>,
 }
 
 /// The thermo series of a run, every recorded row.
@@ -851,6 +917,7 @@ fn states_of(
         packing: meter
             .measure(scene, &simbox, &scene.particles.positions, &opts.analysis)
             .map_err(CompactionError::analysing("the packing"))?,
+        fragments: fragments_of(scene, opts, &[]),
     }];
     let mut series = RunSeries::default();
     let mut failed = None;
@@ -908,10 +975,42 @@ fn states_of(
                 p_over_e_eff: pressure[r] / e_eff,
                 ke_per_particle: ke[r] / n,
                 packing,
+                fragments: fragments_of(scene, opts, &c.broken_bonds),
             });
         }
     }
     Ok((rows, series, failed))
+}
+
+/// A warning, if some grains of the run came apart: the grain measures
+/// take each grain as one body.
+fn pieces_warning(seed: u64, states: &[StateRow]) -> Option<String> {
+    let first = states
+        .iter()
+        .find(|s| s.fragments.is_some_and(|f| f.whole_grains < 1.0))?;
+    Some(format!(
+        "seed {seed}: from P/E_eff = {:.2e} (phi_MC {:.4}, stage {}) on, some grains are in \
+         pieces; phi_MC, Z, eps_V and the asphericity take each grain as one body (its \
+         particles' convex hull), which a grain in pieces is not: read them as the grains' \
+         extent, not their shape",
+        first.p_over_e_eff, first.packing.phi_mc, first.stage
+    ))
+}
+
+/// The grains' fragments with `broken` bonds broken, when bonds break.
+fn fragments_of(
+    scene: &Scene,
+    opts: &CompactOptions,
+    broken: &[[usize; 2]],
+) -> Option<GrainFragments> {
+    opts.bond_failure.filter(|f| f.breaks)?;
+    let grain = scene.particles.grain.as_deref()?;
+    Some(GrainFragments::of(
+        grain,
+        grain_count(scene),
+        &scene.bonds.pairs,
+        broken,
+    ))
 }
 
 /// The checkpoint of a measured state.
@@ -1040,7 +1139,7 @@ pub fn run_compaction(
         }
         let data = folder.join("packing.data");
         crate::whole_file::write_whole(&data, write_data_file(&packing).as_bytes())?;
-        let scene = compaction_scene(&packing, &opts.protocol);
+        let scene = opts.scene(&packing);
         let scene_path = folder.join("scene.json");
         write_scene(&scene_path, &scene).map_err(|e| CompactionError::Packing(e.to_string()))?;
         print(&format!(
@@ -1065,6 +1164,10 @@ pub fn run_compaction(
             (Some(a), Some(b)) => Some(format!("{a}; {b}")),
             (a, b) => a.or(b),
         };
+        if let Some(warning) = pieces_warning(seed, &states) {
+            print(&format!("warning: {warning}"));
+            report.warnings.push(warning);
+        }
         report.runs.push(CompactionRun {
             seed,
             grains: grain_count(&packing),
@@ -1089,15 +1192,28 @@ pub fn run_compaction(
                 "seed {seed}: the slice picture was not written: {e}"
             ));
         }
-        let last = report.runs.last().and_then(|r| r.states.last());
+        // The loading's last state; an unloading's is in the table.
+        let last = report.runs.last().and_then(|r| {
+            r.states
+                .iter()
+                .rev()
+                .find(|s| s.stage.starts_with("compress"))
+        });
         if let Some(s) = last {
-            let shape = if opts.dem.is_some() {
+            let mut shape = if opts.dem.is_some() {
                 format!("phi_sphere = {:.4}", s.packing.phi_sphere)
             } else {
                 format!("eps_V = {:.3}", s.packing.eps_v_mean)
             };
+            if let Some(f) = s.fragments {
+                shape += &format!(
+                    ", {:.2}% of the bonds broken, {:.1}% of the grains whole",
+                    100.0 * f.broken_fraction,
+                    100.0 * f.whole_grains
+                );
+            }
             print(&format!(
-                "seed {seed}: {run_seconds:.0} s; last state phi_MC = {:.4}, P/E_eff = {:.3e}, Z_force = {:.2}, {shape}",
+                "seed {seed}: {run_seconds:.0} s; last loaded state phi_MC = {:.4}, P/E_eff = {:.3e}, Z_force = {:.2}, {shape}",
                 s.packing.phi_mc, s.p_over_e_eff, s.packing.z_force
             ));
         }

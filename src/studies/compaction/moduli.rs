@@ -509,6 +509,7 @@ mod tests {
                 z_force: 5.0,
                 ..Default::default()
             },
+            fragments: None,
         }
     }
 

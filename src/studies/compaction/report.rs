@@ -6,6 +6,7 @@ use super::{
     FIT_WINDOW,
 };
 use crate::analysis::distribution::{density_histogram, shape, z_scores};
+use crate::analysis::fragments::GrainFragments;
 use crate::analysis::jamming::PowerLaw;
 use crate::analysis::plot::{Mark, Panel, Series};
 use crate::file_error::FileError;
@@ -14,7 +15,8 @@ use std::path::Path;
 
 /// Writes `compaction.json`, `compaction.svg`, `jamming.svg`,
 /// `distributions.svg` (grains only), `moduli.svg` (when moduli were
-/// measured) and `compaction.txt` into `dir`.
+/// measured), `fragments.svg` (when bonds break) and `compaction.txt`
+/// into `dir`.
 pub fn write_report(report: &CompactionReport, dir: &Path) -> Result<(), CompactionError> {
     output::write_report(report, dir)?;
     Ok(())
@@ -24,7 +26,8 @@ impl StudyReport for CompactionReport {
     const JSON: &'static str = "compaction.json";
 
     /// `compaction.svg`, `jamming.svg`, `distributions.svg` (grains only),
-    /// `moduli.svg` (when moduli were measured) and `compaction.txt`.
+    /// `moduli.svg` (when moduli were measured), `fragments.svg` (when
+    /// bonds break) and `compaction.txt`.
     fn draw(&self, out: &StudyOutput) -> Result<(), OutputError> {
         let report = self;
         let per_run = |f: &dyn Fn(&StateRow) -> Option<(f64, f64)>, mark| -> Vec<Series> {
@@ -40,7 +43,8 @@ impl StudyReport for CompactionReport {
                 })
                 .collect()
         };
-        let compressed = |s: &StateRow| s.stage != "start";
+        // The loading only: unloading states would fold the curves back.
+        let compressed = |s: &StateRow| s.stage != "start" && !unloading(s);
         let mut z = per_run(
             &|s| compressed(s).then_some((s.packing.phi_mc, s.packing.z_force)),
             Mark::LinePoints,
@@ -158,6 +162,9 @@ impl StudyReport for CompactionReport {
         }
         if report.runs.iter().any(|r| !r.moduli.is_empty()) {
             out.svg("moduli.svg", &moduli_panels(report))?;
+        }
+        if breaks(report) {
+            out.svg("fragments.svg", &fragment_panels(report))?;
         }
         out.text("compaction.txt", &table(report))?;
         Ok(())
@@ -612,6 +619,144 @@ pub fn table(report: &CompactionReport) -> String {
         let _ = writeln!(t, "{name:<22} {:<36} {paper}", stats(&columns[k]));
     }
     t.push_str(&distribution_table(&band_z_scores(report)));
+    if breaks(report) {
+        t.push_str(&fragment_table(report));
+    }
+    t.push_str(&unloading_table(report));
+    t
+}
+
+/// What the unloading left, run by run: the last compressed state beside
+/// the last state of the rest after it (nothing without an unloading).
+fn unloading_table(report: &CompactionReport) -> String {
+    use std::fmt::Write as _;
+    let mut t = String::new();
+    for r in &report.runs {
+        let last = |prefix: &str| r.states.iter().rev().find(|s| s.stage.starts_with(prefix));
+        let (Some(loaded), Some(rested)) = (last("compress"), last("rest")) else {
+            continue;
+        };
+        if t.is_empty() {
+            t.push_str("\n# unloaded: the box expanded back to its jammed size, then rested\n");
+            let _ = writeln!(
+                t,
+                "{:>6} {:>10} {:>11} {:>8} {:>10} {:>13}",
+                "seed", "state", "P/E_eff", "phi_MC", "mean eps_V", "alpha excess"
+            );
+        }
+        for (name, s) in [("loaded", loaded), ("unloaded", rested)] {
+            let _ = writeln!(
+                t,
+                "{:>6} {:>10} {:>11.3e} {:>8.4} {:>10.5} {:>13.3e}",
+                r.seed,
+                name,
+                s.p_over_e_eff,
+                s.packing.phi_mc,
+                s.packing.eps_v_mean,
+                s.packing.asphericity_excess_mean
+            );
+        }
+    }
+    t
+}
+
+/// Whether a state is of the unloading after the compression.
+fn unloading(state: &StateRow) -> bool {
+    state.stage == "unload" || state.stage == "rest"
+}
+
+/// Whether the report's states count broken bonds and fragments.
+fn breaks(report: &CompactionReport) -> bool {
+    report
+        .runs
+        .iter()
+        .any(|r| r.states.iter().any(|s| s.fragments.is_some()))
+}
+
+/// The compressed states with their fragment counts.
+fn compressed_fragments(
+    run: &super::CompactionRun,
+) -> impl Iterator<Item = (&StateRow, GrainFragments)> {
+    run.states
+        .iter()
+        .filter(|s| s.stage.starts_with("compress"))
+        .filter_map(|s| s.fragments.map(|f| (s, f)))
+}
+
+/// The bonds broken and the grains' fragments against the pressure.
+fn fragment_panels(report: &CompactionReport) -> Vec<Panel> {
+    let series = |label: &str, value: &dyn Fn(&GrainFragments) -> f64| -> Vec<Series> {
+        report
+            .runs
+            .iter()
+            .map(|r| {
+                Series::new(
+                    format!("{label}, seed {}", r.seed),
+                    compressed_fragments(r)
+                        .map(|(s, f)| (s.p_over_e_eff, value(&f)))
+                        .filter(|p| p.0 > 0.0)
+                        .collect(),
+                    Mark::LinePoints,
+                )
+            })
+            .collect()
+    };
+    let mut pieces = series("whole grains", &|f| f.whole_grains);
+    pieces.extend(series("largest fragment / grain", &|f| f.largest_fragment));
+    pieces.extend(series("loose particles", &|f| f.loose_particles));
+    vec![
+        Panel {
+            title: "bonds broken".into(),
+            x_label: "P / E_eff".into(),
+            y_label: "share of the bonds".into(),
+            log_x: true,
+            series: series("broken", &|f| f.broken_fraction),
+            ..Panel::default()
+        },
+        Panel {
+            title: "the grains coming apart".into(),
+            x_label: "P / E_eff".into(),
+            y_label: "share".into(),
+            log_x: true,
+            series: pieces,
+            ..Panel::default()
+        },
+        Panel {
+            title: "fragments of two particles or more".into(),
+            x_label: "P / E_eff".into(),
+            y_label: "per grain".into(),
+            log_x: true,
+            series: series("fragments per grain", &|f| f.fragments_per_grain),
+            ..Panel::default()
+        },
+    ]
+}
+
+/// The fragment counts of every compressed state, run by run.
+fn fragment_table(report: &CompactionReport) -> String {
+    use std::fmt::Write as _;
+    let mut t = String::from("\n# bonds broken and the grains' fragments against the pressure\n");
+    let _ = writeln!(
+        t,
+        "{:>6} {:>11} {:>8} {:>8} {:>8} {:>9} {:>11} {:>8}",
+        "seed", "P/E_eff", "phi_MC", "broken", "whole", "largest", "fragments", "loose"
+    );
+    for r in &report.runs {
+        for (s, f) in compressed_fragments(r) {
+            let _ = writeln!(
+                t,
+                "{:>6} {:>11.3e} {:>8.4} {:>7.2}% {:>7.1}% {:>8.1}% {:>11.2} {:>7.2}%",
+                r.seed,
+                s.p_over_e_eff,
+                s.packing.phi_mc,
+                100.0 * f.broken_fraction,
+                100.0 * f.whole_grains,
+                100.0 * f.largest_fragment,
+                f.fragments_per_grain,
+                100.0 * f.loose_particles
+            );
+        }
+    }
     t
 }
 

@@ -322,6 +322,7 @@ impl CalibrationOptions {
                 multicontact: law.multicontact(self.reach),
                 ..DemContact::default()
             }),
+            bond_failure: None,
         }
     }
 }
