@@ -21,7 +21,7 @@ use crate::scene::protocols::{hertz_squeeze, SqueezeParams};
 use crate::scene::{ForceField, Scene};
 use crate::studies::hertz::{
     built_grain, gap_and_force, read_grain_file, rotation_draws, squeeze_native_system, turned,
-    GrainSource, HertzError, Moduli, MAX_ROTATIONS,
+    Grain, GrainSource, HertzError, Moduli, MAX_ROTATIONS,
 };
 use crate::studies::output::{self, OutputError, StudyOutput, StudyReport};
 use crate::studies::StudyRuntime;
@@ -189,17 +189,15 @@ pub struct MeanSd {
 impl MeanSd {
     /// Of `values`; none when there are none.
     pub fn of(values: &[f64]) -> Option<Self> {
-        let n = values.len();
-        if n == 0 {
+        if values.is_empty() {
             return None;
         }
-        let mean = values.iter().sum::<f64>() / n as f64;
-        let sd = if n > 1 {
-            (values.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / (n - 1) as f64).sqrt()
-        } else {
-            0.0
-        };
-        Some(Self { mean, sd, count: n })
+        let (mean, sd) = crate::studies::calibration::mean_sd(values);
+        Some(Self {
+            mean,
+            sd,
+            count: values.len(),
+        })
     }
 }
 
@@ -245,14 +243,6 @@ pub struct CrushReport {
     pub cases: Vec<CrushCase>,
     /// Wall-clock seconds of the study.
     pub wall_seconds: f64,
-}
-
-/// One grain to crush.
-#[derive(Clone, Debug, Serialize, Deserialize)]
-struct Grain {
-    seed: u64,
-    scene: Scene,
-    summary: Option<GrainSummary>,
 }
 
 /// The grains, one per seed: built at the first a_B (the bulk they are
