@@ -197,6 +197,40 @@ fn failing_list_cases(
             });
         }
     }
+    // The drop-in's pass on the same list kept as rows: V, then the forces
+    // (V0 set once: nothing breaks or yields).
+    let rule = BondFailure::breaking(0.5);
+    let mut rows = ListRows::new();
+    let stamp = ListStamp {
+        builds: 1,
+        edits: 0,
+        entries: bonds.len(),
+        atoms: x.len(),
+    };
+    let (mut vol, mut vol0) = (vec![0.0; x.len()], vec![0.0; x.len()]);
+    rows.sync(stamp, bonds, r0, &[]).expect("valid list");
+    rows.volumes(x, &mut vol, Some(&mut vol0), true);
+    rows.set_reference_volumes(&vol0).expect("every atom's V0");
+    let mut list = bonds.to_vec();
+    let mut broken = vec![0; bonds.len()];
+    c.bench_function("bond::list_rows_breaking", |b| {
+        b.iter(|| {
+            rows.volumes(x, &mut vol, None, true);
+            let found = rows.forces(
+                x,
+                Some(v),
+                Some(&vol),
+                coeffs[0],
+                &rule,
+                true,
+                &mut f,
+                &mut list,
+                &mut [],
+                &mut broken,
+            );
+            assert_eq!(found.broken, 0);
+        })
+    });
     let isa = Isa::detect().name();
     c.bench_function(&format!("bond::elastic_list_newton_off/{isa}"), |b| {
         b.iter(|| bond_forces_on(Isa::detect(), &Unwrapped, &elastic, own, &mut f))

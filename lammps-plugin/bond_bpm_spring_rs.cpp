@@ -31,13 +31,15 @@ BondBPMSpringRS::BondBPMSpringRS(LAMMPS *lmp, bool plastic_bonds) :
     Bond(lmp), plastic(plastic_bonds),
     style(plastic_bonds ? "bond_style bpm/spring/plastic/rs" : "bond_style bpm/spring/rs"),
     break_flag(1), smooth(1), normalize(0), volume(0), overlay(0), damped(false), live(true),
-    store_every(0), reference(nullptr), broken_pairs(nullptr), store(nullptr)
+    store_every(0), rows(bpm_list_rows_create()), list_edits(0), reference(nullptr),
+    broken_pairs(nullptr), store(nullptr)
 {
   writedata = 1;
 }
 
 BondBPMSpringRS::~BondBPMSpringRS()
 {
+  bpm_list_rows_destroy(rows);
   if (allocated) memory->destroy(setflag);
 }
 
@@ -254,6 +256,21 @@ void BondBPMSpringRS::compute(int eflag, int vflag)
   auto bonds = reinterpret_cast<bpm_bond_entry *>(nbonds ? neighbor->bondlist[0] : nullptr);
   const double *x = atom->x[0];
   const double *vol = nullptr, *vol0 = nullptr;
+  bool tallied = eflag_global || vflag_global;
+  if (live && coeffs.size() == 1 && !tallied) {
+    bpm_fault fault{};
+    int status = BPM_OK;
+    bpm_failure_counts found = compute_rows(newton_bond ? nall : nlocal, fault, status);
+    if (status == BPM_ERR_UNSTABLE)
+      bpm_stop_on_fault(lmp, style.c_str(), fault, &coeffs[0]);
+    if (status == BPM_ERR_STALE)
+      error->one(FLERR, style + ": the bond rows are out of step with the bond list (a bug: "
+                                "please report)");
+    if (status != BPM_OK)
+      error->one(FLERR, style + ": row kernels failed with status " + std::to_string(status));
+    settle_failures(found);
+    return;
+  }
   if (volume) {
     reference->clear_volumes(nall);
     int status = bpm_intact_bond_volumes(x, nall, bonds, nbonds, r0, plastic_strains, nlocal,
@@ -289,14 +306,70 @@ void BondBPMSpringRS::compute(int eflag, int vflag)
     bpm_stop_on_fault(lmp, style.c_str(), fault, &coeffs[neighbor->bondlist[fault.bond][2] - 1]);
   if (status != BPM_OK)
     error->one(FLERR, style + ": force kernel failed with status " + std::to_string(status));
+  settle_failures(found);
+  // The list kernel changed the list or its plastic strains behind the rows.
+  if (found.broken > 0 || found.yielded > 0) list_edits++;
+  if (eflag_global) energy += tally.energy;
+  if (vflag_global)
+    for (int k = 0; k < 6; k++) virial[k] += tally.virial[k];
+}
+
+// After a pass: plastic strains kept per atom, broken bonds (their list
+// indices lead `broken`) processed.
+void BondBPMSpringRS::settle_failures(const bpm_failure_counts &found)
+{
   if (found.yielded > 0) reference->store_plastic();
   for (int64_t k = 0; k < found.broken; k++) {
     int n = broken[k];
     process_broken(neighbor->bondlist[n][0], neighbor->bondlist[n][1]);
   }
-  if (eflag_global) energy += tally.energy;
-  if (vflag_global)
-    for (int k = 0; k < 6; k++) virial[k] += tally.virial[k];
+}
+
+// The rows' pass: rows synced with the list (built anew only after a
+// neighbour build or a list-kernel step), the volumes V every step and
+// V0 only when bonds broke or yielded, then the forces on atoms
+// 0..ngather. The same forces, breaks and plastic strains as the list
+// kernel, bit for bit.
+bpm_failure_counts BondBPMSpringRS::compute_rows(int ngather, bpm_fault &fault, int &status)
+{
+  int nbonds = neighbor->nbondlist;
+  int nall = atom->nlocal + atom->nghost;
+  auto bonds = reinterpret_cast<bpm_bond_entry *>(nbonds ? neighbor->bondlist[0] : nullptr);
+  const double *r0 = reference->bondlist_r0();
+  double *plastic_strains = plastic ? reference->bondlist_plastic() : nullptr;
+  const double *x = atom->x[0];
+  bpm_failure_counts found{0, 0};
+  int stale = 0;
+  // The rows follow the reference fix's list-aligned lengths (rebuilt at
+  // each neighbour build and run set-up) and the list kernel's edits.
+  status = bpm_list_rows_sync(rows, (int64_t) reference->list_builds(), (int64_t) list_edits,
+                              bonds, nbonds, r0, plastic_strains, nall, &stale);
+  if (status != BPM_OK) return found;
+  const double *vol = nullptr;
+  if (volume) {
+    // Every rank sums and sends V0 if one must: the communication packs
+    // V0 with V on all ranks or none, and a break on one rank changes the
+    // V0 of another's ghosts.
+    int stale_here = stale;
+    MPI_Allreduce(&stale_here, &stale, 1, MPI_INT, MPI_MAX, world);
+    reference->ensure_volumes(nall);
+    status = bpm_list_rows_volumes(rows, x, nall, ngather, force->newton_bond, reference->vol,
+                                   stale ? reference->vol0 : nullptr);
+    if (status != BPM_OK) return found;
+    reference->communicate_volumes(force->newton_bond, stale != 0);
+    if (stale) {
+      status = bpm_list_rows_set_reference(rows, reference->vol0, nall);
+      if (status != BPM_OK) return found;
+    }
+    vol = reference->vol;
+  }
+  broken.resize(nbonds > 0 ? nbonds : 1);
+  int may_break = plastic ? !update->setupflag : 1;
+  const double *v = damped ? atom->v[0] : nullptr;
+  status = bpm_list_rows_forces(rows, x, v, nall, &coeffs[0], &rules[0], may_break, vol, ngather,
+                                atom->f[0], bonds, nbonds, plastic_strains, broken.data(), &found,
+                                &fault);
+  return found;
 }
 
 // A bond that broke: recorded, its pair handed to the contact, and gone

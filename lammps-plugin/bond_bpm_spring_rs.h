@@ -50,6 +50,10 @@ class BondBPMSpringRS : public Bond {
   int store_every;
   std::vector<std::string> store_values;
   std::vector<double> store_row;
+  // The list's intact bonds as rows between neighbour builds (one bond
+  // type, steps without energy or virial): the faster pass.
+  bpm_list_rows *rows;
+  bigint list_edits;    // list-kernel steps that broke or yielded bonds: the rows are rebuilt after one
   class FixBPMReference *reference;
   class FixBPMBrokenPairs *broken_pairs;
   class FixBPMStoreLocal *store;
@@ -59,6 +63,8 @@ class BondBPMSpringRS : public Bond {
   void check_special_weights();
   void process_broken(int i, int j);
   void forget_bond(int i, int j);
+  bpm_failure_counts compute_rows(int ngather, bpm_fault &fault, int &status);
+  void settle_failures(const bpm_failure_counts &found);
 };
 
 }    // namespace LAMMPS_NS

@@ -17,7 +17,8 @@ enum {
   BPM_ERR_TYPE = 3,  /* a bond or atom type without coefficients */
   BPM_ERR_PANIC = 4, /* internal error in the kernels (a bug) */
   BPM_ERR_UNSTABLE = 5, /* forces computed, but an interaction left the model's range (fault) */
-  BPM_ERR_STOPPED = 6   /* a pass stopped; the message written says why */
+  BPM_ERR_STOPPED = 6,  /* a pass stopped; the message written says why */
+  BPM_ERR_STALE = 7     /* list rows used with another list, or without their V0 set */
 };
 
 /* Kinds of fault: the first sign of a blow-up, caught while values are finite. */
@@ -103,6 +104,30 @@ int bpm_failing_bond_forces(const double *x, const double *v, int64_t nall, bpm_
                             const double *vol0, int64_t n_owned, int32_t newton, double *f,
                             int32_t *broken, bpm_failure_counts *found, bpm_tally *tally,
                             bpm_fault *fault);
+
+/* A bond list's intact bonds kept as rows between steps (one bond type;
+ * steps without energy or virial): create once, sync every step with the
+ * list (rebuilt only when builds, edits, nbonds or nall changed; *stale = 1
+ * when V0 must be summed and set), then volumes (V of atoms 0..ngather,
+ * and V0 into vol0 if not NULL: with newton == 0, after breaks only, the
+ * broken bonds' atoms summed anew and the others as set_reference last got
+ * them), set_reference after V0 is communicated,
+ * and forces (onto atoms 0..ngather; vol NULL: no multibody term). The
+ * same forces, breaks and plastic strains as bpm_failing_bond_forces. */
+typedef struct bpm_list_rows bpm_list_rows;
+bpm_list_rows *bpm_list_rows_create(void);
+void bpm_list_rows_destroy(bpm_list_rows *rows);
+int bpm_list_rows_sync(bpm_list_rows *rows, int64_t builds, int64_t edits,
+                       const bpm_bond_entry *bonds, int64_t nbonds, const double *r0,
+                       const double *plastic, int64_t nall, int32_t *stale);
+int bpm_list_rows_volumes(bpm_list_rows *rows, const double *x, int64_t nall, int64_t ngather,
+                          int32_t newton, double *vol, double *vol0);
+int bpm_list_rows_set_reference(bpm_list_rows *rows, const double *vol0, int64_t nall);
+int bpm_list_rows_forces(bpm_list_rows *rows, const double *x, const double *v, int64_t nall,
+                         const bpm_bond_coeffs *coeffs, const bpm_bond_failure *rule,
+                         int32_t may_break, const double *vol, int64_t ngather, double *f,
+                         bpm_bond_entry *bonds, int64_t nbonds, double *plastic, int32_t *broken,
+                         bpm_failure_counts *found, bpm_fault *fault);
 
 /* Force over distance (to fforce) and spring-proxy energy (k (r - r_eq)^2
  * / 2, over r0 with normalize) of one intact bond with plastic strain e_p,

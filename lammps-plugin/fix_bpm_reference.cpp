@@ -21,7 +21,7 @@ FixBPMReference::FixBPMReference(LAMMPS *lmp, int narg, char **arg) :
     Fix(lmp, narg, arg), vol(nullptr), vol0(nullptr), multibody_sums(nullptr),
     owner("bond_style bpm/multibody"), r0(nullptr), ep(nullptr), with_plastic(false),
     breaking(false), restored(false), restored_breaking(false), captured(0), nmax_vol(0),
-    nmax_sums(0), nmax_r0(0), slots_stale(false), list_built_at(-1), list_size(-1),
+    comm_reference(true), nmax_sums(0), nmax_r0(0), slots_stale(false), list_built_at(-1), list_rebuilds(0), list_size(-1),
     max_r0_all(0.0), comm_sums(false)
 {
   with_plastic = narg == 4 && strcmp(arg[3], "plastic") == 0;
@@ -179,6 +179,7 @@ const double *FixBPMReference::bondlist_r0()
     if (with_plastic) list_ep[k] = ep[0][slot];
   }
   list_built_at = neighbor->lastcall;
+  list_rebuilds++;
   list_size = n;
   return list_r0.data();
 }
@@ -278,7 +279,7 @@ double FixBPMReference::r0_between(int i, int j)
   return slot >= 0 ? r0[0][slot] : -1.0;
 }
 
-void FixBPMReference::clear_volumes(int nall)
+void FixBPMReference::ensure_volumes(int nall)
 {
   if (nall > nmax_vol) {
     nmax_vol = atom->nmax > nall ? atom->nmax : nall;
@@ -287,6 +288,11 @@ void FixBPMReference::clear_volumes(int nall)
     memory->create(vol, nmax_vol, "bpm/reference:vol");
     memory->create(vol0, nmax_vol, "bpm/reference:vol0");
   }
+}
+
+void FixBPMReference::clear_volumes(int nall)
+{
+  ensure_volumes(nall);
   for (int i = 0; i < nall; i++) vol[i] = vol0[i] = 0.0;
 }
 
@@ -307,9 +313,11 @@ void FixBPMReference::communicate_multibody_sums(int newton_bond)
   comm_sums = false;
 }
 
-void FixBPMReference::communicate_volumes(int newton_bond)
+void FixBPMReference::communicate_volumes(int newton_bond, bool with_reference)
 {
+  comm_reference = with_reference;
   communicate(newton_bond);
+  comm_reference = true;
 }
 
 void FixBPMReference::communicate(int newton_bond)
@@ -333,7 +341,7 @@ int FixBPMReference::pack_forward_comm(int n, int *list, double *buf, int, int *
   }
   for (int k = 0; k < n; k++) {
     buf[m++] = vol[list[k]];
-    buf[m++] = vol0[list[k]];
+    if (comm_reference) buf[m++] = vol0[list[k]];
   }
   return m;
 }
@@ -348,7 +356,7 @@ void FixBPMReference::unpack_forward_comm(int n, int first, double *buf)
   }
   for (int i = first; i < first + n; i++) {
     vol[i] = buf[m++];
-    vol0[i] = buf[m++];
+    if (comm_reference) vol0[i] = buf[m++];
   }
 }
 
@@ -362,7 +370,7 @@ int FixBPMReference::pack_reverse_comm(int n, int first, double *buf)
   }
   for (int i = first; i < first + n; i++) {
     buf[m++] = vol[i];
-    buf[m++] = vol0[i];
+    if (comm_reference) buf[m++] = vol0[i];
   }
   return m;
 }
@@ -377,7 +385,7 @@ void FixBPMReference::unpack_reverse_comm(int n, int *list, double *buf)
   }
   for (int k = 0; k < n; k++) {
     vol[list[k]] += buf[m++];
-    vol0[list[k]] += buf[m++];
+    if (comm_reference) vol0[list[k]] += buf[m++];
   }
 }
 

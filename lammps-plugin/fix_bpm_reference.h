@@ -60,8 +60,11 @@ class FixBPMReference : public Fix {
   std::string owner;
   // Zeroed V and V0 arrays for nall atoms.
   void clear_volumes(int nall);
-  // Sums ghost parts into owners (newton_bond on), then copies owners to ghosts.
-  void communicate_volumes(int newton_bond);
+  // V and V0 arrays for nall atoms, as they are (grown if needed: then unset).
+  void ensure_volumes(int nall);
+  // Sums ghost parts into owners (newton_bond on), then copies owners to
+  // ghosts: V, and V0 too unless with_reference is false.
+  void communicate_volumes(int newton_bond, bool with_reference = true);
   // Zeroed multibody sums (Mx, My, Mz, N per atom) of the zero-net variant.
   void clear_multibody_sums(int nall);
   // As communicate_volumes, for the multibody sums.
@@ -71,6 +74,9 @@ class FixBPMReference : public Fix {
   // r0 and e_p (0 without plastic strains) of that bond; false if none.
   bool bond_values(int i, int j, double &r0_value, double &ep_value);
   double max_r0() const { return max_r0_all; }
+  // How many times the list-aligned r0 and e_p were built (each neighbour
+  // build, each run's set-up): what a copy of them must follow.
+  bigint list_builds() const { return list_rebuilds; }
 
   double *vol, *vol0;
   double *multibody_sums;    // [4 nall]: the zero-net variant's multibody sums
@@ -82,6 +88,7 @@ class FixBPMReference : public Fix {
   bool breaking, restored, restored_breaking;
   int captured;
   int nmax_vol;
+  bool comm_reference;    // V0 travels with V
   int nmax_sums;
   int nmax_r0;
   int stride;
@@ -90,6 +97,7 @@ class FixBPMReference : public Fix {
   std::vector<long> slot_entry;    // per slot: 2 k + side of the list entry that uses it, or -1
   bool slots_stale;
   bigint list_built_at;
+  bigint list_rebuilds;
   int list_size;
   double max_r0_all;
   bool comm_sums;    // which arrays the comm calls carry: the multibody sums, or V and V0

@@ -608,3 +608,203 @@ fn intact_volumes_leave_a_solid_at_its_rest_lengths_without_force() {
     assert!(largest < 1e-12, "largest multibody force {largest:e}");
     assert_eq!(ep, plastic);
 }
+
+/// The rows' C ABI (`bpm_list_rows_*`): the list pass's forces, breaks
+/// and types through it, and a status for each misuse: another bond type,
+/// an atom outside the atoms, calls out of step with the sync.
+#[test]
+fn list_rows_abi_gives_the_list_pass_and_refuses_misuse() {
+    let (x0, mut bonds, r0) = random_network(60, 3.2, 1.5, 17);
+    // Stretched 6% along x: some bonds past eps_c = 0.05.
+    let x: Vec<[f64; 3]> = x0.iter().map(|p| [p[0] * 1.06, p[1], p[2]]).collect();
+    let v = random_rows(x.len(), 0.1, 18);
+    let n = x.len();
+    let nb = bonds.len();
+    bonds[3].ty = 0;
+    let coeffs = BondCoeffs {
+        k: 1.0,
+        a: -0.5,
+        gamma: 0.5,
+    };
+    let rule = RawBondFailure {
+        critical_strain: 0.05,
+        plastic_strain: 0.0,
+        breaks: 1,
+        smooth: 1,
+        normalize: 0,
+        yields: 0,
+    };
+    let mut vol = vec![0.0; n];
+    let mut vol0 = vec![0.0; n];
+    // The list pass through its C ABI.
+    let mut list_bonds = bonds.clone();
+    let st = unsafe {
+        bpm_intact_bond_volumes(
+            x.as_ptr() as *const f64,
+            n as i64,
+            list_bonds.as_ptr(),
+            nb as i64,
+            r0.as_ptr(),
+            std::ptr::null(),
+            n as i64,
+            0,
+            vol.as_mut_ptr(),
+            vol0.as_mut_ptr(),
+        )
+    };
+    assert_eq!(st, BPM_OK);
+    let mut f_list = vec![[0.0f64; 3]; n];
+    let mut broken_list = vec![-1i32; nb];
+    let mut found_list = FailureCounts::default();
+    let st = unsafe {
+        bpm_failing_bond_forces(
+            x.as_ptr() as *const f64,
+            v.as_ptr() as *const f64,
+            n as i64,
+            list_bonds.as_mut_ptr(),
+            nb as i64,
+            r0.as_ptr(),
+            std::ptr::null_mut(),
+            &coeffs,
+            &rule,
+            1,
+            1,
+            vol.as_ptr(),
+            vol0.as_ptr(),
+            n as i64,
+            0,
+            f_list.as_mut_ptr() as *mut f64,
+            broken_list.as_mut_ptr(),
+            &mut found_list,
+            std::ptr::null_mut(),
+            std::ptr::null_mut(),
+        )
+    };
+    assert_eq!(st, BPM_OK);
+    assert!(found_list.broken > 0, "some bonds must break");
+    // The same through the rows.
+    let rows = bpm_list_rows_create();
+    let mut row_bonds = bonds.clone();
+    let sync = |bonds: &[BondEntry], nall: i64, stale: &mut i32| unsafe {
+        bpm_list_rows_sync(
+            rows,
+            1,
+            0,
+            bonds.as_ptr(),
+            bonds.len() as i64,
+            r0.as_ptr(),
+            std::ptr::null(),
+            nall,
+            stale,
+        )
+    };
+    let (mut row_vol, mut row_vol0) = (vec![0.0; n], vec![0.0; n]);
+    let volumes = |nall: i64, vol: &mut [f64], vol0: *mut f64| unsafe {
+        bpm_list_rows_volumes(
+            rows,
+            x.as_ptr() as *const f64,
+            nall,
+            n as i64,
+            0,
+            vol.as_mut_ptr(),
+            vol0,
+        )
+    };
+    let mut f_rows = vec![[0.0f64; 3]; n];
+    let mut broken_rows = vec![-1i32; nb];
+    let mut found_rows = FailureCounts::default();
+    let forces = |bonds: &mut [BondEntry],
+                  vol: *const f64,
+                  f: &mut [[f64; 3]],
+                  broken: &mut [i32],
+                  found: &mut FailureCounts| unsafe {
+        bpm_list_rows_forces(
+            rows,
+            x.as_ptr() as *const f64,
+            v.as_ptr() as *const f64,
+            n as i64,
+            &coeffs,
+            &rule,
+            1,
+            vol,
+            n as i64,
+            f.as_mut_ptr() as *mut f64,
+            bonds.as_mut_ptr(),
+            bonds.len() as i64,
+            std::ptr::null_mut(),
+            broken.as_mut_ptr(),
+            found,
+            std::ptr::null_mut(),
+        )
+    };
+    let mut stale = 0;
+    // Misuse first: nothing synced, another type, an atom outside.
+    assert_eq!(
+        volumes(n as i64, &mut row_vol, std::ptr::null_mut()),
+        BPM_ERR_STALE
+    );
+    let mut typed = bonds.clone();
+    typed[5].ty = 2;
+    assert_eq!(sync(&typed, n as i64, &mut stale), BPM_ERR_TYPE);
+    let mut outside = bonds.clone();
+    outside[7].j = n as i32;
+    assert_eq!(sync(&outside, n as i64, &mut stale), BPM_ERR_INDEX);
+    assert_eq!(sync(&bonds, n as i64, &mut stale), BPM_OK);
+    assert_eq!(stale, 1, "new rows need V0");
+    // Forces with the multibody term before this step's volumes and V0.
+    let mut scratch = vec![[0.0f64; 3]; n];
+    assert_eq!(
+        forces(
+            &mut row_bonds,
+            row_vol.as_ptr(),
+            &mut scratch,
+            &mut broken_rows,
+            &mut found_rows
+        ),
+        BPM_ERR_STALE
+    );
+    assert_eq!(
+        volumes(n as i64 + 1, &mut row_vol, std::ptr::null_mut()),
+        BPM_ERR_STALE
+    );
+    assert_eq!(
+        volumes(n as i64, &mut row_vol, row_vol0.as_mut_ptr()),
+        BPM_OK
+    );
+    assert_eq!(row_vol, vol);
+    assert_eq!(row_vol0, vol0);
+    assert_eq!(
+        unsafe { bpm_list_rows_set_reference(rows, row_vol0.as_ptr(), n as i64) },
+        BPM_OK
+    );
+    assert_eq!(
+        forces(
+            &mut row_bonds,
+            row_vol.as_ptr(),
+            &mut f_rows,
+            &mut broken_rows,
+            &mut found_rows
+        ),
+        BPM_OK
+    );
+    let bits = |f: &[[f64; 3]]| f.iter().flatten().map(|c| c.to_bits()).collect::<Vec<_>>();
+    assert_eq!(bits(&f_rows), bits(&f_list));
+    assert_eq!(
+        (found_rows.broken, found_rows.yielded),
+        (found_list.broken, 0)
+    );
+    assert_eq!(broken_rows, broken_list);
+    assert_eq!(row_bonds, list_bonds);
+    // The lengths are spent: a second pass needs this step's volumes.
+    assert_eq!(
+        forces(
+            &mut row_bonds,
+            row_vol.as_ptr(),
+            &mut scratch,
+            &mut broken_rows,
+            &mut found_rows
+        ),
+        BPM_ERR_STALE
+    );
+    unsafe { bpm_list_rows_destroy(rows) };
+}

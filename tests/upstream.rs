@@ -525,3 +525,78 @@ fn a_pair_broken_in_one_run_is_a_contact_in_the_next() {
     assert!((fx + (1.0 - r)).abs() < 1e-12, "{line}");
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// The drop-in runs its rows on steps without energy or virial and the
+/// bond list kernel on the others: a block pulled apart on two ranks (so
+/// with ghosts, and V0 communicated only when a rank's bonds broke or
+/// yielded) with a thermo line every step (the list kernel throughout,
+/// with the multibody term and bonds that break and yield) ends bit for
+/// bit where the same pull without thermo lines (the rows, rebuilt only at
+/// neighbour builds) ends, and where one with a line every 37 steps (the
+/// rows rebuilt after list-kernel steps that broke bonds) ends.
+#[test]
+fn the_dropin_rows_and_its_list_kernel_pull_a_block_apart_alike() {
+    use bpm::verify::upstream::Styles;
+    let dir = workdir("dropin-rows");
+    let deck = |thermo: &str| {
+        format!(
+            "units lj\nboundary f f f\natom_style bond\nnewton on off\nlattice fcc 1.4142135623730951\n\
+             region box block -2 6 -2 6 -2 10\nregion block block 0 4 0 4 0 4\n\
+             create_box 1 box bond/types 1 extra/bond/per/atom 14 extra/special/per/atom 40\n\
+             create_atoms 1 region block\ndisplace_atoms all random 0.04 0.04 0.04 7 units box\nmass 1 1.0\n\
+             special_bonds lj 0 1 1 coul 0 1 1\ncomm_modify vel yes cutoff 3.0\n\
+             pair_style zero 1.2\npair_coeff * *\ncreate_bonds many all all 1 0.0 1.2\n\
+             special_bonds lj 0 1 1 coul 1 1 1\n\
+             pair_style bpm/spring anharmonic yes\npair_coeff * * 1.0 1.0 0.5 50.0\n\
+             bond_style bpm/spring/plastic volume/factor yes\nbond_coeff 1 1.0 0.05 0.5 0.02 -0.5\n\
+             variable top_z equal bound(all,zmax)-0.5\nvariable bottom_z equal bound(all,zmin)+0.5\n\
+             region top block INF INF INF INF ${{top_z}} INF units box\n\
+             region bottom block INF INF INF INF INF ${{bottom_z}} units box\n\
+             group top region top\ngroup bottom region bottom\ngroup inner subtract all top bottom\n\
+             fix hold bottom move linear 0 0 0\nfix pull top move linear 0 0 0.02\n\
+             fix integrate inner nve\ncompute nb all nbond/atom\ncompute bonds all reduce sum c_nb\n\
+             {thermo}\ntimestep 0.01\nrun 2500\n\
+             print \"FINAL $(x[1]:%.17g) $(z[40]:%.17g) $(vz[200]:%.17g) $(fz[100]:%.17g) $(c_bonds/2)\"\n"
+        )
+    };
+    let run = |name: &str, thermo: &str| {
+        let input = dir.join(format!("{name}.in"));
+        std::fs::write(&input, deck(thermo)).unwrap();
+        let work = bpm::verify::Work {
+            particles: 300,
+            steps: 2500,
+        };
+        let out = modern()
+            .run_styles(Styles::Ours, &input, &[], 2, work)
+            .unwrap();
+        let added = out
+            .lines()
+            .find_map(|l| l.strip_prefix("Added ")?.split_whitespace().next())
+            .and_then(|n| n.parse::<f64>().ok())
+            .unwrap_or_else(|| panic!("no bond count in:\n{out}"));
+        let last = out
+            .lines()
+            .find(|l| l.starts_with("FINAL"))
+            .unwrap_or_else(|| panic!("no FINAL line in:\n{out}"))
+            .to_string();
+        (added, last)
+    };
+    let (added, rows) = run("rows", "thermo 0");
+    let (_, list) = run(
+        "list",
+        "thermo_style custom step pe press c_bonds\nthermo 1",
+    );
+    assert_eq!(rows, list);
+    let (_, mixed) = run(
+        "mixed",
+        "thermo_style custom step pe press c_bonds\nthermo 37",
+    );
+    assert_eq!(rows, mixed);
+    // Between a tenth and nine tenths of the bonds broke.
+    let left: f64 = rows.split_whitespace().last().unwrap().parse().unwrap();
+    assert!(
+        left > 0.1 * added && left < 0.9 * added,
+        "{added} bonds, then {rows}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -32,7 +32,7 @@ pub struct RawBondFailure {
 }
 
 impl RawBondFailure {
-    fn rule(&self) -> BondFailure {
+    pub(super) fn rule(&self) -> BondFailure {
         BondFailure {
             critical_strain: self.critical_strain,
             breaks: self.breaks != 0,

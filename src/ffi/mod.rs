@@ -30,14 +30,23 @@ pub const BPM_ERR_UNSTABLE: i32 = 5;
 /// multi-contact correction beyond the model's range, a full contact row,
 /// a bad coefficient).
 pub const BPM_ERR_STOPPED: i32 = 6;
+/// Rows kept between steps ([`crate::kernels::ListRows`]) were used with a
+/// list or atom count other than the one they were synced with, or without
+/// the reference volumes the pass needs.
+pub const BPM_ERR_STALE: i32 = 7;
 
 mod bond_failure;
 mod granular;
+mod list_rows;
 pub use bond_failure::{
     bpm_check_bond_failure, bpm_failing_bond_forces, bpm_failing_bond_single,
     bpm_intact_bond_volumes, FailureCounts, RawBondFailure,
 };
 pub use granular::{parse_coeffs, GranularStyle, GranularStyleCoeffs, DEFAULT_SLOTS};
+pub use list_rows::{
+    bpm_list_rows_create, bpm_list_rows_destroy, bpm_list_rows_forces, bpm_list_rows_set_reference,
+    bpm_list_rows_sync, bpm_list_rows_volumes,
+};
 
 /// Writes the first fault of `pass` to `fault` (if not null) and returns
 /// the status of the call.

@@ -20,7 +20,9 @@
 //! is 0 gets, bit for bit, the force of the elastic kernels times `w`.
 
 use super::bond::{cube_root, reciprocal, BondCoeffs};
-use super::bond_rows::{settle_checked_row, BondRows, LaneTally, RowForce, RowInputs, AS_J};
+use super::bond_rows::{
+    gather_by_particle, settle_checked_row, BondRows, LaneTally, RowForce, RowInputs, AS_J,
+};
 use super::fault::ForcePass;
 use super::isa::Isa;
 use super::Separation;
@@ -459,14 +461,12 @@ pub fn gather_rest_volumes(
         vol0.len(),
         forces.len()
     );
-    let incidence = rows.incidence();
-    for (p, out) in particles.zip(vol0.iter_mut()) {
-        *out = incidence.of(p).iter().fold(0.0, |sum, &e| {
-            let row = (e & !AS_J) as usize;
-            let r_eq = rows.r0(row) * (1.0 + forces[row][3]);
-            sum + r_eq * r_eq * r_eq
-        });
-    }
+    let term = |e: u32| {
+        let row = (e & !AS_J) as usize;
+        let r_eq = rows.r0(row) * (1.0 + forces[row][3]);
+        r_eq * r_eq * r_eq
+    };
+    gather_by_particle(rows, particles, vol0, term);
 }
 
 #[cfg(target_arch = "x86_64")]

@@ -33,7 +33,7 @@ const MAX_INDEX: usize = (AS_J - 1) as usize;
 ///
 /// Built once per layout (the engine rebuilds it when positions wrap);
 /// every index is checked here, so the passes need no bounds checks.
-#[derive(Clone, Debug, Default)]
+#[derive(Clone, Debug, Default, PartialEq)]
 pub struct BondRows {
     particles: usize,
     pub(super) i: Vec<u32>,
@@ -175,6 +175,92 @@ impl BondRows {
         Ok(())
     }
 
+    /// Takes out the rows `doomed` (increasing, no repeats): the rows left
+    /// keep their order, and each particle its entries' order, so the
+    /// layout is the one [`BondRows::new`] builds from the rows left, and
+    /// every pass over it gives the same bits. One pass over the rows and
+    /// the entries, with `renumbering` as scratch (kept by the caller, so
+    /// a step in which bonds break allocates nothing): what such a step
+    /// costs instead of a new layout.
+    ///
+    /// # Panics
+    /// If `doomed` is not increasing or names a row past the last.
+    pub fn remove_rows(&mut self, doomed: &[usize], renumbering: &mut Vec<u32>) {
+        let Some(&first) = doomed.first() else {
+            return;
+        };
+        let rows = self.len();
+        assert!(
+            doomed.windows(2).all(|w| w[0] < w[1]) && doomed[doomed.len() - 1] < rows,
+            "rows to remove must increase and lie below {rows}"
+        );
+        // Each row's index once the doomed ones are gone (GONE for them):
+        // a load per entry below, where a search of `doomed` would be a
+        // branch per step of the search.
+        const GONE: u32 = u32::MAX;
+        renumbering.clear();
+        renumbering.extend(0..first as u32);
+        let mut next = doomed.iter().copied().peekable();
+        let mut kept = first as u32;
+        for row in first..rows {
+            if next.peek() == Some(&row) {
+                next.next();
+                renumbering.push(GONE);
+            } else {
+                renumbering.push(kept);
+                kept += 1;
+            }
+        }
+        drop_rows(&mut self.i, doomed);
+        drop_rows(&mut self.j, doomed);
+        drop_rows(&mut self.r0, doomed);
+        drop_rows(&mut self.inv_r0, doomed);
+        drop_rows(&mut self.inv_v0sum, doomed);
+        drop_rows(&mut self.bond, doomed);
+        let mut write = 0;
+        let mut start = 0;
+        for p in 0..self.particles {
+            let end = self.offsets[p + 1];
+            self.offsets[p] = write;
+            for k in start..end {
+                let entry = self.incidence[k];
+                let row = renumbering[(entry & !AS_J) as usize];
+                if row == GONE {
+                    continue;
+                }
+                self.incidence[write] = row | (entry & AS_J);
+                write += 1;
+            }
+            start = end;
+        }
+        self.offsets[self.particles] = write;
+        self.incidence.truncate(write);
+    }
+
+    /// As [`BondRows::set_reference_volumes`], but only for the rows of
+    /// the particles `changed` (the others' `V0` as last set): the same
+    /// `1 / (V0_i + V0_j)` where it is computed, and no pass over every row.
+    pub fn update_reference_volumes(
+        &mut self,
+        vol0: &[f64],
+        changed: impl Iterator<Item = usize>,
+    ) -> Result<(), BondRowsError> {
+        if vol0.len() != self.particles || self.inv_v0sum.len() != self.len() {
+            return Err(BondRowsError::ReferenceVolumes {
+                given: vol0.len(),
+                particles: self.particles,
+            });
+        }
+        for p in changed {
+            for &e in &self.incidence[self.offsets[p]..self.offsets[p + 1]] {
+                let row = (e & !AS_J) as usize;
+                let (i, j) = (self.i[row] as usize, self.j[row] as usize);
+                self.inv_v0sum[row] = reciprocal(vol0[i] + vol0[j]);
+            }
+        }
+        Ok(())
+    }
+
     /// Number of rows.
     pub fn len(&self) -> usize {
         self.i.len()
@@ -264,6 +350,22 @@ impl BondRows {
     fn check_particles(&self, what: &str, len: usize) {
         assert_eq!(len, self.particles, "{what} of {len} particles");
     }
+}
+
+/// `values` without the entries `doomed` (increasing, all below its
+/// length, or `values` empty), in order.
+pub(super) fn drop_rows<T: Copy>(values: &mut Vec<T>, doomed: &[usize]) {
+    let (Some(&first), false) = (doomed.first(), values.is_empty()) else {
+        return;
+    };
+    // The runs between doomed entries move down whole (a memmove each).
+    let mut write = first;
+    for (k, &gone) in doomed.iter().enumerate() {
+        let next = doomed.get(k + 1).copied().unwrap_or(values.len());
+        values.copy_within(gone + 1..next, write);
+        write += next - gone - 1;
+    }
+    values.truncate(write);
 }
 
 /// Each particle's entries, compressed: particle `p`'s at
@@ -744,9 +846,22 @@ pub fn gather_volumes(
     // SAFETY: incidence entries index rows (checked by the layout), and
     // `lengths` has one per row (checked above).
     let term = |e: u32| unsafe { lengths.get_unchecked((e & !AS_J) as usize)[1] };
+    gather_by_particle(rows, particles, vol, term);
+}
+
+/// Sets `out[p]` for each particle `p` of `particles` (`out` holds exactly
+/// those) to the sum of `term(entry)` over its incidence entries, from 0
+/// in row order, a few particles side by side.
+#[inline(always)]
+pub(super) fn gather_by_particle(
+    rows: &BondRows,
+    particles: Range<usize>,
+    out: &mut [f64],
+    term: impl Fn(u32) -> f64,
+) {
     in_groups(
         particles,
-        vol,
+        out,
         |first, out| {
             let mut sums = [0.0; CHAINS];
             interleaved_entries(rows.incidence(), first, |c, e| sums[c] += term(e));

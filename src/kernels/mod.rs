@@ -21,6 +21,7 @@ mod granular;
 mod granular_lanes;
 mod granular_list;
 mod isa;
+mod list_rows;
 mod multicontact;
 mod pair;
 mod row_window;
@@ -63,6 +64,7 @@ pub use granular_list::{
     HISTORY_VALUES,
 };
 pub use isa::Isa;
+pub use list_rows::{ListRows, ListRowsError, ListStamp};
 pub use multicontact::{
     group_by_sphere, pair_contact_points, surface_corrections, Closure, ContactPoint, HalfSpace,
     MprSwitch, MprTest, COINCIDENT_POINTS, NEGLIGIBLE, POINT_FLOOR,
