@@ -260,7 +260,8 @@ void BondBPMSpringRS::compute(int eflag, int vflag)
   if (live && coeffs.size() == 1 && !tallied) {
     bpm_fault fault{};
     int status = BPM_OK;
-    bpm_failure_counts found = compute_rows(newton_bond ? nall : nlocal, fault, status);
+    bpm_failure_counts found =
+        compute_rows(bonds, r0, plastic_strains, newton_bond ? nall : nlocal, fault, status);
     if (status == BPM_ERR_UNSTABLE)
       bpm_stop_on_fault(lmp, style.c_str(), fault, &coeffs[0]);
     if (status == BPM_ERR_STALE)
@@ -330,13 +331,12 @@ void BondBPMSpringRS::settle_failures(const bpm_failure_counts &found)
 // V0 only when bonds broke or yielded, then the forces on atoms
 // 0..ngather. The same forces, breaks and plastic strains as the list
 // kernel, bit for bit.
-bpm_failure_counts BondBPMSpringRS::compute_rows(int ngather, bpm_fault &fault, int &status)
+bpm_failure_counts BondBPMSpringRS::compute_rows(bpm_bond_entry *bonds, const double *r0,
+                                                 double *plastic_strains, int ngather,
+                                                 bpm_fault &fault, int &status)
 {
   int nbonds = neighbor->nbondlist;
   int nall = atom->nlocal + atom->nghost;
-  auto bonds = reinterpret_cast<bpm_bond_entry *>(nbonds ? neighbor->bondlist[0] : nullptr);
-  const double *r0 = reference->bondlist_r0();
-  double *plastic_strains = plastic ? reference->bondlist_plastic() : nullptr;
   const double *x = atom->x[0];
   bpm_failure_counts found{0, 0};
   int stale = 0;

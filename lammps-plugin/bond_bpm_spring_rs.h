@@ -63,7 +63,8 @@ class BondBPMSpringRS : public Bond {
   void check_special_weights();
   void process_broken(int i, int j);
   void forget_bond(int i, int j);
-  bpm_failure_counts compute_rows(int ngather, bpm_fault &fault, int &status);
+  bpm_failure_counts compute_rows(bpm_bond_entry *bonds, const double *r0, double *plastic_strains,
+                                  int ngather, bpm_fault &fault, int &status);
   void settle_failures(const bpm_failure_counts &found);
 };
 

@@ -3,7 +3,8 @@
 //! [`failing_list_forces`].
 
 use super::{
-    check_bond_atoms, check_bond_list, counts, guard, list, opt_rows, report, rows, write_message,
+    check_bond_atoms, check_bond_list, counts, guard, list, list_mut, opt_rows, report, rows,
+    write_message,
 };
 use super::{BPM_ERR_NULL, BPM_ERR_STOPPED, BPM_ERR_TYPE, BPM_OK};
 use crate::kernels::{
@@ -209,11 +210,7 @@ pub unsafe extern "C" fn bpm_failing_bond_forces(
         if yields && nbonds > 0 && plastic.is_null() {
             return BPM_ERR_NULL;
         }
-        let bonds = if nbonds == 0 {
-            &mut [][..]
-        } else {
-            slice::from_raw_parts_mut(bonds, nbonds)
-        };
+        let bonds = list_mut(bonds, nbonds);
         // Types 0 and below are bonds already broken: skipped, not refused.
         let status = check_bond_list(bonds, nall, i32::MIN, ncoeffs);
         if status != BPM_OK {
@@ -229,16 +226,12 @@ pub unsafe extern "C" fn bpm_failing_bond_forces(
             volumes: (!vol.is_null()).then(|| (list(vol, nall), list(vol0, nall))),
             tally: !tally.is_null(),
         };
-        let plastic = if yields && nbonds > 0 {
-            slice::from_raw_parts_mut(plastic, nbonds)
+        let plastic = if yields {
+            list_mut(plastic, nbonds)
         } else {
             &mut [][..]
         };
-        let broken = if nbonds == 0 {
-            &mut [][..]
-        } else {
-            slice::from_raw_parts_mut(broken, nbonds)
-        };
+        let broken = list_mut(broken, nbonds);
         let own = Ownership {
             n_owned,
             newton: newton != 0,

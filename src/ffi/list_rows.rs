@@ -5,10 +5,9 @@
 //! then runs the volume and force passes on them.
 
 use super::bond_failure::{FailureCounts, RawBondFailure};
-use super::{guard, list, opt_rows, report, rows};
+use super::{guard, list, list_mut, opt_rows, report, rows};
 use super::{BPM_ERR_INDEX, BPM_ERR_NULL, BPM_ERR_STALE, BPM_ERR_TYPE, BPM_OK};
 use crate::kernels::{BondCoeffs, BondEntry, Fault, ListRows, ListRowsError, ListStamp};
-use std::slice;
 
 /// New rows of no list, for [`bpm_list_rows_sync`]; free them with
 /// [`bpm_list_rows_destroy`].
@@ -121,8 +120,8 @@ pub unsafe extern "C" fn bpm_list_rows_volumes(
         if rows.atoms() != Some(nall) || ngather > nall {
             return BPM_ERR_STALE;
         }
-        let vol = slice_mut(vol, ngather);
-        let vol0 = (!vol0.is_null()).then(|| slice_mut(vol0, ngather));
+        let vol = list_mut(vol, ngather);
+        let vol0 = (!vol0.is_null()).then(|| list_mut(vol0, ngather));
         rows.volumes(self::rows(x, nall), vol, vol0, newton == 0);
         BPM_OK
     })
@@ -219,7 +218,7 @@ pub unsafe extern "C" fn bpm_list_rows_forces(
             return BPM_ERR_STALE;
         }
         let plastic = if yields {
-            slice_mut(plastic, entries)
+            list_mut(plastic, entries)
         } else {
             &mut [][..]
         };
@@ -230,10 +229,10 @@ pub unsafe extern "C" fn bpm_list_rows_forces(
             *coeffs,
             &rule,
             may_break != 0,
-            slice_mut(f as *mut [f64; 3], ngather),
-            slice_mut(bonds, entries),
+            list_mut(f as *mut [f64; 3], ngather),
+            list_mut(bonds, entries),
             plastic,
-            slice_mut(broken, entries),
+            list_mut(broken, entries),
         );
         if let Some(found) = found.as_mut() {
             *found = FailureCounts {
@@ -243,12 +242,4 @@ pub unsafe extern "C" fn bpm_list_rows_forces(
         }
         report(&pass.pass, std::ptr::null_mut(), fault)
     })
-}
-
-unsafe fn slice_mut<'a, T>(p: *mut T, n: usize) -> &'a mut [T] {
-    if n == 0 {
-        &mut []
-    } else {
-        slice::from_raw_parts_mut(p, n)
-    }
 }

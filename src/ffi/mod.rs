@@ -95,6 +95,15 @@ pub(crate) unsafe fn list<'a, T>(p: *const T, n: usize) -> &'a [T] {
     }
 }
 
+/// [`list`], writable: `n` values at `p` (empty when `n` is 0, whatever `p`).
+pub(crate) unsafe fn list_mut<'a, T>(p: *mut T, n: usize) -> &'a mut [T] {
+    if n == 0 {
+        &mut []
+    } else {
+        slice::from_raw_parts_mut(p, n)
+    }
+}
+
 /// The rows of a LAMMPS neighbour list (`ilist`, `numneigh`,
 /// `firstneigh`) as `(i, neighbour indices)`, each row checked first
 /// (indices below `nall`, counts not negative, pointers not null), so the
