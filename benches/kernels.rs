@@ -92,7 +92,7 @@ fn kernels(c: &mut Criterion) {
                 b.iter(|| per_bond_loop(&inputs, &mut f))
             });
         }
-        bond_rows_cases(c, name, &inputs);
+        bond_rows_cases(c, name, &inputs, !tally);
     }
     failing_list_cases(c, &x, &v, &bonds, &r0, (&vol, &vol0));
     // The same network squeezed by 1% and 3% (linear): every volume ratio
@@ -117,7 +117,12 @@ fn kernels(c: &mut Criterion) {
             volumes: Some((&vol[..], &vol0[..])),
             tally: false,
         };
-        bond_rows_cases(c, &format!("bond::multibody_squeezed_{squeeze}"), &inputs);
+        bond_rows_cases(
+            c,
+            &format!("bond::multibody_squeezed_{squeeze}"),
+            &inputs,
+            false,
+        );
     }
 }
 
@@ -253,8 +258,9 @@ fn failing_list_cases(
 
 /// The native engine's two-step bond pass on the same bonds, beside the
 /// scatter kernel: `bond_rows::...`, the row pass (with the volume pass it
-/// needs for the multibody term) and the per-particle sums, one thread.
-fn bond_rows_cases(c: &mut Criterion, name: &str, inputs: &BondInputs) {
+/// needs for the multibody term) and the per-particle sums, one thread;
+/// `with_rules` adds the same pass with bonds that can break or yield.
+fn bond_rows_cases(c: &mut Criterion, name: &str, inputs: &BondInputs, with_rules: bool) {
     let n = inputs.x.len();
     let own = Ownership::all(n);
     let mut vol0 = vec![0.0; n];
@@ -276,11 +282,31 @@ fn bond_rows_cases(c: &mut Criterion, name: &str, inputs: &BondInputs) {
     let mut force_rows = vec![[0.0; 4]; rows.len()];
     let mut f = vec![[0.0; 3]; n];
     let id = name.replacen("bond::", "bond_rows::", 1);
-    for isa in [Isa::Portable, Isa::Avx2] {
+    // The rules that break (upstream's defaults at eps_c = 0.5) and also
+    // yield (eps_p = 0.2): nothing here is strained that far, so the rows
+    // are the elastic ones and the difference is the rule's cost.
+    let breaking = BondFailure::breaking(0.5);
+    let yielding = BondFailure {
+        plastic_strain: Some(0.2),
+        ..breaking
+    };
+    let rules: &[(&str, Option<BondFailure>)] = if with_rules {
+        &[
+            ("", None),
+            ("_breaking", Some(breaking)),
+            ("_yielding", Some(yielding)),
+        ]
+    } else {
+        &[("", None)]
+    };
+    for (isa, &(suffix, rule)) in [Isa::Portable, Isa::Avx2]
+        .into_iter()
+        .flat_map(|isa| rules.iter().map(move |r| (isa, r)))
+    {
         if !isa.available() {
             continue;
         }
-        c.bench_function(&format!("{id}/{}", isa.name()), |b| {
+        c.bench_function(&format!("{id}{suffix}/{}", isa.name()), |b| {
             b.iter(|| {
                 if multibody {
                     row_volumes_on(
@@ -300,14 +326,28 @@ fn bond_rows_cases(c: &mut Criterion, name: &str, inputs: &BondInputs) {
                     multibody: multibody.then_some((&vol[..], &lengths[..])),
                     tally: inputs.tally,
                 };
-                let pass = row_forces_on(
-                    isa,
-                    &Unwrapped,
-                    &rows,
-                    0..rows.len(),
-                    &row_inputs,
-                    &mut force_rows,
-                );
+                let pass = match &rule {
+                    None => row_forces_on(
+                        isa,
+                        &Unwrapped,
+                        &rows,
+                        0..rows.len(),
+                        &row_inputs,
+                        &mut force_rows,
+                    ),
+                    Some(rule) => {
+                        failing_row_forces_on(
+                            isa,
+                            &Unwrapped,
+                            &rows,
+                            0..rows.len(),
+                            &row_inputs,
+                            rule,
+                            &mut force_rows,
+                        )
+                        .pass
+                    }
+                };
                 gather_forces_on(isa, &rows, 0..n, &force_rows, &mut f);
                 pass
             })

@@ -391,6 +391,7 @@ fn a_tiny_compaction_study_measures_moduli_and_writes_its_report() {
         },
         dem: None,
         bond_failure: None,
+        overlay_pair: false,
     };
     let report = run_compaction(&opts, &plain(), None, &dir, "test", &mut |_| {}).unwrap();
     let run = &report.runs[0];
@@ -767,6 +768,7 @@ fn tiny_study(
         },
         dem,
         bond_failure: None,
+        overlay_pair: false,
     }
 }
 

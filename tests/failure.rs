@@ -82,6 +82,17 @@ fn pair_scene(r: f64, failure: BondFailure) -> Scene {
     scene
 }
 
+/// The contact force of [`pair_scene`]'s contact law at distance `r`.
+fn pair_scene_contact(r: f64) -> f64 {
+    let contact = PairCoeffs {
+        k: 1.0,
+        d: 1.0,
+        a: 50.0,
+        gamma: 0.0,
+    };
+    pair_force_magnitude(r, 0.0, &contact)
+}
+
 #[test]
 fn a_bond_broken_in_compression_is_a_contact_from_the_next_evaluation() {
     let scene = pair_scene(0.85, unsmoothed(0.1, None));
@@ -98,13 +109,7 @@ fn a_bond_broken_in_compression_is_a_contact_from_the_next_evaluation() {
     assert_eq!(model.broken_bonds(), &[[0, 1]]);
     assert!(model.bonds().is_empty());
     sys.compute_forces(&drivers, 0.0, true);
-    let contact = PairCoeffs {
-        k: 1.0,
-        d: 1.0,
-        a: 50.0,
-        gamma: 0.0,
-    };
-    let expected = pair_force_magnitude(0.85, 0.0, &contact);
+    let expected = pair_scene_contact(0.85);
     let f = sys.particles.f[0];
     assert!(
         (f[0] + expected).abs() < 1e-12 * expected && f[1] == 0.0 && f[2] == 0.0,
@@ -117,6 +122,59 @@ fn a_bond_broken_in_compression_is_a_contact_from_the_next_evaluation() {
     }
     let r = sys.particles.x[1][0] - sys.particles.x[0][0];
     assert!(r > 1.0, "the contact pushed them apart to {r}");
+}
+
+/// With the contact law overlaid on the bonds (`overlay_pair`), a bonded
+/// pair squeezed below the contact distance feels the bond and the contact
+/// at once, and without it the bond alone. A bond that breaks under the
+/// overlay leaves the contact acting once, not twice: the pair list held
+/// the pair already. The overlay needs a contact law.
+#[test]
+fn an_overlaid_contact_acts_between_bonded_particles_and_once_after_a_break() {
+    let drivers = StageDrivers {
+        dt: 0.01,
+        ..Default::default()
+    };
+    let pushed = pair_scene_contact(0.85);
+    // Particle 0's force along x, at set-up and at the next evaluation.
+    let forces = |critical_strain: f64, overlay: bool| {
+        let mut scene = pair_scene(0.85, unsmoothed(critical_strain, None));
+        scene.force_field.overlay_pair = overlay;
+        let mut sys = build_system(&scene, 1);
+        sys.setup(&drivers).unwrap();
+        let first = sys.particles.f[0];
+        sys.compute_forces(&drivers, 0.0, true);
+        let second = sys.particles.f[0];
+        assert!(first[1] == 0.0 && first[2] == 0.0 && second[1] == 0.0);
+        (first[0], second[0])
+    };
+    let close = |got: f64, want: f64| (got - want).abs() <= 1e-12 * want.abs();
+    // The bond (k (r0 - r) = 0.15) holds at 15% strain with eps_c = 0.5.
+    let (bond_only, _) = forces(0.5, false);
+    assert!(close(bond_only, -0.15), "{bond_only}");
+    let (overlaid, _) = forces(0.5, true);
+    assert!(
+        close(overlaid, -0.15 - pushed),
+        "{overlaid} against {}",
+        -0.15 - pushed
+    );
+    // With eps_c = 0.1 it breaks at set-up: the overlaid contact acts at
+    // once and then alone; without the overlay, from the next evaluation.
+    let (at_break, after) = forces(0.1, true);
+    assert!(
+        close(at_break, -pushed) && close(after, -pushed),
+        "{at_break}, {after}"
+    );
+    let (at_break, after) = forces(0.1, false);
+    assert!(
+        at_break == 0.0 && close(after, -pushed),
+        "{at_break}, {after}"
+    );
+    let mut scene = pair_scene(0.85, unsmoothed(0.5, None));
+    scene.force_field.overlay_pair = true;
+    scene.force_field.pair = None;
+    let err = bpm::scene::validate(&scene).unwrap_err().to_string();
+    assert!(err.contains("force_field.overlay_pair"), "{err}");
 }
 
 #[test]

@@ -870,6 +870,9 @@ fn bond_rows_report_a_collapsed_bond_and_refuse_bad_atoms() {
     let x: Vec<[f64; 3]> = (0..12).map(|k| [k as f64, 0.0, 0.0]).collect();
     let mut r0: Vec<f64> = vec![1.0; 11];
     r0[6] = 10.0;
+    // Exactly at the collapse limit (0.2 x 5 = 1): outside the lanes'
+    // open range, but no fault; the report must go on to bond 106.
+    r0[2] = 5.0;
     let rows = BondRows::new(12, (0..11).map(|b| (b, b + 1, r0[b], 100 + b)), None).unwrap();
     let inputs = RowInputs {
         x: &x,
@@ -895,6 +898,30 @@ fn bond_rows_report_a_collapsed_bond_and_refuse_bad_atoms() {
             (FaultKind::BondCollapsed, 6, 7, 106),
             "{isa:?}"
         );
+        // Bonds that break and yield: the squeezed bond (strain -0.9)
+        // yields in the pass that reports it, beside a bond that breaks
+        // (strain 1) in the same block of four, and the report is the same.
+        let rule = BondFailure {
+            plastic_strain: Some(0.05),
+            ..BondFailure::breaking(0.95)
+        };
+        let mut breaking_rows = r0.clone();
+        breaking_rows[5] = 0.5;
+        let rows = BondRows::new(
+            12,
+            (0..11).map(|b| (b, b + 1, breaking_rows[b], 100 + b)),
+            None,
+        )
+        .unwrap();
+        let pass = failing_row_forces_on(isa, &Unwrapped, &rows, 0..11, &inputs, &rule, &mut out);
+        let fault = pass.pass.fault.expect("the squeezed bond is a fault");
+        assert_eq!(
+            (fault.kind, fault.i, fault.j, fault.bond, fault.reference),
+            (FaultKind::BondCollapsed, 6, 7, 106, 10.0),
+            "{isa:?}, bonds that break and yield"
+        );
+        assert_eq!((pass.broken, pass.yielded), (1, 2), "{isa:?}");
+        assert!(row_broke(&out[5]) && out[6][3] == -0.85, "{isa:?}: {out:?}");
     }
     assert!(matches!(
         BondRows::new(3, [(0, 3, 1.0, 0)].into_iter(), None),

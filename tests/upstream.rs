@@ -272,14 +272,14 @@ fn a_block_pulled_to_fracture_breaks_as_upstreams_on_our_styles() {
     for r in &rows {
         eprintln!("{}", r.line());
     }
-    // 3 blocks x (4 observables against upstream, 2 across rank counts),
-    // and 4 native observables for the 2 blocks without overlay/pair.
-    assert_eq!(judged(&rows), 26);
+    // 3 blocks x (4 observables against upstream, 2 across rank counts,
+    // 4 of the native engine against upstream).
+    assert_eq!(judged(&rows), 30);
     assert_eq!(
         rows.iter()
             .filter(|r| r.observable.starts_with("native"))
             .count(),
-        8
+        12
     );
     let _ = std::fs::remove_dir_all(&dir);
 }

@@ -121,8 +121,15 @@ pub trait ParticleModel: std::fmt::Debug + Send + Any {
     /// engine builds no pair list at all).
     fn pair_cutoff(&self) -> Option<f64>;
 
-    /// Pairs the pair list leaves out (for the BPM, bonded pairs).
+    /// Pairs the pair list leaves out (for the BPM, bonded pairs, unless
+    /// the contacts are overlaid on the bonds).
     fn exclusions(&self) -> Option<&Exclusions>;
+
+    /// Pairs joined by bonds, whatever the pair list does with them (error
+    /// reports tell them from unbonded neighbours).
+    fn bonded_pairs(&self) -> Option<&Exclusions> {
+        self.exclusions()
+    }
 
     /// Whether particles carry angular velocity and torque (integrated as
     /// solid spheres).

@@ -390,7 +390,7 @@ impl System {
                 let pair = [fault.i as usize, fault.j as usize];
                 let nearest = pair
                     .iter()
-                    .map(|&p| self.nearest_unexcluded(p))
+                    .map(|&p| self.nearest_unbonded(p))
                     .fold(f64::INFINITY, f64::min);
                 let contact = self.model.pair_cutoff().unwrap_or(f64::NAN);
                 Err(EngineError::Unstable {
@@ -409,15 +409,15 @@ impl System {
         }
     }
 
-    /// Distance from particle `p` to its nearest particle that the model
-    /// does not exclude from contact (its bond partners are excluded); a
-    /// scan of all particles, for error reports only.
-    fn nearest_unexcluded(&self, p: usize) -> f64 {
+    /// Distance from particle `p` to its nearest particle not bonded to it
+    /// (whether or not contacts are overlaid on bonds); a scan of all
+    /// particles, for error reports only.
+    fn nearest_unbonded(&self, p: usize) -> f64 {
         let sep = self.simbox.minimum_image();
-        let exclusions = self.model.exclusions();
+        let bonded = self.model.bonded_pairs();
         let x = &self.particles.x;
         (0..x.len())
-            .filter(|&q| q != p && !exclusions.is_some_and(|e| e.excludes(p, q)))
+            .filter(|&q| q != p && !bonded.is_some_and(|e| e.excludes(p, q)))
             .map(|q| sep.distance(&x[p], &x[q]))
             .fold(f64::INFINITY, f64::min)
     }

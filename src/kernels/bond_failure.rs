@@ -5,7 +5,8 @@
 //!
 //! - **Breaking**: a bond with `|e| > eps_c` breaks. It exerts no force in
 //!   the step it breaks, and its two particles interact through the contact
-//!   law from the next step on.
+//!   law from the next step on (already, if the contacts are overlaid on
+//!   the bonds).
 //! - **Smoothing**: the whole bond force (spring, multibody term and
 //!   damping) is multiplied by `w = 1 - (e / eps_c)^8`, which falls to 0
 //!   at the critical strain, so a bond lets go without a jump in force.
@@ -387,6 +388,25 @@ impl<S: Separation> FailingPass<'_, S> {
         result
     }
 
+    /// The fault of intact row `row` whose force row the pass wrote as
+    /// `written`: the row recomputed from the plastic strain it left,
+    /// which gives the pass's force again (a yield sets `e_p` to
+    /// `e -/+ eps_p`, where the rule leaves it).
+    #[cfg(target_arch = "x86_64")]
+    #[cold]
+    #[inline(never)]
+    fn fault_of<const MB: bool, const DAMPED: bool>(
+        &self,
+        row: usize,
+        written: &[f64; 4],
+    ) -> Option<super::fault::Fault> {
+        let intact = self.row::<MB, DAMPED>(row, written[3])?;
+        let mut probe = ForcePass::default();
+        let r0 = self.rows.r0(row);
+        settle_checked_row::<false>(self.rows, row, r0, &intact.force, &mut probe, &mut [0.0; 4]);
+        probe.fault
+    }
+
     /// Row `row` with plastic strain `e_p`, or `None` if it breaks.
     #[inline(always)]
     fn row<const MB: bool, const DAMPED: bool>(&self, row: usize, e_p: f64) -> Option<IntactRow> {
@@ -479,9 +499,17 @@ mod avx2 {
     use super::super::bond_rows::avx2::{
         cube_roots, dot, in_range, lengths_of, separations, tally_terms, to_rows_with, LaneImage,
     };
-    use super::super::fault::Fault;
     use super::*;
     use std::arch::x86_64::*;
+
+    /// Keeps the first row the lanes' range test rejects: out of line, so
+    /// that the loop tests one mask and jumps rarely instead of updating
+    /// the record every block.
+    #[cold]
+    #[inline(never)]
+    fn note_fault(first: &mut Option<usize>, block: usize, faulty: i32) {
+        first.get_or_insert(block + faulty.trailing_zeros() as usize);
+    }
 
     #[target_feature(enable = "avx2")]
     pub(super) unsafe fn failing_blocks<
@@ -502,6 +530,16 @@ mod avx2 {
             inputs,
             rule,
         } = *pass;
+        // Everything the loop reads, in locals: the rows are written
+        // through raw pointers, which the compiler must otherwise assume
+        // may alias the rule, the inputs and the layout, reloading them
+        // (and re-testing the rule's flags) every block.
+        let (breaks, smooth, normalize) = (rule.breaks, rule.smooth, rule.normalize);
+        let (row_i, row_j) = (&rows.i[..], &rows.j[..]);
+        let (r0s, inv_r0s, inv_v0sums) = (&rows.r0[..], &rows.inv_r0[..], &rows.inv_v0sum[..]);
+        let x = inputs.x;
+        let v = inputs.v.unwrap_or(&[]);
+        let (vol, lengths) = inputs.multibody.unwrap_or((&[], &[]));
         let c = &inputs.coeffs;
         let (neg_k, a, gamma, half_k) = (
             _mm256_set1_pd(-c.k),
@@ -515,8 +553,12 @@ mod avx2 {
         let plastic = _mm256_set1_pd(rule.plastic_strain.unwrap_or(0.0));
         let magnitude = _mm256_castsi256_pd(_mm256_set1_epi64x(i64::MAX));
         let infinity = _mm256_set1_pd(f64::INFINITY);
+        let all = _mm256_castsi256_pd(_mm256_set1_epi64x(-1));
         let image = sep.minimum_image().map(|m| LaneImage::new(m));
-        let mut result = FailurePass::default();
+        let (mut broken_rows, mut yielded_rows) = (0, 0);
+        // The first row out of range, reported after the loop: a fault
+        // carried through the loop would be moved about every block.
+        let mut first_faulty = None;
         let mut sums = [_mm256_setzero_pd(); 7];
         if TALLY {
             for (sum, lane) in sums.iter_mut().zip(&lanes.sums) {
@@ -525,18 +567,24 @@ mod avx2 {
         }
         for k in (0..range.len()).step_by(4) {
             let row = range.start + k;
-            let (i, j) = (&rows.i[row..row + 4], &rows.j[row..row + 4]);
-            let del = separations(sep, image.as_ref(), inputs.x, i, j);
-            let r0 = _mm256_loadu_pd(rows.r0.as_ptr().add(row));
-            let inv_r0 = _mm256_loadu_pd(rows.inv_r0.as_ptr().add(row));
-            let r = match inputs.multibody {
-                Some((_, lengths)) if MB => lengths_of(lengths.as_ptr().add(row)),
-                _ => _mm256_sqrt_pd(dot(&del, &del)),
+            // In bounds: the caller checked the range against the layout
+            // and the outputs, and the lengths against the rows.
+            let (i, j) = (
+                row_i.get_unchecked(row..row + 4),
+                row_j.get_unchecked(row..row + 4),
+            );
+            let del = separations(sep, image.as_ref(), x, i, j);
+            let r0 = _mm256_loadu_pd(r0s.as_ptr().add(row));
+            let inv_r0 = _mm256_loadu_pd(inv_r0s.as_ptr().add(row));
+            let r = if MB {
+                lengths_of(lengths.as_ptr().add(row))
+            } else {
+                _mm256_sqrt_pd(dot(&del, &del))
             };
             let rinv = _mm256_div_pd(one, r);
             let elongation = _mm256_sub_pd(r, r0);
             let e = _mm256_mul_pd(elongation, inv_r0);
-            let broken = if rule.breaks {
+            let broken = if breaks {
                 _mm256_and_pd(
                     _mm256_cmp_pd::<_CMP_GT_OQ>(_mm256_and_pd(e, magnitude), critical),
                     _mm256_cmp_pd::<_CMP_LT_OQ>(r, infinity),
@@ -548,33 +596,38 @@ mod avx2 {
             // Without yielding, e_p stays 0: the rest length is r0, bit
             // for bit what (1 + 0) r0 gives.
             let (e_p, rest, stretch) = if PLASTIC {
-                let mut e_p = _mm256_setr_pd(*dst.add(3), *dst.add(7), *dst.add(11), *dst.add(15));
-                let before = e_p;
-                let above = _mm256_cmp_pd::<_CMP_GT_OQ>(e, _mm256_add_pd(e_p, plastic));
-                let below = _mm256_cmp_pd::<_CMP_LT_OQ>(e, _mm256_sub_pd(e_p, plastic));
-                e_p = _mm256_blendv_pd(e_p, _mm256_sub_pd(e, plastic), above);
-                e_p = _mm256_blendv_pd(e_p, _mm256_add_pd(e, plastic), below);
-                let moved = _mm256_andnot_pd(broken, _mm256_cmp_pd::<_CMP_NEQ_OQ>(e_p, before));
-                result.yielded += _mm256_movemask_pd(moved).count_ones() as usize;
+                let before = _mm256_setr_pd(*dst.add(3), *dst.add(7), *dst.add(11), *dst.add(15));
+                let above = _mm256_cmp_pd::<_CMP_GT_OQ>(e, _mm256_add_pd(before, plastic));
+                let below = _mm256_cmp_pd::<_CMP_LT_OQ>(e, _mm256_sub_pd(before, plastic));
+                // Most blocks have no bond yielding in a step: only the
+                // others pay for the blends and the count.
+                let e_p = if _mm256_movemask_pd(_mm256_or_pd(above, below)) == 0 {
+                    before
+                } else {
+                    let mut e_p = _mm256_blendv_pd(before, _mm256_sub_pd(e, plastic), above);
+                    e_p = _mm256_blendv_pd(e_p, _mm256_add_pd(e, plastic), below);
+                    let moved = _mm256_andnot_pd(broken, _mm256_cmp_pd::<_CMP_NEQ_OQ>(e_p, before));
+                    yielded_rows += _mm256_movemask_pd(moved).count_ones() as usize;
+                    e_p
+                };
                 let rest = _mm256_mul_pd(r0, _mm256_add_pd(one, e_p));
                 (e_p, rest, _mm256_sub_pd(r, rest))
             } else {
                 (_mm256_setzero_pd(), r0, elongation)
             };
-            let mut fmag = if rule.normalize {
+            let mut fmag = if normalize {
                 _mm256_mul_pd(neg_k, _mm256_sub_pd(e, e_p))
             } else {
                 _mm256_mul_pd(neg_k, stretch)
             };
             if MB {
-                let vol = inputs.multibody.map_or(&[][..], |m| m.0);
                 let idx_i = _mm_loadu_si128(i.as_ptr() as *const __m128i);
                 let idx_j = _mm_loadu_si128(j.as_ptr() as *const __m128i);
                 let vsum = _mm256_add_pd(
                     _mm256_i32gather_pd::<8>(vol.as_ptr(), idx_i),
                     _mm256_i32gather_pd::<8>(vol.as_ptr(), idx_j),
                 );
-                let inv_v0sum = _mm256_loadu_pd(rows.inv_v0sum.as_ptr().add(row));
+                let inv_v0sum = _mm256_loadu_pd(inv_v0sums.as_ptr().add(row));
                 let q = _mm256_mul_pd(vsum, inv_v0sum);
                 let dilation = cube_roots(q, _mm256_sub_pd(q, one));
                 let inv_rest = if PLASTIC {
@@ -588,34 +641,42 @@ mod avx2 {
                 );
             }
             if DAMPED {
-                let dv = differences(inputs.v.unwrap_or(&[]), i, j);
+                let dv = differences(v, i, j);
                 let del_dot_dv = dot(&del, &dv);
                 fmag = _mm256_sub_pd(fmag, _mm256_mul_pd(_mm256_mul_pd(gamma, del_dot_dv), rinv));
             }
-            if rule.smooth {
+            if smooth {
                 let s = _mm256_mul_pd(e, inverse_critical);
                 let s2 = _mm256_mul_pd(s, s);
                 let s4 = _mm256_mul_pd(s2, s2);
                 fmag = _mm256_mul_pd(fmag, _mm256_sub_pd(one, _mm256_mul_pd(s4, s4)));
             }
-            let intact = _mm256_andnot_pd(broken, _mm256_castsi256_pd(_mm256_set1_epi64x(-1)));
-            let fpair = _mm256_and_pd(_mm256_mul_pd(fmag, rinv), intact);
-            // Broken rows: +0, as the scalar build writes them.
-            let force = [
-                _mm256_and_pd(_mm256_mul_pd(del[0], fpair), intact),
-                _mm256_and_pd(_mm256_mul_pd(del[1], fpair), intact),
-                _mm256_and_pd(_mm256_mul_pd(del[2], fpair), intact),
+            let fpair = _mm256_mul_pd(fmag, rinv);
+            let mut force = [
+                _mm256_mul_pd(del[0], fpair),
+                _mm256_mul_pd(del[1], fpair),
+                _mm256_mul_pd(del[2], fpair),
             ];
-            let fourth = _mm256_blendv_pd(e_p, _mm256_set1_pd(f64::NAN), broken);
+            let mut fourth = e_p;
+            let broken_lanes = _mm256_movemask_pd(broken);
+            // Blocks where a bond breaks are rare: only they pay for masks.
+            let intact = if broken_lanes == 0 {
+                all
+            } else {
+                broken_rows += broken_lanes.count_ones() as usize;
+                let intact = _mm256_andnot_pd(broken, all);
+                // Broken rows: +0, as the scalar build writes them.
+                force = force.map(|f| _mm256_and_pd(f, intact));
+                fourth = _mm256_blendv_pd(e_p, _mm256_set1_pd(f64::NAN), broken);
+                intact
+            };
             let force_rows = to_rows_with(force[0], force[1], force[2], fourth);
             for (l, fr) in force_rows.into_iter().enumerate() {
                 _mm256_storeu_pd(dst.add(4 * l), fr);
             }
-            let broken_lanes = _mm256_movemask_pd(broken);
-            result.broken += broken_lanes.count_ones() as usize;
             if TALLY {
                 let mut energy = _mm256_mul_pd(_mm256_mul_pd(half_k, stretch), stretch);
-                if rule.normalize {
+                if normalize {
                     energy = _mm256_mul_pd(energy, inv_r0);
                 }
                 // Broken lanes add +0 (their force is masked, and so is
@@ -625,27 +686,26 @@ mod avx2 {
                 }
             }
             let faulty = !_mm256_movemask_pd(in_range(r, r0, fpair)) & !broken_lanes & 0b1111;
-            if faulty != 0 && result.pass.fault.is_none() {
-                let l = faulty.trailing_zeros() as usize;
-                let lane = |v: __m256d| {
-                    let mut a = [0.0; 4];
-                    _mm256_storeu_pd(a.as_mut_ptr(), v);
-                    a[l]
-                };
-                result.pass.fault = Fault::of_bond(
-                    rows.bond[row + l] as usize,
-                    rows.i[row + l] as usize,
-                    rows.j[row + l] as usize,
-                    lane(r),
-                    lane(r0),
-                    lane(fpair),
-                );
+            if faulty != 0 {
+                note_fault(&mut first_faulty, k, faulty);
             }
         }
         if TALLY {
             for (sum, lane) in sums.iter().zip(lanes.sums.iter_mut()) {
                 _mm256_storeu_pd(lane.as_mut_ptr(), *sum);
             }
+        }
+        let mut result = FailurePass {
+            broken: broken_rows,
+            yielded: yielded_rows,
+            ..FailurePass::default()
+        };
+        // The lanes' test rejects a length exactly at a limit, which is no
+        // fault (as on the portable build): scan on to the first that is.
+        if let Some(first) = first_faulty {
+            result.pass.fault = (first..out.len())
+                .filter(|&k| !row_broke(&out[k]))
+                .find_map(|k| pass.fault_of::<MB, DAMPED>(range.start + k, &out[k]));
         }
         result
     }

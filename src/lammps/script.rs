@@ -153,6 +153,12 @@ fn check_supported(index: usize, stage: &StageSpec, scene: &Scene) -> Result<(),
             "bonds with plastic strains (`bonds.plastic_strain`): the harness's LAMMPS runs take only reference lengths",
         ));
     }
+    let overlaid = |ff: &ForceField| ff.overlay_pair;
+    if overlaid(&scene.force_field) || stage.force_field.as_ref().is_some_and(overlaid) {
+        return Err(unsupported(
+            "contacts overlaid on bonds (`overlay_pair`): the harness's LAMMPS runs exclude bonded pairs from contact (`special_bonds lj 0 1 1`)",
+        ));
+    }
     let fails = |ff: &ForceField| ff.bond_failure.is_some_and(|f| f.is_live());
     if fails(&scene.force_field) || stage.force_field.as_ref().is_some_and(fails) {
         return Err(unsupported(

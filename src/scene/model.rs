@@ -205,6 +205,13 @@ pub struct ForceField {
     /// Pair coefficients `k`, `d`, `a` (a_P), `gamma`; absent for no contacts.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub pair: Option<PairCoeffs>,
+    /// Bonded particles also touch through the contact law (upstream
+    /// LAMMPS's `overlay/pair yes`): a bond squeezed below the contact
+    /// distance `d` is resisted by the contact's repulsion too. Default
+    /// off: bonded particles have no contact force, and a broken bond's
+    /// particles touch from the step after it breaks. Needs `pair`.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub overlay_pair: bool,
     /// Neighbour-list skin (d units); default 0.3.
     #[serde(default = "default_skin")]
     pub skin: f64,
@@ -239,6 +246,7 @@ impl ForceField {
             bond: self.bond,
             failure: self.bond_failure,
             pair: self.pair,
+            overlay_pair: self.overlay_pair,
             zero_net: self.zero_net_multibody,
         }
     }
@@ -257,6 +265,7 @@ impl ForceField {
                 a: 50.0,
                 gamma: 1.0,
             }),
+            overlay_pair: false,
             bond_failure: None,
             skin: default_skin(),
             zero_net_multibody: false,
@@ -272,6 +281,7 @@ impl ForceField {
             bond: BondCoeffs::default(),
             bond_failure: None,
             pair: None,
+            overlay_pair: false,
             skin: default_skin(),
             zero_net_multibody: false,
             granular: Some(material),

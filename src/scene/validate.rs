@@ -161,10 +161,12 @@ fn check_force_field(
         }
         (ModelKind::Dem, Some(m)) => {
             check_granular(&format!("{prefix}.granular"), m)?;
-            if !ff.bond.is_zero() || ff.pair.is_some() || ff.zero_net_multibody {
+            if !ff.bond.is_zero() || ff.pair.is_some() || ff.zero_net_multibody || ff.overlay_pair
+            {
                 return Err(invalid(
                     prefix,
-                    "model dem has no bonds and no bpm contacts: leave out bond, pair and zero_net_multibody",
+                    "model dem has no bonds and no bpm contacts: leave out bond, pair, \
+                     overlay_pair and zero_net_multibody",
                 ));
             }
         }
@@ -201,6 +203,13 @@ fn check_force_field(
                  leave out zero_net_multibody or bond_failure",
             ));
         }
+    }
+    if ff.overlay_pair && ff.pair.is_none() {
+        return Err(invalid(
+            format!("{prefix}.overlay_pair"),
+            "overlays the contact law on bonds, but there is no contact law: give pair, or leave \
+             out overlay_pair",
+        ));
     }
     non_negative(&format!("{prefix}.bond.k"), ff.bond.k)?;
     finite(&format!("{prefix}.bond.a"), ff.bond.a)?;

@@ -11,7 +11,9 @@
 //! Bonds that break ([`BondFailure`]) leave the bond arrays at the end of
 //! the step in which they break; their particles then interact through the
 //! contact law from the next force evaluation, through a short list of new contacts
-//! until the pair list is next rebuilt without their exclusion. The
+//! until the pair list is next rebuilt without their exclusion. With
+//! [`BpmForceField::overlay_pair`] nothing is excluded: bonded particles
+//! touch through the contact law as well, as unbonded ones do. The
 //! volume proxies `V` and `V0` sum over intact bonds, and `V0` over their
 //! rest lengths (docs/model.md, "Breaking and yielding").
 
@@ -103,6 +105,10 @@ pub struct BpmForceField {
     pub failure: Option<BondFailure>,
     /// Pair coefficients, if contacts are modelled.
     pub pair: Option<PairCoeffs>,
+    /// Bonded particles also touch through the contact law: the pair list
+    /// keeps them (upstream's `overlay/pair yes`).
+    #[serde(default)]
+    pub overlay_pair: bool,
     /// The zero-net-multibody variant (the scene refuses it with failing
     /// bonds).
     pub zero_net: bool,
@@ -327,7 +333,9 @@ impl BpmModel {
     }
 
     /// Replaces the force field (a stage's force-field change) and
-    /// re-derives the live terms and `V0`. Bonds keep their plastic
+    /// re-derives the live terms and `V0`. A change of `overlay_pair`
+    /// changes which pairs the pair list must hold: rebuild it (as
+    /// [`crate::engine::System::setup`] does at each stage start). Bonds keep their plastic
     /// strains; a field whose bonds do not yield makes each bond's rest
     /// length its reference length.
     pub fn set_force_field(&mut self, field: BpmForceField, n: usize) {
@@ -682,8 +690,9 @@ impl BpmModel {
                 pairs: Vec::new(),
             };
         }
-        // Without contacts there is no pair list to wait for.
-        if self.terms.pairs {
+        // Without contacts there is no pair list to wait for; with the
+        // contacts overlaid on the bonds, the list holds these pairs already.
+        if self.terms.pairs && !self.field.overlay_pair {
             self.new_contacts
                 .pairs
                 .extend(pairs.iter().map(|&[i, j]| (i, [j as i32])));
@@ -733,6 +742,10 @@ impl ParticleModel for BpmModel {
     }
 
     fn exclusions(&self) -> Option<&Exclusions> {
+        (!self.field.overlay_pair).then(|| self.bonds.exclusions())
+    }
+
+    fn bonded_pairs(&self) -> Option<&Exclusions> {
         Some(self.bonds.exclusions())
     }
 

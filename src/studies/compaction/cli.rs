@@ -74,6 +74,11 @@ pub struct CompactArgs {
     /// native engine only; none given: elastic bonds).
     #[command(flatten)]
     failure: BondFailureArgs,
+    /// Bonded particles also touch through the contact law (as upstream
+    /// LAMMPS's overlay/pair yes): a bond squeezed below the contact
+    /// distance meets the contact's repulsion too. Native engine only.
+    #[arg(long)]
+    overlay_pair: bool,
     /// Seeds: one packing and run per seed (comma separated).
     #[arg(long, value_delimiter = ',', default_value = "1")]
     seeds: Vec<u64>,
@@ -200,6 +205,7 @@ impl CompactArgs {
             a_b,
             zero_net,
             failure,
+            overlay_pair,
             seeds,
             engine,
             ranks,
@@ -344,7 +350,7 @@ impl CompactArgs {
             moduli: compaction::ModuliOptions {
                 // A modulus run cannot restart with broken bonds.
                 states: moduli_states.unwrap_or(match model {
-                    CompactModel::Bpm if bond_failure.is_none() => 6,
+                    CompactModel::Bpm if bond_failure.is_none() && !overlay_pair => 6,
                     CompactModel::Bpm | CompactModel::Dem => 0,
                 }),
                 protocol: protocols::PackingModuliProtocol {
@@ -357,6 +363,7 @@ impl CompactArgs {
             },
             dem,
             bond_failure,
+            overlay_pair,
         };
         opts.validate()?;
         let exe = std::env::current_exe().context("locating the bpm executable")?;

@@ -111,6 +111,11 @@ pub struct CompactOptions {
     /// built and stored elastic); absent, they stay elastic.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub bond_failure: Option<BondFailure>,
+    /// Bonded particles also touch through the contact law (the force
+    /// field's `overlay_pair`): a bond squeezed below the contact distance
+    /// meets the contact's repulsion, as upstream LAMMPS's `overlay/pair`.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub overlay_pair: bool,
 }
 
 /// Why the study could not run (a run that stops is a result: it is
@@ -323,6 +328,24 @@ impl CompactOptions {
                 ));
             }
         }
+        if self.overlay_pair {
+            let refuse = |why: &str| Err(InvalidOption::new("--overlay-pair", why.to_string()));
+            if self.dem.is_some() {
+                return refuse("is a bonded-grain option: DEM spheres have no bonds");
+            }
+            if matches!(self.engine, CompactionEngine::Lammps { .. }) {
+                return refuse(
+                    "runs in the native engine only: the harness's LAMMPS runs exclude bonded \
+                     pairs from contact (use --engine native)",
+                );
+            }
+            if self.moduli.states > 0 {
+                return refuse(
+                    "needs --moduli-states 0: the modulus runs use the packing's own force \
+                     field, without the overlay",
+                );
+            }
+        }
         if self.moduli.states > 0 {
             let m = &self.moduli.protocol;
             positive("--moduli-relax-time", m.relax_time)?;
@@ -412,6 +435,7 @@ impl CompactOptions {
     fn scene(&self, packing: &Scene) -> Scene {
         let mut scene = compaction_scene(packing, &self.protocol);
         scene.force_field.bond_failure = self.bond_failure;
+        scene.force_field.overlay_pair = self.overlay_pair;
         scene
     }
 }

@@ -323,6 +323,7 @@ impl CalibrationOptions {
                 ..DemContact::default()
             }),
             bond_failure: None,
+            overlay_pair: false,
         }
     }
 }

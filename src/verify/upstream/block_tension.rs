@@ -57,9 +57,8 @@ pub struct TensionCase {
 impl TensionCase {
     /// The case in the native engine's terms, read from the deck's own
     /// words so that both run the same numbers; `None` for words it does
-    /// not follow: a keyword other than `volume/factor` (`overlay/pair
-    /// yes` above all: its contacts never act between bonded particles),
-    /// or coefficients it cannot read.
+    /// not follow: a keyword other than `volume/factor` and
+    /// `overlay/pair`, or coefficients it cannot read.
     pub fn native_force_field(&self) -> Option<ForceField> {
         // The style and only the keywords the native engine follows (the
         // others, such as smooth no or normalize yes, would go unread).
@@ -70,11 +69,19 @@ impl TensionCase {
             _ => return None,
         };
         let keywords: Vec<&str> = words.collect();
-        let volume = match keywords[..] {
-            [] => false,
-            ["volume/factor", yes_no] => yes_no == "yes",
-            _ => return None,
-        };
+        let (mut volume, mut overlay) = (false, false);
+        for pair in keywords.chunks(2) {
+            let flag = match pair[0] {
+                "volume/factor" => &mut volume,
+                "overlay/pair" => &mut overlay,
+                _ => return None,
+            };
+            *flag = match pair.get(1).copied()? {
+                "yes" => true,
+                "no" => false,
+                _ => return None,
+            };
+        }
         let numbers = |words: &str| -> Option<Vec<f64>> {
             words.split_whitespace().map(|w| w.parse().ok()).collect()
         };
@@ -86,6 +93,7 @@ impl TensionCase {
             return None;
         }
         let mut field = ForceField::paper(0.0);
+        field.overlay_pair = overlay;
         field.bond = BondCoeffs {
             k,
             a: if volume { *bond.last()? } else { 0.0 },
