@@ -871,7 +871,8 @@ fn bond_rows_report_a_collapsed_bond_and_refuse_bad_atoms() {
     let mut r0: Vec<f64> = vec![1.0; 11];
     r0[6] = 10.0;
     // Exactly at the collapse limit (0.2 x 5 = 1): outside the lanes'
-    // open range, but no fault; the report must go on to bond 106.
+    // open range, but no fault; the report must go on to bond 106. (With
+    // the yielding rule below it yields too: 2 yielded.)
     r0[2] = 5.0;
     let rows = BondRows::new(12, (0..11).map(|b| (b, b + 1, r0[b], 100 + b)), None).unwrap();
     let inputs = RowInputs {

@@ -169,7 +169,7 @@ pub trait ParticleModel: std::fmt::Debug + Send + Any {
 
     /// The likely cause of `fault` at timestep `dt`, in words; `mass` is
     /// the first particle's, `nearest_unbonded` the distance from either
-    /// particle to its nearest unexcluded neighbour over the contact
+    /// particle to its nearest unbonded neighbour over the contact
     /// distance.
     fn likely_cause(&self, fault: &Fault, dt: f64, mass: f64, nearest_unbonded: f64) -> String {
         fault.likely_cause(dt, None, mass, nearest_unbonded)

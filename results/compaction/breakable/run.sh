@@ -7,7 +7,7 @@
 # next two, to 25%; the yielding and elastic runs again with the contact law
 # overlaid on the bonds (--overlay-pair), to 60%; each then unloaded (the box
 # expanded back to its jammed size at 1e-4 per tau, and rested as long).
-# Native engine, one thread, about 20 minutes on a shared two-core machine.
+# Native engine, one thread, about 30 minutes on a shared two-core machine.
 # BPM defaults to target/release/bpm; CASES picks folders by name (all by
 # default).
 set -euo pipefail
