@@ -389,8 +389,8 @@ impl<S: Separation> FailingPass<'_, S> {
     }
 
     /// The fault of intact row `row` whose force row the pass wrote as
-    /// `written`: the row recomputed from the plastic strain it left,
-    /// which gives the pass's force again (a yield sets `e_p` to
+    /// `written`: the row settled again, on a copy, from the plastic strain
+    /// it left, which gives the pass's force again (a yield sets `e_p` to
     /// `e -/+ eps_p`, where the rule leaves it).
     #[cfg(target_arch = "x86_64")]
     #[cold]
@@ -400,11 +400,9 @@ impl<S: Separation> FailingPass<'_, S> {
         row: usize,
         written: &[f64; 4],
     ) -> Option<super::fault::Fault> {
-        let intact = self.row::<MB, DAMPED>(row, written[3])?;
-        let mut probe = ForcePass::default();
-        let r0 = self.rows.r0(row);
-        settle_checked_row::<false>(self.rows, row, r0, &intact.force, &mut probe, &mut [0.0; 4]);
-        probe.fault
+        let mut probe = FailurePass::default();
+        self.settle::<MB, DAMPED, false>(row, &mut written.clone(), &mut probe);
+        probe.pass.fault
     }
 
     /// Row `row` with plastic strain `e_p`, or `None` if it breaks.
