@@ -10,7 +10,12 @@ use bpm::studies::crush::{run_crush, CrushOptions, CrushReport};
 use bpm::studies::hertz::GrainSource;
 use bpm::studies::StudyRuntime;
 
-fn crush(grain: &std::path::Path, critical_strain: f64, out: &std::path::Path) -> CrushReport {
+fn crush(
+    grain: &std::path::Path,
+    critical_strain: f64,
+    compare_at: f64,
+    out: &std::path::Path,
+) -> CrushReport {
     let opts = CrushOptions {
         source: GrainSource::File {
             path: grain.to_path_buf(),
@@ -25,6 +30,7 @@ fn crush(grain: &std::path::Path, critical_strain: f64, out: &std::path::Path) -
             ..BondFailure::breaking(critical_strain)
         },
         max_overlap: 0.4,
+        compare_at: Some(compare_at),
         records: 400,
         threads: 1,
     };
@@ -42,9 +48,9 @@ fn a_breakable_grain_follows_the_unbreakable_one_until_its_first_break() {
     let file = dir.join("grain.json");
     bpm::scene::write_scene(&file, &grain).unwrap();
 
-    let weak = crush(&file, 0.05, &dir.join("weak"));
+    let weak = crush(&file, 0.05, 0.3, &dir.join("weak"));
     // A critical strain no bond reaches: the same squeeze, nothing breaks.
-    let strong = crush(&file, 10.0, &dir.join("strong"));
+    let strong = crush(&file, 10.0, 0.3, &dir.join("strong"));
     let (w, s) = (&weak.cases[0].crushes[0], &strong.cases[0].crushes[0]);
 
     assert!(s.first_break.is_none() && s.broken_fraction.iter().all(|&b| b == 0.0));
@@ -89,4 +95,48 @@ fn a_breakable_grain_follows_the_unbreakable_one_until_its_first_break() {
     let case = &weak.cases[0];
     assert_eq!(case.crushes.len(), 1);
     assert!((case.broken_fraction.unwrap().mean - broken).abs() < 1e-15);
+
+    // At delta/R = 0.3, on the way: the record's own broken share, and
+    // fragments held by the bonds standing then, so no smaller than at
+    // the end; the unbreakable grain is whole there too.
+    let at = w
+        .compared
+        .as_ref()
+        .expect("the squeeze passed delta/R = 0.3");
+    let k = w
+        .curve
+        .overlap_over_r
+        .iter()
+        .position(|&x| x >= 0.3)
+        .unwrap();
+    assert!(k > 0 && w.curve.overlap_over_r[k - 1] < 0.3);
+    assert_eq!(at.overlap_over_r, w.curve.overlap_over_r[k]);
+    assert_eq!(at.broken_fraction, w.broken_fraction[k]);
+    assert!(at.broken_fraction > 0.0 && at.broken_fraction < broken);
+    assert_eq!(
+        at.fragments.sizes.iter().sum::<usize>() + at.fragments.single_particles,
+        w.particles
+    );
+    assert!(at.fragments.largest_fraction() >= f.largest_fraction());
+    assert!(at.fragments.single_particles <= f.single_particles);
+    assert_eq!(s.compared.as_ref().unwrap().fragments, s.fragments);
+    assert_eq!(
+        case.compared_broken_fraction.unwrap().mean,
+        at.broken_fraction
+    );
+
+    // Counted before the first break, the same squeeze's grain is whole:
+    // every bond broken later is put back.
+    let early = first.overlap_over_r / 2.0;
+    let again = crush(&file, 0.05, early, &dir.join("early"));
+    let e = &again.cases[0].crushes[0];
+    assert_eq!(e.curve.force, w.curve.force);
+    let before = e.compared.as_ref().unwrap();
+    assert!(before.overlap_over_r < first.overlap_over_r);
+    assert_eq!(before.broken_fraction, 0.0);
+    assert_eq!(
+        (before.fragments.sizes.clone(), before.large_fragments),
+        (vec![w.particles], 1)
+    );
+    assert!(w.fragments.sizes[0] < w.particles);
 }

@@ -1252,9 +1252,16 @@ fn failing_rows_match_the_elastic_rows_and_agree_between_instruction_sets() {
         .into_iter()
         .filter(|i| i.available())
         .collect();
-    // Plastic strains on entry, some nonzero.
+    // Plastic strains on entry, some nonzero, and every other block of
+    // four all zero (bonds that never yielded).
     let entry: Vec<f64> = (0..rows.len())
-        .map(|k| [0.0, 0.004, -0.003][k % 3])
+        .map(|k| {
+            if k / 4 % 2 == 0 {
+                0.0
+            } else {
+                [0.0, 0.004, -0.003][k % 3]
+            }
+        })
         .collect();
     let never = BondFailure {
         smooth: false,

@@ -495,20 +495,15 @@ mod avx2 {
 
     use super::super::bond_rows::avx2::differences;
     use super::super::bond_rows::avx2::{
-        cube_roots, dot, in_range, lengths_of, separations, tally_terms, to_rows_with, LaneImage,
+        cube_roots, dot, in_range, lengths_of, note_rejected, separations, tally_terms,
+        to_rows_with, LaneImage,
     };
     use super::*;
     use std::arch::x86_64::*;
 
-    /// Keeps the first row the lanes' range test rejects: out of line, so
-    /// that the loop tests one mask and jumps rarely instead of updating
-    /// the record every block.
-    #[cold]
-    #[inline(never)]
-    fn note_fault(first: &mut Option<usize>, block: usize, faulty: i32) {
-        first.get_or_insert(block + faulty.trailing_zeros() as usize);
-    }
-
+    /// # Safety
+    /// As [`super::super::bond_rows::avx2::row_forces`]: AVX2, and the
+    /// range, rows and inputs checked by `BondRows::check_inputs`.
     #[target_feature(enable = "avx2")]
     pub(super) unsafe fn failing_blocks<
         S: Separation,
@@ -685,7 +680,7 @@ mod avx2 {
             }
             let faulty = !_mm256_movemask_pd(in_range(r, r0, fpair)) & !broken_lanes & 0b1111;
             if faulty != 0 {
-                note_fault(&mut first_faulty, k, faulty);
+                note_rejected(&mut first_faulty, k, faulty);
             }
         }
         if TALLY {

@@ -1160,6 +1160,13 @@ pub(super) mod avx2 {
         _mm256_loadu_pd(lanes.as_ptr())
     }
 
+    /// Rows `range`, whole blocks of four, into `out`.
+    ///
+    /// # Safety
+    /// The processor has AVX2; `range` lies within the layout's rows,
+    /// `out` holds `range.len()` rows, and `inputs` hold every atom the
+    /// rows name (and a length per row with the multibody term), as
+    /// [`BondRows::check_inputs`] checks: the loop indexes unchecked.
     #[target_feature(enable = "avx2")]
     pub(super) unsafe fn row_forces<
         S: Separation,
@@ -1174,6 +1181,14 @@ pub(super) mod avx2 {
         out: &mut [[f64; 4]],
         lanes: &mut LaneTally,
     ) -> Option<Fault> {
+        // Everything the loop reads, in locals: the rows are written
+        // through raw pointers, which the compiler must otherwise assume
+        // may alias the inputs and the layout, reloading them every block.
+        let (row_i, row_j) = (&rows.i[..], &rows.j[..]);
+        let (r0s, inv_r0s, inv_v0sums) = (&rows.r0[..], &rows.inv_r0[..], &rows.inv_v0sum[..]);
+        let x = inputs.x;
+        let v = inputs.v.unwrap_or(&[]);
+        let (vol, lengths) = inputs.multibody.unwrap_or((&[], &[]));
         let c = &inputs.coeffs;
         let (neg_k, a, gamma, half_k) = (
             _mm256_set1_pd(-c.k),
@@ -1183,7 +1198,9 @@ pub(super) mod avx2 {
         );
         let one = _mm256_set1_pd(1.0);
         let image = sep.minimum_image().map(|m| LaneImage::new(m));
-        let mut fault = None;
+        // The first row out of range, found after the loop: a search in
+        // the loop would be inlined there, crowding its registers.
+        let mut first_rejected = None;
         let full = range.len();
         let mut sums = [_mm256_setzero_pd(); 7];
         if TALLY {
@@ -1193,36 +1210,41 @@ pub(super) mod avx2 {
         }
         for k in (0..full).step_by(4) {
             let row = range.start + k;
-            let (i, j) = (&rows.i[row..row + 4], &rows.j[row..row + 4]);
-            let del = separations(sep, image.as_ref(), inputs.x, i, j);
-            let r0 = _mm256_loadu_pd(rows.r0.as_ptr().add(row));
-            let r = match inputs.multibody {
-                Some((_, lengths)) if MB => lengths_of(lengths.as_ptr().add(row)),
-                _ => _mm256_sqrt_pd(dot(&del, &del)),
+            // In bounds: the caller checked the range against the layout
+            // and the outputs, and the lengths against the rows.
+            let (i, j) = (
+                row_i.get_unchecked(row..row + 4),
+                row_j.get_unchecked(row..row + 4),
+            );
+            let del = separations(sep, image.as_ref(), x, i, j);
+            let r0 = _mm256_loadu_pd(r0s.as_ptr().add(row));
+            let r = if MB {
+                lengths_of(lengths.as_ptr().add(row))
+            } else {
+                _mm256_sqrt_pd(dot(&del, &del))
             };
             let rinv = _mm256_div_pd(one, r);
             let dstretch = _mm256_sub_pd(r, r0);
             let mut fmag = _mm256_mul_pd(neg_k, dstretch);
             if MB {
-                let vol = inputs.multibody.map_or(&[][..], |m| m.0);
                 let idx_i = _mm_loadu_si128(i.as_ptr() as *const __m128i);
                 let idx_j = _mm_loadu_si128(j.as_ptr() as *const __m128i);
                 let vsum = _mm256_add_pd(
                     _mm256_i32gather_pd::<8>(vol.as_ptr(), idx_i),
                     _mm256_i32gather_pd::<8>(vol.as_ptr(), idx_j),
                 );
-                let inv_v0sum = _mm256_loadu_pd(rows.inv_v0sum.as_ptr().add(row));
+                let inv_v0sum = _mm256_loadu_pd(inv_v0sums.as_ptr().add(row));
                 let q = _mm256_mul_pd(vsum, inv_v0sum);
                 let xq = _mm256_sub_pd(q, one);
                 let dilation = cube_roots(q, xq);
-                let inv_r0 = _mm256_loadu_pd(rows.inv_r0.as_ptr().add(row));
+                let inv_r0 = _mm256_loadu_pd(inv_r0s.as_ptr().add(row));
                 fmag = _mm256_add_pd(
                     fmag,
                     _mm256_mul_pd(a, _mm256_sub_pd(dilation, _mm256_mul_pd(r, inv_r0))),
                 );
             }
             if DAMPED {
-                let dv = differences(inputs.v.unwrap_or(&[]), i, j);
+                let dv = differences(v, i, j);
                 let del_dot_dv = dot(&del, &dv);
                 fmag = _mm256_sub_pd(fmag, _mm256_mul_pd(_mm256_mul_pd(gamma, del_dot_dv), rinv));
             }
@@ -1243,17 +1265,9 @@ pub(super) mod avx2 {
                     *sum = _mm256_add_pd(*sum, term);
                 }
             }
-            if _mm256_movemask_pd(in_range(r, r0, fpair)) != 0b1111 && fault.is_none() {
-                for l in 0..4 {
-                    let force = scalar_row::<S, MB, DAMPED>(sep, rows, row + l, inputs);
-                    let mut scratch = [0.0; 4];
-                    let mut probe = ForcePass::default();
-                    settle_row::<false>(rows, row + l, &force, &mut probe, &mut scratch);
-                    if probe.fault.is_some() {
-                        fault = probe.fault;
-                        break;
-                    }
-                }
+            let rejected = !_mm256_movemask_pd(in_range(r, r0, fpair)) & 0b1111;
+            if rejected != 0 {
+                note_rejected(&mut first_rejected, k, rejected);
             }
         }
         if TALLY {
@@ -1261,7 +1275,41 @@ pub(super) mod avx2 {
                 _mm256_storeu_pd(lane.as_mut_ptr(), *sum);
             }
         }
-        fault
+        // The lanes' test rejects a length exactly at a limit, which is no
+        // fault (as on the portable build): scan on to the first that is.
+        first_rejected.and_then(|first| {
+            (range.start + first..range.end)
+                .find_map(|row| scalar_fault::<S, MB, DAMPED>(sep, rows, row, inputs))
+        })
+    }
+
+    /// Keeps the first row the lanes' range test rejects (`rejected`, a
+    /// lane mask of the block at `block`): out of line, so that the loop
+    /// tests one mask and jumps rarely instead of updating the record
+    /// every block.
+    #[cold]
+    #[inline(never)]
+    pub(in crate::kernels) fn note_rejected(
+        first: &mut Option<usize>,
+        block: usize,
+        rejected: i32,
+    ) {
+        first.get_or_insert(block + rejected.trailing_zeros() as usize);
+    }
+
+    /// The fault of row `row` as the portable build finds it.
+    #[cold]
+    #[inline(never)]
+    fn scalar_fault<S: Separation, const MB: bool, const DAMPED: bool>(
+        sep: &S,
+        rows: &BondRows,
+        row: usize,
+        inputs: &RowInputs,
+    ) -> Option<Fault> {
+        let force = scalar_row::<S, MB, DAMPED>(sep, rows, row, inputs);
+        let mut probe = ForcePass::default();
+        settle_row::<false>(rows, row, &force, &mut probe, &mut [0.0; 4]);
+        probe.fault
     }
 
     /// A block's energy and virial terms, in [`LaneTally`]'s order.

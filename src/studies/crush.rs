@@ -58,13 +58,37 @@ pub struct CrushOptions {
     /// contact (a force of 1e-3 E_eff R^2, reached within about 0.1 d of
     /// travel) ends near `max_overlap + 0.05 + 0.9 d / R`.
     pub max_overlap: f64,
+    /// The overlap `delta/R` at which the bonds broken and the fragments
+    /// are counted too, the same for every grain size: the end of a
+    /// squeeze lies further for small grains (`0.9 d / R`), and their
+    /// counts at the end are not comparable. At most `max_overlap + 0.05`,
+    /// which every squeeze that runs to its end passes; none: the smaller
+    /// of [`DEFAULT_COMPARE_AT`] and that ([`CrushOptions::compared_at`]).
+    #[serde(default)]
+    pub compare_at: Option<f64>,
     /// Records per squeeze.
     pub records: u64,
     /// Threads of the native engine.
     pub threads: usize,
 }
 
+/// The overlap the counts are compared at when none is given (and
+/// `max_overlap` allows it).
+pub const DEFAULT_COMPARE_AT: f64 = 0.5;
+
 impl CrushOptions {
+    /// The overlap the counts are compared at: `compare_at`, or
+    /// [`DEFAULT_COMPARE_AT`] if every squeeze passes it, else their end.
+    pub fn compared_at(&self) -> f64 {
+        self.compare_at
+            .unwrap_or(DEFAULT_COMPARE_AT.min(self.reached_overlap()))
+    }
+
+    /// The overlap every squeeze that runs to its end passes.
+    fn reached_overlap(&self) -> f64 {
+        self.max_overlap + 0.05
+    }
+
     /// Checks the options; the error names the one at fault.
     pub fn validate(&self) -> Result<(), HertzError> {
         let bad = |m: String| Err(HertzError::Options(m));
@@ -97,6 +121,16 @@ impl CrushOptions {
             return bad(format!(
                 "--max-overlap must be in (0, 1), got {}",
                 self.max_overlap
+            ));
+        }
+        let reached = self.reached_overlap();
+        // Allowed up to round-off: 0.35 + 0.05 falls just short of 0.4.
+        if let Some(at) = self
+            .compare_at
+            .filter(|&at| !(at.is_finite() && at > 0.0 && at <= reached + 1e-9))
+        {
+            return bad(format!(
+                "--compare-at must be in (0, --max-overlap + 0.05 = {reached:.6}], got {at}"
             ));
         }
         if self.seeds.is_empty() {
@@ -167,11 +201,51 @@ pub struct Crush {
     pub fragments: Fragments,
     /// Fragments of at least [`LARGE_FRAGMENT`] of the particles.
     pub large_fragments: usize,
+    /// The bonds broken and the fragments at the first record at or past
+    /// `delta/R =` [`CrushOptions::compared_at`] (none if the squeeze
+    /// stopped before it).
+    #[serde(default)]
+    pub compared: Option<CrushState>,
     /// Wall-clock seconds.
     pub seconds: f64,
     /// Why the squeeze stopped before the overlap asked for, if it did.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub stopped: Option<String>,
+}
+
+/// The bonds broken and the fragments at one record of a squeeze.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct CrushState {
+    /// delta / R of the record.
+    pub overlap_over_r: f64,
+    /// Share of the grain's bonds broken by then.
+    pub broken_fraction: f64,
+    /// The fragments the bonds intact then hold together.
+    pub fragments: Fragments,
+    /// Fragments of at least [`LARGE_FRAGMENT`] of the particles.
+    pub large_fragments: usize,
+}
+
+/// The fragments of `particles` particles when only the first `count` of
+/// the bonds `broken` (in the order they broke) had broken, the others
+/// still standing beside the bonds `intact` at the end.
+///
+/// # Panics
+/// If `count` exceeds the bonds broken.
+pub fn fragments_when_broken(
+    particles: usize,
+    intact: impl IntoIterator<Item = [usize; 2]>,
+    broken: &[[usize; 2]],
+    count: usize,
+) -> Fragments {
+    let standing = broken[count..].iter().copied();
+    Fragments::of(particles, intact.into_iter().chain(standing))
+}
+
+/// The smallest fragment counted apart from the debris in a grain of
+/// `particles` particles.
+fn large_fragment_size(particles: usize) -> usize {
+    ((LARGE_FRAGMENT * particles as f64).ceil() as usize).max(2)
 }
 
 /// Mean and sample standard deviation (0 for one value) of some values;
@@ -226,6 +300,15 @@ pub struct CrushCase {
     pub large_fragments: Option<MeanSd>,
     /// The largest fragment's share of the grain, at the end.
     pub largest_fragment: Option<MeanSd>,
+    /// Share of the bonds broken at `delta/R = compare_at`.
+    #[serde(default)]
+    pub compared_broken_fraction: Option<MeanSd>,
+    /// Fragments of at least [`LARGE_FRAGMENT`] of the grain there.
+    #[serde(default)]
+    pub compared_large_fragments: Option<MeanSd>,
+    /// The largest fragment's share of the grain there.
+    #[serde(default)]
+    pub compared_largest_fragment: Option<MeanSd>,
 }
 
 /// The study's result, written as `crush.json`.
@@ -320,7 +403,7 @@ pub fn run_crush(
                 let scene = with_side_walls(hertz_squeeze(&scene, &squeeze));
                 let key = format!("aB{a_b}/seed{}-rot{rotation}", grain.seed);
                 let c = runtime.part(&key, || {
-                    let mut c = crush_grain(&scene, grain, a_b, e_eff, radius, runtime, &key)?;
+                    let mut c = crush_grain(&scene, grain, a_b, e_eff, opts, runtime, &key)?;
                     (c.rotation, c.rotation_draw) = (rotation, draw);
                     Ok::<_, HertzError>(c)
                 })?;
@@ -397,10 +480,11 @@ fn crush_grain(
     grain: &Grain,
     a_b: f64,
     e_eff: f64,
-    radius: f64,
+    opts: &CrushOptions,
     runtime: &StudyRuntime,
     key: &str,
 ) -> Result<Crush, HertzError> {
+    let radius = opts.radius();
     let tag = key.replace('/', "-");
     let t = std::time::Instant::now();
     let (stage, stopped, sys) = squeeze_native_system(scene, &tag, runtime, key)?;
@@ -424,7 +508,7 @@ fn crush_grain(
         particles,
         intact.iter().map(|b| [b.i as usize, b.j as usize]),
     );
-    let large = ((LARGE_FRAGMENT * particles as f64).ceil() as usize).max(2);
+    let large = large_fragment_size(particles);
     let curve = squeeze_curve(&gap, &force, radius, e_eff);
     let share = |b: f64| if bonds == 0 { 0.0 } else { b / bonds as f64 };
     let broken_fraction: Vec<f64> = match curve.contact_record {
@@ -440,6 +524,39 @@ fn crush_grain(
     };
     let first_break_record = broken_fraction.iter().position(|&b| b > 0.0);
     let first_break = first_break_record.and_then(|k| points.at(k));
+    let compared = match curve.contact_record {
+        Some(c) => curve
+            .overlap_over_r
+            .iter()
+            .position(|&x| x >= opts.compared_at())
+            .map(|k| {
+                // The count recorded then names the bonds broken by then:
+                // the engine keeps them in the order they broke.
+                let count = broken[c + k] as usize;
+                let all = model.broken_bonds();
+                if count > all.len() {
+                    return Err(HertzError::Grain(format!(
+                        "{tag}: record {} counts {count} broken bonds, the engine lists {}",
+                        c + k,
+                        all.len()
+                    )));
+                }
+                let fragments = fragments_when_broken(
+                    particles,
+                    intact.iter().map(|b| [b.i as usize, b.j as usize]),
+                    all,
+                    count,
+                );
+                Ok(CrushState {
+                    overlap_over_r: curve.overlap_over_r[k],
+                    broken_fraction: share(broken[c + k]),
+                    large_fragments: fragments.count_at_least(large),
+                    fragments,
+                })
+            })
+            .transpose()?,
+        None => None,
+    };
     let hertz_end = first_break.map_or(0.25, |b| b.overlap_over_r.min(0.25));
     let hertz_before_break = hertz_deviation(
         &curve.overlap_over_r,
@@ -466,6 +583,7 @@ fn crush_grain(
         peak: largest(&curve.normalised_force).and_then(|k| points.at(k)),
         large_fragments: fragments.count_at_least(large),
         fragments,
+        compared,
         broken_fraction,
         curve,
         seconds,
@@ -535,6 +653,11 @@ fn case_of(a_b: f64, moduli: Moduli, e_eff: f64, radius: f64, crushes: Vec<Crush
         broken_fraction: stat(&|c| c.broken_fraction.last().copied()),
         large_fragments: stat(&|c| Some(c.large_fragments as f64)),
         largest_fragment: stat(&|c| Some(c.fragments.largest_fraction())),
+        compared_broken_fraction: stat(&|c| c.compared.as_ref().map(|s| s.broken_fraction)),
+        compared_large_fragments: stat(&|c| c.compared.as_ref().map(|s| s.large_fragments as f64)),
+        compared_largest_fragment: stat(&|c| {
+            c.compared.as_ref().map(|s| s.fragments.largest_fraction())
+        }),
         moduli,
         crushes,
     }
@@ -671,6 +794,7 @@ mod tests {
             rotations: 0,
             failure: BondFailure::breaking(0.05),
             max_overlap: 0.5,
+            compare_at: None,
             records: 100,
             threads: 1,
         }
@@ -698,6 +822,20 @@ mod tests {
         refused(&|o| o.a_bs = vec![0.0, -1.0], "got -1");
         refused(&|o| o.a_bs.clear(), "--a-b");
         refused(&|o| o.max_overlap = 1.0, "--max-overlap");
+        refused(
+            &|o| o.compare_at = Some(0.56),
+            "--compare-at must be in (0, --max-overlap + 0.05 = 0.550000], got 0.56",
+        );
+        refused(&|o| o.compare_at = Some(0.0), "got 0");
+        // Up to the end, round-off aside; a shorter squeeze compares at its
+        // end unless told otherwise.
+        let mut o = options();
+        (o.max_overlap, o.compare_at) = (0.35, Some(0.4));
+        o.validate().unwrap();
+        o.compare_at = None;
+        o.validate().unwrap();
+        assert_eq!(o.compared_at(), 0.35 + 0.05);
+        assert_eq!(options().compared_at(), DEFAULT_COMPARE_AT);
         refused(&|o| o.records = 1, "--records");
         refused(
             &|o| {
@@ -708,6 +846,26 @@ mod tests {
             },
             "--radius",
         );
+    }
+
+    /// The fragments at an earlier record put back the bonds broken
+    /// after it, and only those.
+    #[test]
+    fn fragments_when_broken_put_back_the_later_breaks() {
+        // A chain 0-1-2-3-4 that lost 1-2, then 3-4; 0-1 and 2-3 stand.
+        let intact = [[0, 1], [2, 3]];
+        let broken = [[1, 2], [3, 4]];
+        let at = |count| fragments_when_broken(5, intact, &broken, count);
+        assert_eq!(at(0).sizes, vec![5]);
+        assert_eq!(
+            (at(1).sizes.clone(), at(1).single_particles),
+            (vec![3, 2], 0)
+        );
+        assert_eq!(
+            (at(2).sizes.clone(), at(2).single_particles),
+            (vec![2, 2], 1)
+        );
+        assert_eq!(at(2), Fragments::of(5, intact));
     }
 
     #[test]

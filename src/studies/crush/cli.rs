@@ -41,6 +41,12 @@ pub struct CrushArgs {
     /// this + 0.05 + 0.9 d / R.
     #[arg(long, default_value_t = 0.5)]
     max_overlap: f64,
+    /// Count the bonds broken and the fragments at this delta/R too, the
+    /// same for every grain size (at most --max-overlap + 0.05, which every
+    /// squeeze that runs to its end passes): the squeeze of a small grain
+    /// ends further. Default: 0.5, or --max-overlap + 0.05 if smaller.
+    #[arg(long)]
+    compare_at: Option<f64>,
     /// Random rotations per grain (0: crushed as given).
     #[arg(long, default_value_t = 0)]
     rotations: usize,
@@ -100,11 +106,12 @@ impl CrushArgs {
             rotations: self.rotations,
             failure,
             max_overlap: self.max_overlap,
+            compare_at: self.compare_at,
             records: self.records,
             threads,
         };
         println!(
-            "{:>6} {:>5} {:>4} {:>9} {:>14} {:>14} {:>9} {:>9} {:>10} {:>8}",
+            "{:>6} {:>5} {:>4} {:>9} {:>14} {:>14} {:>9} {:>9} {:>10} {:>19} {:>8}",
             "a_B",
             "seed",
             "rot",
@@ -114,6 +121,7 @@ impl CrushArgs {
             "broken",
             "fragments",
             "largest",
+            format!("at delta/R {}", opts.compared_at()),
             "seconds"
         );
         let runtime = self.runtime.runtime("crush", &opts, threads)?;
@@ -124,7 +132,7 @@ impl CrushArgs {
                 })
             };
             println!(
-                "{:>6} {:>5} {:>4} {:>9} {:>14} {:>14} {:>8.2}% {:>9} {:>9.1}% {:>8.1}",
+                "{:>6} {:>5} {:>4} {:>9} {:>14} {:>14} {:>8.2}% {:>9} {:>9.1}% {:>19} {:>8.1}",
                 c.a_b,
                 c.seed,
                 c.rotation,
@@ -134,6 +142,12 @@ impl CrushArgs {
                 100.0 * c.broken_fraction.last().copied().unwrap_or(0.0),
                 c.large_fragments,
                 100.0 * c.fragments.largest_fraction(),
+                c.compared.as_ref().map_or("-".to_string(), |s| format!(
+                    "{:.2}% {} {:.1}%",
+                    100.0 * s.broken_fraction,
+                    s.large_fragments,
+                    100.0 * s.fragments.largest_fraction()
+                )),
                 c.seconds
             );
             if let Some(reason) = &c.stopped {
@@ -144,7 +158,11 @@ impl CrushArgs {
                 );
             }
         })?;
-        println!("(points: delta/R (3 f / (8 R^2 E_eff)); fragments of at least 1% of the grain)");
+        println!(
+            "(points: delta/R (3 f / (8 R^2 E_eff)); fragments of at least 1% of the grain; \
+         at delta/R {}: broken, fragments, largest)",
+            opts.compared_at()
+        );
         print_cases(&report);
         println!("wrote {}/crush.json and crush.svg", output.display());
         Ok(())
@@ -159,7 +177,8 @@ fn print_cases(report: &CrushReport) {
         println!(
             "a_B = {} (nu {:.3}, E_eff {:.4}): crushed {} of {}; first break at delta/R {}; \
                  crushing force / (E_eff R^2) {} at delta/R {}; broken {}; large fragments {}; \
-                 largest fragment {}",
+                 largest fragment {}; at delta/R {} ({} squeezes reached it): broken {}, \
+                 large fragments {}, largest {}",
             case.a_b,
             case.moduli.nu,
             case.e_eff,
@@ -171,6 +190,11 @@ fn print_cases(report: &CrushReport) {
             show(case.broken_fraction),
             show(case.large_fragments),
             show(case.largest_fragment),
+            report.options.compared_at(),
+            case.compared_broken_fraction.map_or(0, |m| m.count),
+            show(case.compared_broken_fraction),
+            show(case.compared_large_fragments),
+            show(case.compared_largest_fragment),
         );
     }
 }
