@@ -29,6 +29,14 @@ def show(stat, digits=3, percent=False):
     return f"{scale * stat['mean']:.{digits}f}{unit} +- {scale * stat['sd']:.{digits}f}{unit}"
 
 
+def counted(case):
+    """How many squeezes were counted at compare_at ("-": not counted)."""
+    if "compared_broken_fraction" not in case:
+        return "-"
+    stat = case["compared_broken_fraction"] or {"count": 0}
+    return f"{stat['count']} of {len(case['crushes'])}"
+
+
 def cases(paths):
     """(folder, report, case) for every a_B of every crush.json."""
     for path in paths:
@@ -71,8 +79,7 @@ def main(paths):
         end = f"{sum(ends) / len(ends):.2f}" if ends else "-"
         print(f"| {folder} | {report['squeeze']['radius']:g} | {case['a_b']:g} "
               f"| {case['moduli']['nu']:.2f} | {at:g} "
-              f"| {(case.get('compared_broken_fraction') or {}).get('count', 0)} "
-              f"of {len(case['crushes'])} "
+              f"| {counted(case)} "
               f"| {show(case.get('compared_broken_fraction'), 1, True)} "
               f"| {show(case.get('compared_large_fragments'), 1)} "
               f"| {show(case.get('compared_largest_fragment'), 0, True)} "

@@ -23,6 +23,6 @@ for r in 4 6 8; do
 done
 # A smaller critical strain, and bonds that yield before they break.
 run results/crush/R10-eps0.05 --grain $grains/smoother-R10-s1.json --radius 10 \
-    --a-b -0.8,0,3 --critical-strain 0.05 --rotations 1
+    --a-b -0.8,0,3 --critical-strain 0.05 --rotations 1 --compare-at 0.5
 run results/crush/R10-eps0.1-plastic0.05 --grain $grains/smoother-R10-s1.json --radius 10 \
-    --a-b -0.8,0,3 --critical-strain 0.1 --plastic-strain 0.05 --rotations 1
+    --a-b -0.8,0,3 --critical-strain 0.1 --plastic-strain 0.05 --rotations 1 --compare-at 0.5

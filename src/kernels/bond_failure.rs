@@ -502,8 +502,10 @@ mod avx2 {
     use std::arch::x86_64::*;
 
     /// # Safety
-    /// As [`super::super::bond_rows::avx2::row_forces`]: AVX2, and the
-    /// range, rows and inputs checked by `BondRows::check_inputs`.
+    /// As [`super::super::bond_rows::avx2::row_forces`]: AVX2; whole
+    /// blocks of four within the rows, as many in `out`; the inputs
+    /// checked by `BondRows::check_inputs`; `MB` and `DAMPED` only with
+    /// the multibody term and the velocities in the inputs.
     #[target_feature(enable = "avx2")]
     pub(super) unsafe fn failing_blocks<
         S: Separation,
@@ -527,6 +529,8 @@ mod avx2 {
         // through raw pointers, which the compiler must otherwise assume
         // may alias the rule, the inputs and the layout, reloading them
         // (and re-testing the rule's flags) every block.
+        debug_assert!(range.len() % 4 == 0 && out.len() == range.len());
+        debug_assert!((!MB || inputs.multibody.is_some()) && (!DAMPED || inputs.v.is_some()));
         let (breaks, smooth, normalize) = (rule.breaks, rule.smooth, rule.normalize);
         let (row_i, row_j) = (&rows.i[..], &rows.j[..]);
         let (r0s, inv_r0s, inv_v0sums) = (&rows.r0[..], &rows.inv_r0[..], &rows.inv_v0sum[..]);

@@ -1163,10 +1163,13 @@ pub(super) mod avx2 {
     /// Rows `range`, whole blocks of four, into `out`.
     ///
     /// # Safety
-    /// The processor has AVX2; `range` lies within the layout's rows,
-    /// `out` holds `range.len()` rows, and `inputs` hold every atom the
-    /// rows name (and a length per row with the multibody term), as
-    /// [`BondRows::check_inputs`] checks: the loop indexes unchecked.
+    /// The processor has AVX2; `range` lies within the layout's rows and
+    /// holds whole blocks of four; `out` holds `range.len()` rows; `inputs`
+    /// hold every atom the rows name and a length per row with the
+    /// multibody term ([`BondRows::check_inputs`] checks these); and `MB`
+    /// and `DAMPED` are set only when `inputs` carry the multibody term and
+    /// the velocities (as the dispatch sets them). The loop indexes
+    /// unchecked.
     #[target_feature(enable = "avx2")]
     pub(super) unsafe fn row_forces<
         S: Separation,
@@ -1181,6 +1184,8 @@ pub(super) mod avx2 {
         out: &mut [[f64; 4]],
         lanes: &mut LaneTally,
     ) -> Option<Fault> {
+        debug_assert!(range.len() % 4 == 0 && out.len() == range.len());
+        debug_assert!((!MB || inputs.multibody.is_some()) && (!DAMPED || inputs.v.is_some()));
         // Everything the loop reads, in locals: the rows are written
         // through raw pointers, which the compiler must otherwise assume
         // may alias the inputs and the layout, reloading them every block.

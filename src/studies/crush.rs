@@ -78,7 +78,7 @@ pub const DEFAULT_COMPARE_AT: f64 = 0.5;
 
 impl CrushOptions {
     /// The overlap the counts are compared at: `compare_at`, or
-    /// [`DEFAULT_COMPARE_AT`] if every squeeze passes it, else their end.
+    /// [`DEFAULT_COMPARE_AT`], or `max_overlap + 0.05` if that is less.
     pub fn compared_at(&self) -> f64 {
         self.compare_at
             .unwrap_or(DEFAULT_COMPARE_AT.min(self.reached_overlap()))
@@ -416,7 +416,11 @@ pub fn run_crush(
     let report = CrushReport {
         program: "bpm crush".into(),
         version: crate::VERSION.into(),
-        options: opts.clone(),
+        // The overlap compared at as used, given or not.
+        options: CrushOptions {
+            compare_at: Some(opts.compared_at()),
+            ..opts.clone()
+        },
         squeeze,
         cases,
         wall_seconds: start.elapsed().as_secs_f64(),

@@ -121,7 +121,7 @@ impl CrushArgs {
             "broken",
             "fragments",
             "largest",
-            format!("at delta/R {}", opts.compared_at()),
+            format!("at delta/R {:.3}", opts.compared_at()),
             "seconds"
         );
         let runtime = self.runtime.runtime("crush", &opts, threads)?;
@@ -160,7 +160,7 @@ impl CrushArgs {
         })?;
         println!(
             "(points: delta/R (3 f / (8 R^2 E_eff)); fragments of at least 1% of the grain; \
-         at delta/R {}: broken, fragments, largest)",
+         at delta/R {:.3}: broken, fragments, largest)",
             opts.compared_at()
         );
         print_cases(&report);
@@ -177,8 +177,8 @@ fn print_cases(report: &CrushReport) {
         println!(
             "a_B = {} (nu {:.3}, E_eff {:.4}): crushed {} of {}; first break at delta/R {}; \
                  crushing force / (E_eff R^2) {} at delta/R {}; broken {}; large fragments {}; \
-                 largest fragment {}; at delta/R {} ({} squeezes reached it): broken {}, \
-                 large fragments {}, largest {}",
+                 largest fragment {}; at delta/R {:.3} ({}): broken {}, large fragments {}, \
+                 largest {}",
             case.a_b,
             case.moduli.nu,
             case.e_eff,
@@ -191,7 +191,12 @@ fn print_cases(report: &CrushReport) {
             show(case.large_fragments),
             show(case.largest_fragment),
             report.options.compared_at(),
-            case.compared_broken_fraction.map_or(0, |m| m.count),
+            case.compared_broken_fraction
+                .map_or("no squeeze counted there".into(), |m| format!(
+                    "{} of {} squeezes reached it",
+                    m.count,
+                    case.crushes.len()
+                )),
             show(case.compared_broken_fraction),
             show(case.compared_large_fragments),
             show(case.compared_largest_fragment),
