@@ -372,18 +372,12 @@ fn bonds_that_break_leave_the_arrays_and_the_broken_count_grows_with_stretch() {
         p.sort_unstable();
         p
     };
-    let entries = |m: &BpmModel| {
-        m.bonds()
-            .entries
-            .iter()
-            .map(|b| [b.i as usize, b.j as usize])
-            .collect::<Vec<_>>()
-    };
     assert_eq!(
-        pairs(&mut entries(early).into_iter()),
+        pairs(&mut early.bonds().pairs()),
         pairs(
-            &mut entries(model)
-                .into_iter()
+            &mut model
+                .bonds()
+                .pairs()
                 .chain(model.broken_bonds()[count..].iter().copied())
         )
     );

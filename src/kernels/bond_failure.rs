@@ -555,7 +555,7 @@ mod avx2 {
         let (mut broken_rows, mut yielded_rows) = (0, 0);
         // The first row out of range, reported after the loop: a fault
         // carried through the loop would be moved about every block.
-        let mut first_faulty = None;
+        let mut first_rejected = None;
         let mut sums = [_mm256_setzero_pd(); 7];
         if TALLY {
             for (sum, lane) in sums.iter_mut().zip(&lanes.sums) {
@@ -682,9 +682,9 @@ mod avx2 {
                     *sum = _mm256_add_pd(*sum, _mm256_and_pd(term, intact));
                 }
             }
-            let faulty = !_mm256_movemask_pd(in_range(r, r0, fpair)) & !broken_lanes & 0b1111;
-            if faulty != 0 {
-                note_rejected(&mut first_faulty, k, faulty);
+            let rejected = !_mm256_movemask_pd(in_range(r, r0, fpair)) & !broken_lanes & 0b1111;
+            if rejected != 0 {
+                note_rejected(&mut first_rejected, k, rejected);
             }
         }
         if TALLY {
@@ -699,7 +699,7 @@ mod avx2 {
         };
         // The lanes' test rejects a length exactly at a limit, which is no
         // fault (as on the portable build): scan on to the first that is.
-        if let Some(first) = first_faulty {
+        if let Some(first) = first_rejected {
             result.pass.fault = (first..out.len())
                 .filter(|&k| !row_broke(&out[k]))
                 .find_map(|k| pass.fault_of::<MB, DAMPED>(range.start + k, &out[k]));

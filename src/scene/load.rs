@@ -156,11 +156,7 @@ pub fn final_scene(scene: &Scene, sys: &System) -> Scene {
     fin.simbox.tilt = sys.simbox.tilt;
     if let Some(bpm) = sys.model_as::<BpmModel>() {
         let bonds = bpm.bonds();
-        fin.bonds.pairs = bonds
-            .entries
-            .iter()
-            .map(|b| [b.i as usize, b.j as usize])
-            .collect();
+        fin.bonds.pairs = bonds.pairs().collect();
         fin.bonds.r0 = Some(bonds.r0.clone());
         let plastic = bpm.plastic_strains();
         fin.bonds.plastic_strain = plastic.iter().any(|&e| e != 0.0).then_some(plastic);

@@ -507,11 +507,8 @@ fn crush_grain(
     let model = sys.model_as::<BpmModel>().ok_or_else(|| {
         HertzError::Grain(format!("{tag}: the crushed grain is not a bonded model"))
     })?;
-    let intact = &model.bonds().entries;
-    let fragments = Fragments::of(
-        particles,
-        intact.iter().map(|b| [b.i as usize, b.j as usize]),
-    );
+    let intact = model.bonds();
+    let fragments = Fragments::of(particles, intact.pairs());
     let large = large_fragment_size(particles);
     let curve = squeeze_curve(&gap, &force, radius, e_eff);
     let share = |b: f64| if bonds == 0 { 0.0 } else { b / bonds as f64 };
@@ -545,12 +542,7 @@ fn crush_grain(
                         all.len()
                     )));
                 }
-                let fragments = fragments_when_broken(
-                    particles,
-                    intact.iter().map(|b| [b.i as usize, b.j as usize]),
-                    all,
-                    count,
-                );
+                let fragments = fragments_when_broken(particles, intact.pairs(), all, count);
                 Ok(CrushState {
                     overlap_over_r: curve.overlap_over_r[k],
                     broken_fraction: share(broken[c + k]),

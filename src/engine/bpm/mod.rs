@@ -769,12 +769,7 @@ impl ParticleModel for BpmModel {
             || !self.broken.is_empty()
             || self.bonds.plastic.iter().any(|&e| e != 0.0);
         let failing = changed.then(|| FailingState {
-            bonds: self
-                .bonds
-                .entries
-                .iter()
-                .map(|b| [b.i as usize, b.j as usize])
-                .collect(),
+            bonds: self.bonds.pairs().collect(),
             plastic: self.plastic_strains(),
             broken: self.broken.clone(),
             new_contacts: self.new_contacts.clone(),

@@ -100,6 +100,11 @@ impl BondTopology {
         }
     }
 
+    /// Each bond's atoms `[i, j]`, in CSR order.
+    pub fn pairs(&self) -> impl ExactSizeIterator<Item = [usize; 2]> + '_ {
+        self.entries.iter().map(|b| [b.i as usize, b.j as usize])
+    }
+
     /// Each bond's rest length `(1 + e_p) r0`.
     pub fn rest_lengths(&self) -> impl ExactSizeIterator<Item = f64> + '_ {
         self.r0

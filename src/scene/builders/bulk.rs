@@ -292,11 +292,7 @@ pub fn build_bulk(
     let bonds = bond_within(&sys, params.bond_cutoff);
     scene.particles.positions = sys.particles.x.clone();
     scene.bonds = Bonds {
-        pairs: bonds
-            .entries
-            .iter()
-            .map(|b| [b.i as usize, b.j as usize])
-            .collect(),
+        pairs: bonds.pairs().collect(),
         r0: Some(bonds.r0.clone()),
         plastic_strain: None,
     };
