@@ -9,7 +9,8 @@
 //!
 //!     cargo run --release --example failure_cost -- 1 -0.5 1 400 31
 //!
-//! Arguments: copies per side, a_B, threads, steps per round, rounds.
+//! Arguments: copies per side, a_B, threads, steps per round, rounds;
+//! `unsmoothed` last turns the smoothing off in both failing modes.
 
 use bpm::engine::{BpmModel, Stage, StageDrivers};
 use bpm::kernels::BondFailure;
@@ -20,8 +21,12 @@ use bpm::scene::{build_system, ForceField, StageSpec};
 
 fn main() -> anyhow::Result<()> {
     let args: Vec<String> = std::env::args().skip(1).collect();
-    let [copies, a_b, threads, steps, rounds] = &args[..] else {
-        anyhow::bail!("arguments: COPIES A_B THREADS STEPS ROUNDS");
+    let (args, smooth) = match &args[..] {
+        [first @ .., last] if last == "unsmoothed" => (first, false),
+        all => (all, true),
+    };
+    let [copies, a_b, threads, steps, rounds] = args else {
+        anyhow::bail!("arguments: COPIES A_B THREADS STEPS ROUNDS [unsmoothed]");
     };
     let (copies, a_b, threads): (usize, f64, usize) =
         (copies.parse()?, a_b.parse()?, threads.parse()?);
@@ -42,10 +47,14 @@ fn main() -> anyhow::Result<()> {
     sys.setup(&drivers)?;
     let n = sys.len();
     println!(
-        "{n} particles, {} bonds, a_B = {a_b}, {threads} thread(s), {steps} steps per round",
-        scene.bonds.pairs.len()
+        "{n} particles, {} bonds, a_B = {a_b}, {threads} thread(s), {steps} steps per round{}",
+        scene.bonds.pairs.len(),
+        if smooth { "" } else { ", unsmoothed" }
     );
-    let breaking = BondFailure::breaking(0.5);
+    let breaking = BondFailure {
+        smooth,
+        ..BondFailure::breaking(0.5)
+    };
     let modes = [
         ("elastic", None),
         ("breaking", Some(breaking)),

@@ -941,6 +941,86 @@ fn bond_rows_report_a_collapsed_bond_and_refuse_bad_atoms() {
     ));
 }
 
+/// The failing pass's vector build tests one calm condition (every strain
+/// within half the reference length, every force finite) for breaking and
+/// faults alike; a block that is not calm must still get both right. A
+/// bond stretched to twice its length that neither breaks nor faults sits
+/// before one torn beyond the limit (both in blocks of four, not the
+/// scalar tail), and a calm block with a velocity that
+/// is not a number is a fault: on every instruction set.
+#[test]
+fn failing_rows_find_faults_past_the_calm_strain_and_in_non_finite_forces() {
+    let x: Vec<[f64; 3]> = (0..12).map(|k| [k as f64, 0.0, 0.0]).collect();
+    let mut r0: Vec<f64> = vec![1.0; 11];
+    r0[2] = 0.5;
+    r0[6] = 0.3;
+    let rows = |r0: &[f64]| BondRows::new(12, (0..11).map(|b| (b, b + 1, r0[b], 100 + b)), None);
+    let (torn, calm) = (rows(&r0).unwrap(), rows(&[1.0; 11]).unwrap());
+    let mut v = vec![[0.0; 3]; 12];
+    v[7][1] = f64::NAN;
+    let inputs = |v| RowInputs {
+        x: &x,
+        v,
+        coeffs: BondCoeffs {
+            k: 1.0,
+            a: 0.0,
+            gamma: 0.5,
+        },
+        multibody: None,
+        tally: true,
+    };
+    let yielding = BondFailure {
+        breaks: false,
+        smooth: false,
+        plastic_strain: Some(0.05),
+        ..BondFailure::breaking(0.5)
+    };
+    for isa in [Isa::Portable, Isa::Avx2]
+        .into_iter()
+        .filter(|i| i.available())
+    {
+        let mut out = vec![[0.0; 4]; 11];
+        let pass = failing_row_forces_on(
+            isa,
+            &Unwrapped,
+            &torn,
+            0..11,
+            &inputs(None),
+            &yielding,
+            &mut out,
+        );
+        let fault = pass.pass.fault.expect("the torn bond is a fault");
+        assert_eq!(
+            (fault.kind, fault.bond),
+            (FaultKind::BondOverstretched, 106),
+            "{isa:?}"
+        );
+        // Both stretched bonds yield; the one at strain 1 is whole.
+        assert_eq!((pass.broken, pass.yielded), (0, 2), "{isa:?}");
+        assert_eq!(out[2][3], 0.95, "{isa:?}");
+        let mut out = vec![[0.0; 4]; 11];
+        let pass = failing_row_forces_on(
+            isa,
+            &Unwrapped,
+            &calm,
+            0..11,
+            &inputs(Some(&v)),
+            &BondFailure::breaking(0.5),
+            &mut out,
+        );
+        let fault = pass
+            .pass
+            .fault
+            .expect("a force that is not a number is a fault");
+        assert_eq!(
+            (fault.kind, fault.bond),
+            (FaultKind::NonFinite, 106),
+            "{isa:?}"
+        );
+        assert_eq!(pass.broken, 0, "{isa:?}");
+    }
+}
+
 /// The row kernel's and the scatter kernel's cube roots on every
 /// instruction set give the bits of the scalar `cube_root` whatever mix of
 /// volume ratios a block holds: near 1 (the series alone), beyond 1/32

@@ -495,11 +495,33 @@ mod avx2 {
 
     use super::super::bond_rows::avx2::differences;
     use super::super::bond_rows::avx2::{
-        cube_roots, dot, in_range, lengths_of, note_rejected, separations, tally_terms,
-        to_rows_with, LaneImage,
+        cube_roots, dot, in_range, note_rejected, tally_terms, to_rows_with, Geometry, AHEAD_BLOCKS,
     };
+    use super::super::fault::{COLLAPSED_BELOW, OVERSTRETCHED_ABOVE};
     use super::*;
     use std::arch::x86_64::*;
+
+    /// A strain no bond within reaches a fault: half the reference
+    /// length either way lies well inside [`COLLAPSED_BELOW`] and
+    /// [`OVERSTRETCHED_ABOVE`], rounding and all.
+    const CALM_STRAIN: f64 = 0.5;
+    const _: () = assert!(1.0 - CALM_STRAIN > 1.01 * COLLAPSED_BELOW);
+    const _: () = assert!(1.01 * (1.0 + CALM_STRAIN) < OVERSTRETCHED_ABOVE);
+
+    /// The lanes whose bonds break: beyond the critical strain, and finite.
+    #[target_feature(enable = "avx2")]
+    #[inline]
+    unsafe fn breaking(breaks: bool, e: __m256d, r: __m256d, critical: __m256d) -> __m256d {
+        if breaks {
+            let magnitude = _mm256_castsi256_pd(_mm256_set1_epi64x(i64::MAX));
+            _mm256_and_pd(
+                _mm256_cmp_pd::<_CMP_GT_OQ>(_mm256_and_pd(e, magnitude), critical),
+                _mm256_cmp_pd::<_CMP_LT_OQ>(r, _mm256_set1_pd(f64::INFINITY)),
+            )
+        } else {
+            _mm256_setzero_pd()
+        }
+    }
 
     /// # Safety
     /// As [`super::super::bond_rows::avx2::row_forces`]: AVX2; whole
@@ -532,11 +554,11 @@ mod avx2 {
         debug_assert!(range.len() % 4 == 0 && out.len() == range.len());
         debug_assert!((!MB || inputs.multibody.is_some()) && (!DAMPED || inputs.v.is_some()));
         let (breaks, smooth, normalize) = (rule.breaks, rule.smooth, rule.normalize);
-        let (row_i, row_j) = (&rows.i[..], &rows.j[..]);
         let (r0s, inv_r0s, inv_v0sums) = (&rows.r0[..], &rows.inv_r0[..], &rows.inv_v0sum[..]);
-        let x = inputs.x;
         let v = inputs.v.unwrap_or(&[]);
         let (vol, lengths) = inputs.multibody.unwrap_or((&[], &[]));
+        let mut ahead = [[_mm256_setzero_pd(); 4]; AHEAD_BLOCKS];
+        let mut geometry = Geometry::new(sep, rows, range.end, inputs.x, lengths, &mut ahead);
         let c = &inputs.coeffs;
         let (neg_k, a, gamma, half_k) = (
             _mm256_set1_pd(-c.k),
@@ -547,11 +569,15 @@ mod avx2 {
         let one = _mm256_set1_pd(1.0);
         let critical = _mm256_set1_pd(rule.critical_strain);
         let inverse_critical = _mm256_set1_pd(1.0 / rule.critical_strain);
+        let calm_strain = _mm256_set1_pd(if breaks {
+            rule.critical_strain.min(CALM_STRAIN)
+        } else {
+            CALM_STRAIN
+        });
         let plastic = _mm256_set1_pd(rule.plastic_strain.unwrap_or(0.0));
         let magnitude = _mm256_castsi256_pd(_mm256_set1_epi64x(i64::MAX));
         let infinity = _mm256_set1_pd(f64::INFINITY);
         let all = _mm256_castsi256_pd(_mm256_set1_epi64x(-1));
-        let image = sep.minimum_image().map(|m| LaneImage::new(m));
         let (mut broken_rows, mut yielded_rows) = (0, 0);
         // The first row out of range, reported after the loop: a fault
         // carried through the loop would be moved about every block.
@@ -566,29 +592,14 @@ mod avx2 {
             let row = range.start + k;
             // In bounds: the caller checked the range against the layout
             // and the outputs, and the lengths against the rows.
-            let (i, j) = (
-                row_i.get_unchecked(row..row + 4),
-                row_j.get_unchecked(row..row + 4),
-            );
-            let del = separations(sep, image.as_ref(), x, i, j);
+            let (i, j) = geometry.atoms(row);
+            let (del, r) = geometry.block::<MB>(row, k / 4);
             let r0 = _mm256_loadu_pd(r0s.as_ptr().add(row));
             let inv_r0 = _mm256_loadu_pd(inv_r0s.as_ptr().add(row));
-            let r = if MB {
-                lengths_of(lengths.as_ptr().add(row))
-            } else {
-                _mm256_sqrt_pd(dot(&del, &del))
-            };
             let rinv = _mm256_div_pd(one, r);
             let elongation = _mm256_sub_pd(r, r0);
             let e = _mm256_mul_pd(elongation, inv_r0);
-            let broken = if breaks {
-                _mm256_and_pd(
-                    _mm256_cmp_pd::<_CMP_GT_OQ>(_mm256_and_pd(e, magnitude), critical),
-                    _mm256_cmp_pd::<_CMP_LT_OQ>(r, infinity),
-                )
-            } else {
-                _mm256_setzero_pd()
-            };
+            let broken = || breaking(breaks, e, r, critical);
             let dst = out.as_mut_ptr().add(k) as *mut f64;
             // Without yielding, e_p stays 0: the rest length is r0, bit
             // for bit what (1 + 0) r0 gives.
@@ -603,7 +614,8 @@ mod avx2 {
                 } else {
                     let mut e_p = _mm256_blendv_pd(before, _mm256_sub_pd(e, plastic), above);
                     e_p = _mm256_blendv_pd(e_p, _mm256_add_pd(e, plastic), below);
-                    let moved = _mm256_andnot_pd(broken, _mm256_cmp_pd::<_CMP_NEQ_OQ>(e_p, before));
+                    let moved =
+                        _mm256_andnot_pd(broken(), _mm256_cmp_pd::<_CMP_NEQ_OQ>(e_p, before));
                     yielded_rows += _mm256_movemask_pd(moved).count_ones() as usize;
                     e_p
                 };
@@ -655,18 +667,29 @@ mod avx2 {
                 _mm256_mul_pd(del[2], fpair),
             ];
             let mut fourth = e_p;
-            let broken_lanes = _mm256_movemask_pd(broken);
-            // Blocks where a bond breaks are rare: only they pay for masks.
-            let intact = if broken_lanes == 0 {
-                all
-            } else {
-                broken_rows += broken_lanes.count_ones() as usize;
-                let intact = _mm256_andnot_pd(broken, all);
-                // Broken rows: +0, as the scalar build writes them.
-                force = force.map(|f| _mm256_and_pd(f, intact));
-                fourth = _mm256_blendv_pd(e_p, _mm256_set1_pd(f64::NAN), broken);
-                intact
-            };
+            let mut intact = all;
+            // A calm block (every strain within `calm_strain`, every force
+            // finite) has no bond that breaks and none out of range: one
+            // test stands for both. Only the other blocks pay for them.
+            let calm = _mm256_and_pd(
+                _mm256_cmp_pd::<_CMP_LE_OQ>(_mm256_and_pd(e, magnitude), calm_strain),
+                _mm256_cmp_pd::<_CMP_LT_OQ>(_mm256_and_pd(fpair, magnitude), infinity),
+            );
+            if _mm256_movemask_pd(calm) != 0b1111 {
+                let broken = broken();
+                let broken_lanes = _mm256_movemask_pd(broken);
+                if broken_lanes != 0 {
+                    broken_rows += broken_lanes.count_ones() as usize;
+                    intact = _mm256_andnot_pd(broken, all);
+                    // Broken rows: +0, as the scalar build writes them.
+                    force = force.map(|f| _mm256_and_pd(f, intact));
+                    fourth = _mm256_blendv_pd(e_p, _mm256_set1_pd(f64::NAN), broken);
+                }
+                let rejected = !_mm256_movemask_pd(in_range(r, r0, fpair)) & !broken_lanes & 0b1111;
+                if rejected != 0 {
+                    note_rejected(&mut first_rejected, k, rejected);
+                }
+            }
             let force_rows = to_rows_with(force[0], force[1], force[2], fourth);
             for (l, fr) in force_rows.into_iter().enumerate() {
                 _mm256_storeu_pd(dst.add(4 * l), fr);
@@ -681,10 +704,6 @@ mod avx2 {
                 for (sum, term) in sums.iter_mut().zip(tally_terms(energy, &force, &del)) {
                     *sum = _mm256_add_pd(*sum, _mm256_and_pd(term, intact));
                 }
-            }
-            let rejected = !_mm256_movemask_pd(in_range(r, r0, fpair)) & !broken_lanes & 0b1111;
-            if rejected != 0 {
-                note_rejected(&mut first_rejected, k, rejected);
             }
         }
         if TALLY {

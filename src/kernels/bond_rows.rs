@@ -1037,6 +1037,116 @@ pub(super) mod avx2 {
         ]
     }
 
+    /// How many blocks [`Geometry`] computes ahead without the multibody
+    /// term.
+    pub(in crate::kernels) const AHEAD_BLOCKS: usize = 16;
+
+    /// The separations and lengths of a pass's blocks of four rows.
+    ///
+    /// With the multibody term the lengths are the volume pass's, and each
+    /// block's separations come as the block is reached. Without it, the
+    /// lengths are square roots, and [`AHEAD_BLOCKS`] blocks' worth is
+    /// computed ahead of their forces: a block's chain from the positions
+    /// through the square root is long, and computed block by block too
+    /// few blocks fit in flight to hide it (some 4% of the step at
+    /// `a_B = 0`; with the lengths loaded, the buffer cost more than it
+    /// saved).
+    pub(in crate::kernels) struct Geometry<'a, S: Separation> {
+        sep: &'a S,
+        image: Option<LaneImage>,
+        x: &'a [[f64; 3]],
+        row_i: &'a [u32],
+        row_j: &'a [u32],
+        lengths: &'a [[f64; 2]],
+        end: usize,
+        // Borrowed, not owned: with the buffer inside, the compiled loop
+        // read the other fields from the stack every block (a struct with
+        // an array indexed at run time stayed in memory), 1-2% of the
+        // step with the multibody term.
+        ahead: &'a mut Ahead,
+    }
+
+    /// The lanes [`Geometry`] computes ahead: separations and lengths.
+    pub(in crate::kernels) type Ahead = [[__m256d; 4]; AHEAD_BLOCKS];
+
+    impl<'a, S: Separation> Geometry<'a, S> {
+        /// The geometry of `rows` up to row `end`, with positions `x` and,
+        /// with the multibody term, the volume pass's `lengths`; `ahead`
+        /// holds the blocks computed ahead.
+        ///
+        /// # Safety
+        /// AVX2.
+        #[target_feature(enable = "avx2")]
+        pub(in crate::kernels) unsafe fn new(
+            sep: &'a S,
+            rows: &'a BondRows,
+            end: usize,
+            x: &'a [[f64; 3]],
+            lengths: &'a [[f64; 2]],
+            ahead: &'a mut Ahead,
+        ) -> Self {
+            Self {
+                sep,
+                image: sep.minimum_image().map(|m| LaneImage::new(m)),
+                x,
+                row_i: &rows.i,
+                row_j: &rows.j,
+                lengths,
+                end,
+                ahead,
+            }
+        }
+
+        /// The atoms of the block at `row`.
+        ///
+        /// # Safety
+        /// `row + 4 <= end`, within the rows.
+        #[inline(always)]
+        pub(in crate::kernels) unsafe fn atoms(&self, row: usize) -> (&'a [u32], &'a [u32]) {
+            (
+                self.row_i.get_unchecked(row..row + 4),
+                self.row_j.get_unchecked(row..row + 4),
+            )
+        }
+
+        /// The separations and lengths of the block at `row`, the
+        /// `block`-th of the pass.
+        ///
+        /// # Safety
+        /// AVX2; whole blocks of four up to `end`, within the rows (and
+        /// the lengths with `MB`); the atoms within the positions. Every
+        /// block taken in order from 0, each row `4 * block` past the
+        /// first: the blocks after a multiple of [`AHEAD_BLOCKS`] are read
+        /// from what that one computed.
+        #[target_feature(enable = "avx2")]
+        #[inline]
+        pub(in crate::kernels) unsafe fn block<const MB: bool>(
+            &mut self,
+            row: usize,
+            block: usize,
+        ) -> ([__m256d; 3], __m256d) {
+            if MB {
+                let (i, j) = self.atoms(row);
+                let del = separations(self.sep, self.image.as_ref(), self.x, i, j);
+                return (del, lengths_of(self.lengths.as_ptr().add(row)));
+            }
+            let slot = block % AHEAD_BLOCKS;
+            if slot == 0 {
+                for b in 0..AHEAD_BLOCKS {
+                    let row = row + 4 * b;
+                    if row >= self.end {
+                        break;
+                    }
+                    let (i, j) = self.atoms(row);
+                    let del = separations(self.sep, self.image.as_ref(), self.x, i, j);
+                    self.ahead[b] = [del[0], del[1], del[2], _mm256_sqrt_pd(dot(&del, &del))];
+                }
+            }
+            let [dx, dy, dz, r] = self.ahead[slot];
+            ([dx, dy, dz], r)
+        }
+    }
+
     #[target_feature(enable = "avx2")]
     #[inline]
     pub(in crate::kernels) unsafe fn dot(a: &[__m256d; 3], b: &[__m256d; 3]) -> __m256d {
@@ -1189,11 +1299,11 @@ pub(super) mod avx2 {
         // Everything the loop reads, in locals: the rows are written
         // through raw pointers, which the compiler must otherwise assume
         // may alias the inputs and the layout, reloading them every block.
-        let (row_i, row_j) = (&rows.i[..], &rows.j[..]);
         let (r0s, inv_r0s, inv_v0sums) = (&rows.r0[..], &rows.inv_r0[..], &rows.inv_v0sum[..]);
-        let x = inputs.x;
         let v = inputs.v.unwrap_or(&[]);
         let (vol, lengths) = inputs.multibody.unwrap_or((&[], &[]));
+        let mut ahead = [[_mm256_setzero_pd(); 4]; AHEAD_BLOCKS];
+        let mut geometry = Geometry::new(sep, rows, range.end, inputs.x, lengths, &mut ahead);
         let c = &inputs.coeffs;
         let (neg_k, a, gamma, half_k) = (
             _mm256_set1_pd(-c.k),
@@ -1202,7 +1312,6 @@ pub(super) mod avx2 {
             _mm256_set1_pd(0.5 * c.k),
         );
         let one = _mm256_set1_pd(1.0);
-        let image = sep.minimum_image().map(|m| LaneImage::new(m));
         // The first row out of range, found after the loop: a search in
         // the loop would be inlined there, crowding its registers.
         let mut first_rejected = None;
@@ -1217,17 +1326,9 @@ pub(super) mod avx2 {
             let row = range.start + k;
             // In bounds: the caller checked the range against the layout
             // and the outputs, and the lengths against the rows.
-            let (i, j) = (
-                row_i.get_unchecked(row..row + 4),
-                row_j.get_unchecked(row..row + 4),
-            );
-            let del = separations(sep, image.as_ref(), x, i, j);
+            let (i, j) = geometry.atoms(row);
+            let (del, r) = geometry.block::<MB>(row, k / 4);
             let r0 = _mm256_loadu_pd(r0s.as_ptr().add(row));
-            let r = if MB {
-                lengths_of(lengths.as_ptr().add(row))
-            } else {
-                _mm256_sqrt_pd(dot(&del, &del))
-            };
             let rinv = _mm256_div_pd(one, r);
             let dstretch = _mm256_sub_pd(r, r0);
             let mut fmag = _mm256_mul_pd(neg_k, dstretch);
