@@ -509,9 +509,12 @@ mod avx2 {
     const _: () = assert!(1.01 * (1.0 + CALM_STRAIN) < OVERSTRETCHED_ABOVE);
 
     /// The lanes whose bonds break: beyond the critical strain, and finite.
+    ///
+    /// # Safety
+    /// AVX2.
     #[target_feature(enable = "avx2")]
     #[inline]
-    unsafe fn breaking(breaks: bool, e: __m256d, r: __m256d, critical: __m256d) -> __m256d {
+    unsafe fn breaking_lanes(breaks: bool, e: __m256d, r: __m256d, critical: __m256d) -> __m256d {
         if breaks {
             let magnitude = _mm256_castsi256_pd(_mm256_set1_epi64x(i64::MAX));
             _mm256_and_pd(
@@ -599,7 +602,7 @@ mod avx2 {
             let rinv = _mm256_div_pd(one, r);
             let elongation = _mm256_sub_pd(r, r0);
             let e = _mm256_mul_pd(elongation, inv_r0);
-            let broken = || breaking(breaks, e, r, critical);
+            let broken_now = || breaking_lanes(breaks, e, r, critical);
             let dst = out.as_mut_ptr().add(k) as *mut f64;
             // Without yielding, e_p stays 0: the rest length is r0, bit
             // for bit what (1 + 0) r0 gives.
@@ -615,7 +618,7 @@ mod avx2 {
                     let mut e_p = _mm256_blendv_pd(before, _mm256_sub_pd(e, plastic), above);
                     e_p = _mm256_blendv_pd(e_p, _mm256_add_pd(e, plastic), below);
                     let moved =
-                        _mm256_andnot_pd(broken(), _mm256_cmp_pd::<_CMP_NEQ_OQ>(e_p, before));
+                        _mm256_andnot_pd(broken_now(), _mm256_cmp_pd::<_CMP_NEQ_OQ>(e_p, before));
                     yielded_rows += _mm256_movemask_pd(moved).count_ones() as usize;
                     e_p
                 };
@@ -676,7 +679,7 @@ mod avx2 {
                 _mm256_cmp_pd::<_CMP_LT_OQ>(_mm256_and_pd(fpair, magnitude), infinity),
             );
             if _mm256_movemask_pd(calm) != 0b1111 {
-                let broken = broken();
+                let broken = broken_now();
                 let broken_lanes = _mm256_movemask_pd(broken);
                 if broken_lanes != 0 {
                     broken_rows += broken_lanes.count_ones() as usize;
