@@ -862,19 +862,31 @@ fn bond_rows_give_the_scatter_kernels_forces_bit_for_bit() {
     }
 }
 
+/// Twelve particles a unit apart along x.
+fn chain_positions() -> Vec<[f64; 3]> {
+    (0..12).map(|k| [k as f64, 0.0, 0.0]).collect()
+}
+
+/// The rows of [`chain_positions`]'s eleven neighbour bonds, bond `b`
+/// joining `b` and `b + 1` with reference length `r0[b]`, numbered
+/// `100 + b`.
+fn chain_rows(r0: &[f64]) -> BondRows {
+    BondRows::new(12, (0..11).map(|b| (b, b + 1, r0[b], 100 + b)), None).unwrap()
+}
+
 /// A bond squeezed below the collapse limit in the middle of a block of
 /// rows is reported with its own bond number and atoms, on every
 /// instruction set; a row list with a bad atom is refused.
 #[test]
 fn bond_rows_report_a_collapsed_bond_and_refuse_bad_atoms() {
-    let x: Vec<[f64; 3]> = (0..12).map(|k| [k as f64, 0.0, 0.0]).collect();
+    let x = chain_positions();
     let mut r0: Vec<f64> = vec![1.0; 11];
     r0[6] = 10.0;
     // Exactly at the collapse limit (0.2 x 5 = 1): outside the lanes'
     // open range, but no fault; the report must go on to bond 106. (With
     // the yielding rule below it yields too: 2 yielded.)
     r0[2] = 5.0;
-    let rows = BondRows::new(12, (0..11).map(|b| (b, b + 1, r0[b], 100 + b)), None).unwrap();
+    let rows = chain_rows(&r0);
     let inputs = RowInputs {
         x: &x,
         v: None,
@@ -908,12 +920,7 @@ fn bond_rows_report_a_collapsed_bond_and_refuse_bad_atoms() {
         };
         let mut breaking_rows = r0.clone();
         breaking_rows[5] = 0.5;
-        let rows = BondRows::new(
-            12,
-            (0..11).map(|b| (b, b + 1, breaking_rows[b], 100 + b)),
-            None,
-        )
-        .unwrap();
+        let rows = chain_rows(&breaking_rows);
         let pass = failing_row_forces_on(isa, &Unwrapped, &rows, 0..11, &inputs, &rule, &mut out);
         let fault = pass.pass.fault.expect("the squeezed bond is a fault");
         assert_eq!(
@@ -950,12 +957,11 @@ fn bond_rows_report_a_collapsed_bond_and_refuse_bad_atoms() {
 /// is not a number is a fault: on every instruction set.
 #[test]
 fn failing_rows_find_faults_past_the_calm_strain_and_in_non_finite_forces() {
-    let x: Vec<[f64; 3]> = (0..12).map(|k| [k as f64, 0.0, 0.0]).collect();
+    let x = chain_positions();
     let mut r0: Vec<f64> = vec![1.0; 11];
     r0[2] = 0.5;
     r0[6] = 0.3;
-    let rows = |r0: &[f64]| BondRows::new(12, (0..11).map(|b| (b, b + 1, r0[b], 100 + b)), None);
-    let (torn, calm) = (rows(&r0).unwrap(), rows(&[1.0; 11]).unwrap());
+    let (torn, calm) = (chain_rows(&r0), chain_rows(&[1.0; 11]));
     let mut v = vec![[0.0; 3]; 12];
     v[7][1] = f64::NAN;
     let inputs = |v| RowInputs {
