@@ -1027,6 +1027,72 @@ fn failing_rows_find_faults_past_the_calm_strain_and_in_non_finite_forces() {
     }
 }
 
+/// The yield test compares the strain with the rounded band edges
+/// `e_p +- eps_p`, as upstream's plastic style does, on every instruction
+/// set: a bond whose `e - e_p` rounds above `eps_p` but whose `e` does not
+/// exceed the rounded `e_p + eps_p` keeps its plastic strain; one a length
+/// ulp longer yields, in the same block.
+#[test]
+fn rows_yield_past_the_rounded_band_edge_on_every_instruction_set() {
+    // r0 = 1, so e = r - 1 exactly.
+    let (at_edge, e_p, eps_p) = (1.1313187299795122_f64, 0.0813187299795122_f64, 0.05);
+    let beyond = f64::from_bits(at_edge.to_bits() + 1);
+    assert!(at_edge - 1.0 - e_p > eps_p && at_edge - 1.0 <= e_p + eps_p);
+    assert!(beyond - 1.0 > e_p + eps_p);
+    // Eight bonds, at the edge and beyond in turn, apart along y so that
+    // each separation is exactly the bond's length along x: two whole
+    // blocks of four.
+    let length = |b: usize| if b % 2 == 0 { at_edge } else { beyond };
+    let x: Vec<[f64; 3]> = (0..16)
+        .map(|p| {
+            let along = if p % 2 == 1 { length(p / 2) } else { 0.0 };
+            [along, (p / 2) as f64 * 5.0, 0.0]
+        })
+        .collect();
+    let rows = BondRows::new(16, (0..8).map(|b| (2 * b, 2 * b + 1, 1.0, b)), None).unwrap();
+    let inputs = RowInputs {
+        x: &x,
+        v: None,
+        coeffs: BondCoeffs {
+            k: 3.0,
+            a: 0.0,
+            gamma: 0.0,
+        },
+        multibody: None,
+        tally: false,
+    };
+    let rule = BondFailure {
+        smooth: false,
+        plastic_strain: Some(eps_p),
+        ..BondFailure::breaking(0.5)
+    };
+    let mut rows_of = vec![];
+    for isa in [Isa::Portable, Isa::Avx2]
+        .into_iter()
+        .filter(|i| i.available())
+    {
+        let mut out = vec![[0.0, 0.0, 0.0, e_p]; 8];
+        let pass = failing_row_forces_on(isa, &Unwrapped, &rows, 0..8, &inputs, &rule, &mut out);
+        assert_eq!((pass.broken, pass.yielded), (0, 4), "{isa:?}");
+        for (b, row) in out.iter().enumerate() {
+            let want = if b % 2 == 0 {
+                e_p
+            } else {
+                beyond - 1.0 - eps_p
+            };
+            assert_eq!(row[3], want, "{isa:?}, bond {b}");
+        }
+        rows_of.push(out);
+    }
+    for out in &rows_of[1..] {
+        assert_eq!(bits4(out), bits4(&rows_of[0]));
+    }
+}
+
+fn bits4(rows: &[[f64; 4]]) -> Vec<u64> {
+    rows.iter().flatten().map(|v| v.to_bits()).collect()
+}
+
 /// The row kernel's and the scatter kernel's cube roots on every
 /// instruction set give the bits of the scalar `cube_root` whatever mix of
 /// volume ratios a block holds: near 1 (the series alone), beyond 1/32

@@ -600,6 +600,18 @@ mod avx2 {
             let r0 = _mm256_loadu_pd(r0s.as_ptr().add(row));
             let inv_r0 = _mm256_loadu_pd(inv_r0s.as_ptr().add(row));
             let rinv = _mm256_div_pd(one, r);
+            // The damping term first: its velocities and their transpose
+            // take many registers, and formed after the spring's values
+            // they pushed some of those to the stack (the yielding loop
+            // reloaded r0 and a separation). The sum keeps its order:
+            // spring, multibody term, damping.
+            let damping = if DAMPED {
+                let dv = differences(v, i, j);
+                let del_dot_dv = dot(&del, &dv);
+                _mm256_mul_pd(_mm256_mul_pd(gamma, del_dot_dv), rinv)
+            } else {
+                _mm256_setzero_pd()
+            };
             let elongation = _mm256_sub_pd(r, r0);
             let e = _mm256_mul_pd(elongation, inv_r0);
             let broken_now = || breaking_lanes(breaks, e, r, critical);
@@ -653,9 +665,7 @@ mod avx2 {
                 );
             }
             if DAMPED {
-                let dv = differences(v, i, j);
-                let del_dot_dv = dot(&del, &dv);
-                fmag = _mm256_sub_pd(fmag, _mm256_mul_pd(_mm256_mul_pd(gamma, del_dot_dv), rinv));
+                fmag = _mm256_sub_pd(fmag, damping);
             }
             if smooth {
                 let s = _mm256_mul_pd(e, inverse_critical);
@@ -785,6 +795,21 @@ mod tests {
             ..rule
         };
         assert!(failing_bond_force(2.0, 1.0, &mut e_p, None, 0.0, &COEFFS, &unbreakable).is_some());
+    }
+
+    #[test]
+    fn the_yield_test_compares_e_with_the_rounded_band_edges_as_upstream() {
+        // e - e_p rounds above eps_p, but e does not exceed the rounded
+        // e_p + eps_p: upstream's compares (and so ours) see no yield.
+        let (e, e_p, eps_p) = (0.13131872997951222, 0.0813187299795122, 0.05);
+        assert!(e - e_p > eps_p);
+        assert_eq!(plastic_strain_after(e, e_p, eps_p), e_p);
+        assert_eq!(plastic_strain_after(-e, -e_p, eps_p), -e_p);
+        // One ulp further out, it yields to e -+ eps_p.
+        let beyond = e_p + eps_p + f64::EPSILON / 8.0;
+        assert!(beyond > e_p + eps_p);
+        assert_eq!(plastic_strain_after(beyond, e_p, eps_p), beyond - eps_p);
+        assert_eq!(plastic_strain_after(-beyond, -e_p, eps_p), -beyond + eps_p);
     }
 
     #[test]

@@ -1330,6 +1330,14 @@ pub(super) mod avx2 {
             let (del, r) = geometry.block::<MB>(row, k / 4);
             let r0 = _mm256_loadu_pd(r0s.as_ptr().add(row));
             let rinv = _mm256_div_pd(one, r);
+            // The damping term first, as in the failing pass (which see).
+            let damping = if DAMPED {
+                let dv = differences(v, i, j);
+                let del_dot_dv = dot(&del, &dv);
+                _mm256_mul_pd(_mm256_mul_pd(gamma, del_dot_dv), rinv)
+            } else {
+                _mm256_setzero_pd()
+            };
             let dstretch = _mm256_sub_pd(r, r0);
             let mut fmag = _mm256_mul_pd(neg_k, dstretch);
             if MB {
@@ -1350,9 +1358,7 @@ pub(super) mod avx2 {
                 );
             }
             if DAMPED {
-                let dv = differences(v, i, j);
-                let del_dot_dv = dot(&del, &dv);
-                fmag = _mm256_sub_pd(fmag, _mm256_mul_pd(_mm256_mul_pd(gamma, del_dot_dv), rinv));
+                fmag = _mm256_sub_pd(fmag, damping);
             }
             let fpair = _mm256_mul_pd(fmag, rinv);
             let force = [
