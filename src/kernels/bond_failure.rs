@@ -493,9 +493,9 @@ mod avx2 {
     //! choices are blends, so every lane computes what
     //! [`failing_bond_force`] computes, operation by operation.
 
-    use super::super::bond_rows::avx2::differences;
     use super::super::bond_rows::avx2::{
-        cube_roots, dot, in_range, note_rejected, tally_terms, to_rows_with, Geometry, AHEAD_BLOCKS,
+        cube_roots, damping_term, in_range, note_rejected, tally_terms, to_rows_with, Geometry,
+        AHEAD_BLOCKS,
     };
     use super::super::fault::{COLLAPSED_BELOW, OVERSTRETCHED_ABOVE};
     use super::*;
@@ -600,15 +600,9 @@ mod avx2 {
             let r0 = _mm256_loadu_pd(r0s.as_ptr().add(row));
             let inv_r0 = _mm256_loadu_pd(inv_r0s.as_ptr().add(row));
             let rinv = _mm256_div_pd(one, r);
-            // The damping term first: its velocities and their transpose
-            // take many registers, and formed after the spring's values
-            // they pushed some of those to the stack (the yielding loop
-            // reloaded r0 and a separation). The sum keeps its order:
-            // spring, multibody term, damping.
+            // The damping term first (damping_term says why).
             let damping = if DAMPED {
-                let dv = differences(v, i, j);
-                let del_dot_dv = dot(&del, &dv);
-                _mm256_mul_pd(_mm256_mul_pd(gamma, del_dot_dv), rinv)
+                damping_term(v, i, j, &del, gamma, rinv)
             } else {
                 _mm256_setzero_pd()
             };

@@ -1147,6 +1147,30 @@ pub(super) mod avx2 {
         }
     }
 
+    /// The damping term `gamma (del . dv) / r` of a block, from its
+    /// separations `del`, `1 / r` and the velocities `v` of atoms `i` and
+    /// `j`. Both row passes form it before the spring: its velocities and
+    /// their transpose take many registers, and formed after the spring's
+    /// values they pushed some of those to the stack (the yielding loop
+    /// reloaded `r0` and a separation). The force's sum keeps its order:
+    /// spring, multibody term, damping.
+    ///
+    /// # Safety
+    /// AVX2; four atoms in each of `i` and `j`, within `v`.
+    #[target_feature(enable = "avx2")]
+    #[inline]
+    pub(in crate::kernels) unsafe fn damping_term(
+        v: &[[f64; 3]],
+        i: &[u32],
+        j: &[u32],
+        del: &[__m256d; 3],
+        gamma: __m256d,
+        rinv: __m256d,
+    ) -> __m256d {
+        let del_dot_dv = dot(del, &differences(v, i, j));
+        _mm256_mul_pd(_mm256_mul_pd(gamma, del_dot_dv), rinv)
+    }
+
     #[target_feature(enable = "avx2")]
     #[inline]
     pub(in crate::kernels) unsafe fn dot(a: &[__m256d; 3], b: &[__m256d; 3]) -> __m256d {
@@ -1330,11 +1354,9 @@ pub(super) mod avx2 {
             let (del, r) = geometry.block::<MB>(row, k / 4);
             let r0 = _mm256_loadu_pd(r0s.as_ptr().add(row));
             let rinv = _mm256_div_pd(one, r);
-            // The damping term first, as in the failing pass (which see).
+            // The damping term first (damping_term says why).
             let damping = if DAMPED {
-                let dv = differences(v, i, j);
-                let del_dot_dv = dot(&del, &dv);
-                _mm256_mul_pd(_mm256_mul_pd(gamma, del_dot_dv), rinv)
+                damping_term(v, i, j, &del, gamma, rinv)
             } else {
                 _mm256_setzero_pd()
             };
