@@ -1085,12 +1085,14 @@ fn rows_yield_past_the_rounded_band_edge_on_every_instruction_set() {
         rows_of.push(out);
     }
     for out in &rows_of[1..] {
-        assert_eq!(bits4(out), bits4(&rows_of[0]));
+        assert_eq!(row_bits(out), row_bits(&rows_of[0]));
     }
 }
 
-fn bits4(rows: &[[f64; 4]]) -> Vec<u64> {
-    rows.iter().flatten().map(|v| v.to_bits()).collect()
+/// The bits of each force row (three force components and the fourth
+/// value), to compare rows exactly, NaN markers included.
+fn row_bits(rows: &[[f64; 4]]) -> Vec<[u64; 4]> {
+    rows.iter().map(|r| r.map(f64::to_bits)).collect()
 }
 
 /// The row kernel's and the scatter kernel's cube roots on every
@@ -1476,11 +1478,11 @@ fn failing_rows_match_the_elastic_rows_and_agree_between_instruction_sets() {
                 pass.yielded,
                 rows.len()
             );
-            let bits = |o: &[[f64; 4]]| -> Vec<[u64; 4]> {
-                o.iter().map(|r| r.map(f64::to_bits)).collect()
-            };
             for (other, other_pass) in &results[1..] {
-                let first = bits(other).iter().zip(bits(out)).position(|(a, b)| *a != b);
+                let first = row_bits(other)
+                    .iter()
+                    .zip(row_bits(out))
+                    .position(|(a, b)| *a != b);
                 assert_eq!(first, None, "{case}, normalize {normalize}: first row that differs between instruction sets");
                 assert_eq!(
                     other_pass, pass,
