@@ -921,7 +921,18 @@ fn bond_rows_report_a_collapsed_bond_and_refuse_bad_atoms() {
         let mut breaking_rows = r0.clone();
         breaking_rows[5] = 0.5;
         let rows = chain_rows(&breaking_rows);
-        let pass = failing_row_forces_on(isa, &Unwrapped, &rows, 0..11, &inputs, &rule, &mut out);
+        let mut plastic = banded(&rows, &rule, vec![0.0; 11]);
+        let section = Some(plastic.section(0..11));
+        let pass = failing_row_forces_on(
+            isa,
+            &Unwrapped,
+            &rows,
+            0..11,
+            &inputs,
+            &rule,
+            section,
+            &mut out,
+        );
         let fault = pass.pass.fault.expect("the squeezed bond is a fault");
         assert_eq!(
             (fault.kind, fault.i, fault.j, fault.bond, fault.reference),
@@ -929,7 +940,8 @@ fn bond_rows_report_a_collapsed_bond_and_refuse_bad_atoms() {
             "{isa:?}, bonds that break and yield"
         );
         assert_eq!((pass.broken, pass.yielded), (1, 2), "{isa:?}");
-        assert!(row_broke(&out[5]) && out[6][3] == -0.85, "{isa:?}: {out:?}");
+        assert!(row_broke(&out[5]) && out[6][3] == 0.0, "{isa:?}: {out:?}");
+        assert_eq!(plastic.strains()[6], -0.85, "{isa:?}");
     }
     assert!(matches!(
         BondRows::new(3, [(0, 3, 1.0, 0)].into_iter(), None),
@@ -986,6 +998,7 @@ fn failing_rows_find_faults_past_the_calm_strain_and_in_non_finite_forces() {
         .filter(|i| i.available())
     {
         let mut out = vec![[0.0; 4]; 11];
+        let mut plastic = banded(&torn, &yielding, vec![0.0; 11]);
         let pass = failing_row_forces_on(
             isa,
             &Unwrapped,
@@ -993,6 +1006,7 @@ fn failing_rows_find_faults_past_the_calm_strain_and_in_non_finite_forces() {
             0..11,
             &inputs(None),
             &yielding,
+            Some(plastic.section(0..11)),
             &mut out,
         );
         let fault = pass.pass.fault.expect("the torn bond is a fault");
@@ -1003,7 +1017,7 @@ fn failing_rows_find_faults_past_the_calm_strain_and_in_non_finite_forces() {
         );
         // Both stretched bonds yield; the one at strain 1 is whole.
         assert_eq!((pass.broken, pass.yielded), (0, 2), "{isa:?}");
-        assert_eq!(out[2][3], 0.95, "{isa:?}");
+        assert_eq!(plastic.strains()[2], 0.95, "{isa:?}");
         let mut out = vec![[0.0; 4]; 11];
         let pass = failing_row_forces_on(
             isa,
@@ -1012,6 +1026,7 @@ fn failing_rows_find_faults_past_the_calm_strain_and_in_non_finite_forces() {
             0..11,
             &inputs(Some(&v)),
             &BondFailure::breaking(0.5),
+            None,
             &mut out,
         );
         let fault = pass
@@ -1071,16 +1086,27 @@ fn rows_yield_past_the_rounded_band_edge_on_every_instruction_set() {
         .into_iter()
         .filter(|i| i.available())
     {
-        let mut out = vec![[0.0, 0.0, 0.0, e_p]; 8];
-        let pass = failing_row_forces_on(isa, &Unwrapped, &rows, 0..8, &inputs, &rule, &mut out);
+        let mut out = vec![[0.0; 4]; 8];
+        let mut plastic = banded(&rows, &rule, vec![e_p; 8]);
+        let section = Some(plastic.section(0..8));
+        let pass = failing_row_forces_on(
+            isa,
+            &Unwrapped,
+            &rows,
+            0..8,
+            &inputs,
+            &rule,
+            section,
+            &mut out,
+        );
         assert_eq!((pass.broken, pass.yielded), (0, 4), "{isa:?}");
-        for (b, row) in out.iter().enumerate() {
+        for (b, &strain) in plastic.strains().iter().enumerate() {
             let want = if b % 2 == 0 {
                 e_p
             } else {
                 beyond - 1.0 - eps_p
             };
-            assert_eq!(row[3], want, "{isa:?}, bond {b}");
+            assert_eq!(strain, want, "{isa:?}, bond {b}");
         }
         rows_of.push(out);
     }
@@ -1438,17 +1464,26 @@ fn failing_rows_match_the_elastic_rows_and_agree_between_instruction_sets() {
             multibody: multibody.then_some((&vol[..], &lengths[..])),
             tally,
         };
+        // The two sections through shared rows, as the engine's threads
+        // take them.
         let run = |isa: Isa, rule: &BondFailure, start: &[f64]| {
-            let mut out: Vec<[f64; 4]> = start
-                .iter()
-                .map(|&e| [f64::NAN, f64::NAN, f64::NAN, e])
-                .collect();
+            let mut out = vec![[f64::NAN; 4]; start.len()];
+            let mut plastic = PlasticRows::new(&rows, start.to_vec());
+            let yields = rule.plastic_strain.is_some();
+            if yields {
+                plastic.band_for(rule);
+            }
+            let shared = yields.then(|| plastic.shared());
+            // SAFETY: the two sections do not overlap.
+            let section =
+                |r: std::ops::Range<usize>| shared.as_ref().map(|s| unsafe { s.section(r) });
             let (a, b) = out.split_at_mut(ni);
+            let (pa, pb) = (section(0..ni), section(ni..rows.len()));
             let pass =
-                failing_row_forces_on(isa, &Unwrapped, &rows, 0..ni, &inputs, rule, a).merged(
-                    &failing_row_forces_on(isa, &sep, &rows, ni..rows.len(), &inputs, rule, b),
+                failing_row_forces_on(isa, &Unwrapped, &rows, 0..ni, &inputs, rule, pa, a).merged(
+                    &failing_row_forces_on(isa, &sep, &rows, ni..rows.len(), &inputs, rule, pb, b),
                 );
-            (out, pass)
+            (out, plastic.strains().to_vec(), pass)
         };
         let case = format!("multibody {multibody}, damped {damped}, tally {tally}");
         for &isa in &isas {
@@ -1456,7 +1491,7 @@ fn failing_rows_match_the_elastic_rows_and_agree_between_instruction_sets() {
             let (a, b) = elastic.split_at_mut(ni);
             let want = row_forces_on(isa, &Unwrapped, &rows, 0..ni, &inputs, a)
                 .merged(&row_forces_on(isa, &sep, &rows, ni..rows.len(), &inputs, b));
-            let (got, pass) = run(isa, &never, &vec![0.0; rows.len()]);
+            let (got, _, pass) = run(isa, &never, &vec![0.0; rows.len()]);
             assert_eq!(
                 got, elastic,
                 "{isa:?}, {case}: rows of a rule that never acts"
@@ -1470,7 +1505,7 @@ fn failing_rows_match_the_elastic_rows_and_agree_between_instruction_sets() {
         for normalize in [false, true] {
             let rule = acting(normalize);
             let results: Vec<_> = isas.iter().map(|&isa| run(isa, &rule, &entry)).collect();
-            let (out, pass) = &results[0];
+            let (out, strains, pass) = &results[0];
             assert!(
                 pass.broken > 10 && pass.yielded > 10 && pass.broken + pass.yielded < rows.len(),
                 "{case}: {} broken, {} yielded of {}",
@@ -1478,12 +1513,18 @@ fn failing_rows_match_the_elastic_rows_and_agree_between_instruction_sets() {
                 pass.yielded,
                 rows.len()
             );
-            for (other, other_pass) in &results[1..] {
+            for (other, other_strains, other_pass) in &results[1..] {
                 let first = row_bits(other)
                     .iter()
                     .zip(row_bits(out))
                     .position(|(a, b)| *a != b);
                 assert_eq!(first, None, "{case}, normalize {normalize}: first row that differs between instruction sets");
+                let bits = |s: &[f64]| s.iter().map(|e| e.to_bits()).collect::<Vec<_>>();
+                assert_eq!(
+                    bits(other_strains),
+                    bits(strains),
+                    "{case}, normalize {normalize}: plastic strains"
+                );
                 assert_eq!(
                     other_pass, pass,
                     "{case}, normalize {normalize}: counts and sums"
@@ -1507,8 +1548,8 @@ fn failing_rows_match_the_elastic_rows_and_agree_between_instruction_sets() {
                 match failing_bond_force(r, r0[b], &mut e_p, d, damping, &coeffs, &rule) {
                     None => assert!(row_broke(row), "row {k} should have broken"),
                     Some(f) => {
-                        assert!(!row_broke(row));
-                        assert_eq!(row[3], e_p, "row {k}: plastic strain");
+                        assert!(!row_broke(row) && row[3] == 0.0);
+                        assert_eq!(strains[k], e_p, "row {k}: plastic strain");
                         for c in 0..3 {
                             assert_relative_eq!(
                                 row[c],
@@ -1522,6 +1563,183 @@ fn failing_rows_match_the_elastic_rows_and_agree_between_instruction_sets() {
             }
         }
     }
+}
+
+/// The vector build reads each row's band (the strains in which it
+/// neither yields nor can break) from the plastic rows: bands drawn for a
+/// wide yield strain are redrawn for a narrow one, so that bonds at a
+/// strain between the two yield on every instruction set; rows banded for
+/// another rule are refused.
+#[test]
+fn plastic_rows_are_banded_anew_for_another_rule() {
+    let x = chain_positions();
+    // Chain bonds of length 1 at r0 = 1 / 1.05: strain 0.05 (to rounding).
+    let rows = chain_rows(&[1.0 / 1.05; 11]);
+    let inputs = RowInputs {
+        x: &x,
+        v: None,
+        coeffs: BondCoeffs {
+            k: 1.0,
+            a: 0.0,
+            gamma: 0.0,
+        },
+        multibody: None,
+        tally: false,
+    };
+    let rule = |eps_p| BondFailure {
+        smooth: false,
+        plastic_strain: Some(eps_p),
+        ..BondFailure::breaking(0.4)
+    };
+    let (wide, narrow) = (rule(0.2), rule(0.01));
+    for isa in [Isa::Portable, Isa::Avx2]
+        .into_iter()
+        .filter(|i| i.available())
+    {
+        let mut out = vec![[0.0; 4]; 11];
+        let mut plastic = banded(&rows, &wide, vec![0.0; 11]);
+        let pass = |plastic: &mut PlasticRows, rule, out: &mut [[f64; 4]]| {
+            let section = Some(plastic.section(0..11));
+            failing_row_forces_on(isa, &Unwrapped, &rows, 0..11, &inputs, rule, section, out)
+        };
+        assert_eq!(pass(&mut plastic, &wide, &mut out).yielded, 0, "{isa:?}");
+        let refused = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+            pass(&mut plastic.clone(), &narrow, &mut out.clone())
+        }));
+        assert!(refused.is_err(), "{isa:?}: bands of another rule");
+        plastic.band_for(&narrow);
+        assert_eq!(pass(&mut plastic, &narrow, &mut out).yielded, 11, "{isa:?}");
+        for &e_p in plastic.strains() {
+            assert_relative_eq!(e_p, 0.04, max_relative = 1e-12);
+        }
+    }
+}
+
+/// A band is cut to the calm strain: bonds whose plastic strain lies
+/// near the critical strain, pulled past it but within their yield band,
+/// break on every instruction set.
+#[test]
+fn bands_are_cut_to_the_calm_strain() {
+    let x: Vec<[f64; 3]> = (0..12).map(|k| [k as f64 * 1.062, 0.0, 0.0]).collect();
+    let rows = chain_rows(&[1.0; 11]);
+    let inputs = RowInputs {
+        x: &x,
+        v: None,
+        coeffs: BondCoeffs {
+            k: 1.0,
+            a: 0.0,
+            gamma: 0.0,
+        },
+        multibody: None,
+        tally: false,
+    };
+    let rule = BondFailure {
+        smooth: false,
+        plastic_strain: Some(0.01),
+        ..BondFailure::breaking(0.06)
+    };
+    for isa in [Isa::Portable, Isa::Avx2]
+        .into_iter()
+        .filter(|i| i.available())
+    {
+        let mut out = vec![[0.0; 4]; 11];
+        let mut plastic = banded(&rows, &rule, vec![0.055; 11]);
+        let section = Some(plastic.section(0..11));
+        let pass = failing_row_forces_on(
+            isa,
+            &Unwrapped,
+            &rows,
+            0..11,
+            &inputs,
+            &rule,
+            section,
+            &mut out,
+        );
+        assert_eq!((pass.broken, pass.yielded), (11, 0), "{isa:?}");
+        assert!(out.iter().all(row_broke), "{isa:?}");
+    }
+}
+
+/// The bands follow the plastic strains from pass to pass: a chain
+/// stretched, held, relaxed and compressed yields as the rule says bond by
+/// bond, each pass from the strains the last one left, on every
+/// instruction set, the rows split between two sections as two threads
+/// take them (not at a block boundary).
+#[test]
+fn bands_follow_the_plastic_strains_over_passes() {
+    let rows = chain_rows(&[1.0; 11]);
+    let eps_p = 0.01;
+    let rule = BondFailure {
+        smooth: false,
+        plastic_strain: Some(eps_p),
+        ..BondFailure::breaking(0.5)
+    };
+    let scales = [1.08, 1.065, 1.005, 0.99, 1.03];
+    let mut strains_of = vec![];
+    for isa in [Isa::Portable, Isa::Avx2]
+        .into_iter()
+        .filter(|i| i.available())
+    {
+        let mut plastic = banded(&rows, &rule, vec![0.0; 11]);
+        let mut want = [0.0; 11];
+        for scale in scales {
+            let x: Vec<[f64; 3]> = (0..12).map(|k| [k as f64 * scale, 0.0, 0.0]).collect();
+            let inputs = RowInputs {
+                x: &x,
+                v: None,
+                coeffs: BondCoeffs {
+                    k: 1.0,
+                    a: 0.0,
+                    gamma: 0.0,
+                },
+                multibody: None,
+                tally: false,
+            };
+            let mut out = vec![[0.0; 4]; 11];
+            let (a, b) = out.split_at_mut(5);
+            let shared = plastic.shared();
+            // SAFETY: the two sections do not overlap.
+            let (pa, pb) = unsafe { (shared.section(0..5), shared.section(5..11)) };
+            let pass =
+                failing_row_forces_on(isa, &Unwrapped, &rows, 0..5, &inputs, &rule, Some(pa), a)
+                    .merged(&failing_row_forces_on(
+                        isa,
+                        &Unwrapped,
+                        &rows,
+                        5..11,
+                        &inputs,
+                        &rule,
+                        Some(pb),
+                        b,
+                    ));
+            let mut yielded = 0;
+            for (b, e_p) in want.iter_mut().enumerate() {
+                let e = (x[b + 1][0] - x[b][0]) - 1.0;
+                let after = plastic_strain_after(e, *e_p, eps_p);
+                yielded += usize::from(after != *e_p);
+                *e_p = after;
+            }
+            assert_eq!(plastic.strains(), &want[..], "{isa:?}, scale {scale}");
+            assert_eq!(
+                (pass.broken, pass.yielded),
+                (0, yielded),
+                "{isa:?}, scale {scale}"
+            );
+            assert!(yielded > 0 || scale == 1.065, "{isa:?}, scale {scale}");
+        }
+        strains_of.push(plastic.strains().to_vec());
+    }
+    for strains in &strains_of[1..] {
+        let bits = |s: &[f64]| s.iter().map(|e| e.to_bits()).collect::<Vec<_>>();
+        assert_eq!(bits(strains), bits(&strains_of[0]));
+    }
+}
+
+/// Plastic strains `e_p` of `rows`, banded for `rule`.
+fn banded(rows: &BondRows, rule: &BondFailure, e_p: Vec<f64>) -> PlasticRows {
+    let mut plastic = PlasticRows::new(rows, e_p);
+    plastic.band_for(rule);
+    plastic
 }
 
 fn dot3(a: &[f64; 3], b: &[f64; 3]) -> f64 {

@@ -24,8 +24,9 @@ use super::bond::{cube_root, reciprocal, BondCoeffs};
 use super::bond_rows::{
     gather_by_particle, settle_checked_row, BondRows, LaneTally, RowForce, RowInputs, AS_J,
 };
-use super::fault::ForcePass;
+use super::fault::{ForcePass, COLLAPSED_BELOW, OVERSTRETCHED_ABOVE};
 use super::isa::Isa;
+use super::plastic_rows::{rest_length, Band, PlasticRows, PlasticSection, RawPlastic};
 use super::Separation;
 use std::ops::Range;
 
@@ -235,29 +236,75 @@ pub fn row_broke(row: &[f64; 4]) -> bool {
     row[3].is_nan()
 }
 
+/// A strain no bond within reaches a fault: half the reference length
+/// either way lies well inside [`COLLAPSED_BELOW`] and
+/// [`OVERSTRETCHED_ABOVE`], rounding and all.
+const CALM_STRAIN: f64 = 0.5;
+const _: () = assert!(1.0 - CALM_STRAIN > 1.01 * COLLAPSED_BELOW);
+const _: () = assert!(1.01 * (1.0 + CALM_STRAIN) < OVERSTRETCHED_ABOVE);
+
+/// The strain within which no bond of `rule` breaks or reaches a fault.
+fn calm_strain(rule: &BondFailure) -> f64 {
+    if rule.breaks {
+        rule.critical_strain.min(CALM_STRAIN)
+    } else {
+        CALM_STRAIN
+    }
+}
+
+/// The band of a rule that yields.
+fn band_of(rule: &BondFailure) -> Option<Band> {
+    rule.plastic_strain.map(|plastic_strain| Band {
+        plastic_strain,
+        calm_strain: calm_strain(rule),
+    })
+}
+
+/// The methods of [`PlasticRows`] that take the rule.
+impl PlasticRows {
+    /// Whether the bands are `rule`'s.
+    pub fn banded_for(&self, rule: &BondFailure) -> bool {
+        self.band().is_some() && self.band() == band_of(rule)
+    }
+
+    /// Draws the bands for `rule`, unless they are drawn for it.
+    ///
+    /// # Panics
+    /// If `rule` does not yield.
+    pub fn band_for(&mut self, rule: &BondFailure) {
+        if !self.banded_for(rule) {
+            self.draw(band_of(rule).expect("bands are drawn for a rule that yields"));
+        }
+    }
+}
+
 /// [`super::row_forces`] for bonds that break and yield.
 ///
-/// Each row of `out` carries its bond's plastic strain `e_p` in its fourth
-/// value, which the gathers ignore: read on entry, updated on exit. A row
-/// whose bond breaks gets zero force and `NaN` there ([`row_broke`]); the
-/// engine removes such bonds before the next pass. With the multibody
-/// term, the rows' reference volumes are those of the rest lengths
-/// ([`gather_rest_volumes`], [`BondRows::set_reference_volumes`]). Runs on
-/// the widest instruction set this processor has; every build gives the
-/// same rows and sums bit for bit.
+/// With a rule that yields, `plastic` holds the plastic strains of the
+/// rows `range` (banded for the rule, [`PlasticRows::band_for`]), which
+/// the pass reads and moves; without, it must be `None`. A row whose bond
+/// breaks gets zero force and `NaN` in its fourth value ([`row_broke`]);
+/// the others get 0 there. The engine removes broken rows before the next
+/// pass. With the multibody term, the rows' reference volumes are those of
+/// the rest lengths ([`gather_rest_volumes`],
+/// [`BondRows::set_reference_volumes`]). Runs on the widest instruction set
+/// this processor has; every build gives the same rows, strains and sums
+/// bit for bit.
 pub fn failing_row_forces<S: Separation>(
     sep: &S,
     rows: &BondRows,
     range: Range<usize>,
     inputs: &RowInputs,
     rule: &BondFailure,
+    plastic: Option<PlasticSection<'_>>,
     out: &mut [[f64; 4]],
 ) -> FailurePass {
-    failing_row_forces_on(Isa::detect(), sep, rows, range, inputs, rule, out)
+    failing_row_forces_on(Isa::detect(), sep, rows, range, inputs, rule, plastic, out)
 }
 
 /// [`failing_row_forces`] compiled for `isa` (the portable build when this
 /// processor lacks it).
+#[allow(clippy::too_many_arguments)]
 pub fn failing_row_forces_on<S: Separation>(
     isa: Isa,
     sep: &S,
@@ -265,14 +312,28 @@ pub fn failing_row_forces_on<S: Separation>(
     range: Range<usize>,
     inputs: &RowInputs,
     rule: &BondFailure,
+    plastic: Option<PlasticSection<'_>>,
     out: &mut [[f64; 4]],
 ) -> FailurePass {
     rows.check_inputs(&range, out.len(), inputs);
-    let pass = FailingPass {
+    match (&plastic, band_of(rule)) {
+        (Some(section), Some(band)) => {
+            assert_eq!(section.len(), range.len(), "one plastic strain per row");
+            assert!(
+                section.band == band,
+                "plastic rows banded for another rule: call PlasticRows::band_for"
+            );
+        }
+        (None, None) => {}
+        (Some(_), None) => panic!("plastic strains given with a rule that does not yield"),
+        (None, Some(_)) => panic!("a rule that yields needs the rows' plastic strains"),
+    }
+    let mut pass = FailingPass {
         sep,
         rows,
         inputs,
         rule,
+        plastic,
     };
     let flags = (
         inputs.multibody.is_some(),
@@ -299,12 +360,13 @@ pub fn failing_row_forces_on<S: Separation>(
     )
 }
 
-/// What a failing pass reads.
+/// What a failing pass reads, and the plastic strains it moves.
 struct FailingPass<'a, S> {
     sep: &'a S,
     rows: &'a BondRows,
     inputs: &'a RowInputs<'a>,
     rule: &'a BondFailure,
+    plastic: Option<PlasticSection<'a>>,
 }
 
 /// One intact row: its force and its new plastic strain.
@@ -319,7 +381,7 @@ impl<S: Separation> FailingPass<'_, S> {
     /// rows one by one.
     #[inline(always)]
     fn rows_on<const MB: bool, const DAMPED: bool, const TALLY: bool, const PLASTIC: bool>(
-        &self,
+        &mut self,
         isa: Isa,
         range: Range<usize>,
         out: &mut [[f64; 4]],
@@ -333,22 +395,24 @@ impl<S: Separation> FailingPass<'_, S> {
             result.pass.tally = lanes.total();
         }
         for (k, out) in out.iter_mut().enumerate().skip(full) {
-            self.settle::<MB, DAMPED, TALLY>(range.start + k, out, &mut result);
+            self.settle::<MB, DAMPED, TALLY>(range.start, k, out, &mut result);
         }
         result
     }
 
-    /// Row `row` into `out` (its plastic strain read from and written back
-    /// to `out[3]`), counted in `result` (tallied there with `TALLY`);
-    /// returns its force if it held.
+    /// Row `k` of the range from `first` into `out` (its plastic strain
+    /// read and moved in the pass's section), counted in `result`
+    /// (tallied there with `TALLY`); returns its force if it held.
     #[inline(always)]
     fn settle<const MB: bool, const DAMPED: bool, const TALLY: bool>(
-        &self,
-        row: usize,
+        &mut self,
+        first: usize,
+        k: usize,
         out: &mut [f64; 4],
         result: &mut FailurePass,
     ) -> Option<RowForce> {
-        let e_p = out[3];
+        let row = first + k;
+        let e_p = self.plastic.as_ref().map_or(0.0, |p| p.strain(k));
         let Some(intact) = self.row::<MB, DAMPED>(row, e_p) else {
             *out = BROKEN_ROW;
             result.broken += 1;
@@ -356,14 +420,18 @@ impl<S: Separation> FailingPass<'_, S> {
         };
         let r0 = self.rows.r0(row);
         settle_checked_row::<TALLY>(self.rows, row, r0, &intact.force, &mut result.pass, out);
-        result.yielded += usize::from(intact.e_p != e_p);
-        out[3] = intact.e_p;
+        if intact.e_p != e_p {
+            result.yielded += 1;
+            if let Some(plastic) = &mut self.plastic {
+                plastic.set(k, r0, intact.e_p);
+            }
+        }
         Some(intact.force)
     }
 
     #[inline(always)]
     fn blocks<const MB: bool, const DAMPED: bool, const TALLY: bool, const PLASTIC: bool>(
-        &self,
+        &mut self,
         isa: Isa,
         range: Range<usize>,
         out: &mut [[f64; 4]],
@@ -380,7 +448,7 @@ impl<S: Separation> FailingPass<'_, S> {
         let _ = isa;
         let mut result = FailurePass::default();
         for (k, out) in out.iter_mut().enumerate() {
-            let force = self.settle::<MB, DAMPED, false>(range.start + k, out, &mut result);
+            let force = self.settle::<MB, DAMPED, false>(range.start, k, out, &mut result);
             if let Some(force) = force.filter(|_| TALLY) {
                 lanes.add(k % 4, &force);
             }
@@ -388,21 +456,23 @@ impl<S: Separation> FailingPass<'_, S> {
         result
     }
 
-    /// The fault of intact row `row` whose force row the pass wrote as
-    /// `written`: the row settled again, on a copy, from the plastic strain
-    /// it left, which gives the pass's force again (a yield sets `e_p` to
-    /// `e -/+ eps_p`, where the rule leaves it).
+    /// The fault of intact row `row`, whose plastic strain the pass left
+    /// at `e_p`: the row settled again, on a copy, which gives the pass's
+    /// force again (a yield sets `e_p` to `e -/+ eps_p`, where the rule
+    /// leaves it).
     #[cfg(target_arch = "x86_64")]
     #[cold]
     #[inline(never)]
     fn fault_of<const MB: bool, const DAMPED: bool>(
         &self,
         row: usize,
-        written: &[f64; 4],
+        e_p: f64,
     ) -> Option<super::fault::Fault> {
-        let mut probe = FailurePass::default();
-        self.settle::<MB, DAMPED, false>(row, &mut written.clone(), &mut probe);
-        probe.pass.fault
+        let intact = self.row::<MB, DAMPED>(row, e_p)?;
+        let r0 = self.rows.r0(row);
+        let mut probe = ForcePass::default();
+        settle_checked_row::<false>(self.rows, row, r0, &intact.force, &mut probe, &mut [0.0; 4]);
+        probe.fault
     }
 
     /// Row `row` with plastic strain `e_p`, or `None` if it breaks.
@@ -433,15 +503,9 @@ impl<S: Separation> FailingPass<'_, S> {
         } else {
             0.0
         };
-        // Without yielding e_p is 0, whatever the row held.
-        let mut e_p = if self.rule.plastic_strain.is_some() {
-            e_p
-        } else {
-            0.0
-        };
+        let mut e_p = e_p;
         let fmag = failing_bond_force(r, r0, &mut e_p, dilation, damping, c, self.rule)?;
-        let rest = r0 * (1.0 + e_p);
-        let stretch = r - rest;
+        let stretch = r - rest_length(r0, e_p);
         let mut energy = 0.5 * c.k * stretch * stretch;
         if self.rule.normalize {
             energy *= rows.inv_r0[row];
@@ -462,26 +526,26 @@ impl<S: Separation> FailingPass<'_, S> {
 const BROKEN_ROW: [f64; 4] = [0.0, 0.0, 0.0, f64::NAN];
 
 /// Sets `vol0[p]` for each particle `p` of `particles` (`vol0` holds
-/// exactly those) to the sum of its rows' `r_eq^3`, with each row's plastic
-/// strain read from the fourth value of its force row (`forces`, as
-/// [`failing_row_forces`] leaves them), in row order.
+/// exactly those) to the sum of its rows' `r_eq^3`, with each row's rest
+/// length from `plastic`, in row order.
 pub fn gather_rest_volumes(
     rows: &BondRows,
     particles: Range<usize>,
-    forces: &[[f64; 4]],
+    plastic: &PlasticRows,
     vol0: &mut [f64],
 ) {
     assert!(
         particles.end <= rows.particles()
             && vol0.len() == particles.len()
-            && forces.len() == rows.len(),
+            && plastic.len() == rows.len(),
         "rest volumes of particles {particles:?} into {} from {} rows",
         vol0.len(),
-        forces.len()
+        plastic.len()
     );
+    let strains = plastic.strains();
     let term = |e: u32| {
         let row = (e & !AS_J) as usize;
-        let r_eq = rows.r0(row) * (1.0 + forces[row][3]);
+        let r_eq = rest_length(rows.r0(row), strains[row]);
         r_eq * r_eq * r_eq
     };
     gather_by_particle(rows, particles, vol0, term);
@@ -497,16 +561,8 @@ mod avx2 {
         cube_roots, damping_term, in_range, note_rejected, tally_terms, to_rows_with, Geometry,
         AHEAD_BLOCKS,
     };
-    use super::super::fault::{COLLAPSED_BELOW, OVERSTRETCHED_ABOVE};
     use super::*;
     use std::arch::x86_64::*;
-
-    /// A strain no bond within reaches a fault: half the reference
-    /// length either way lies well inside [`COLLAPSED_BELOW`] and
-    /// [`OVERSTRETCHED_ABOVE`], rounding and all.
-    const CALM_STRAIN: f64 = 0.5;
-    const _: () = assert!(1.0 - CALM_STRAIN > 1.01 * COLLAPSED_BELOW);
-    const _: () = assert!(1.01 * (1.0 + CALM_STRAIN) < OVERSTRETCHED_ABOVE);
 
     /// The lanes whose bonds break: beyond the critical strain, and finite.
     ///
@@ -526,11 +582,49 @@ mod avx2 {
         }
     }
 
+    /// Moves the plastic strains of the rows `k..k + 4` of `plastic` that
+    /// yield at strains `e` (and do not break, `broken`), counted in
+    /// `yielded`.
+    ///
+    /// # Safety
+    /// AVX2; rows `k..k + 4` within `plastic`, and `r0s` holds their `r0`.
+    #[target_feature(enable = "avx2")]
+    #[inline]
+    unsafe fn yield_block(
+        plastic: RawPlastic,
+        k: usize,
+        r0s: &[f64],
+        e: __m256d,
+        broken: __m256d,
+        yielded: &mut usize,
+    ) {
+        let band = _mm256_set1_pd(plastic.band.plastic_strain);
+        let before = _mm256_loadu_pd(plastic.e_p.add(k));
+        let above = _mm256_cmp_pd::<_CMP_GT_OQ>(e, _mm256_add_pd(before, band));
+        let below = _mm256_cmp_pd::<_CMP_LT_OQ>(e, _mm256_sub_pd(before, band));
+        let mut e_p = _mm256_blendv_pd(before, _mm256_sub_pd(e, band), above);
+        e_p = _mm256_blendv_pd(e_p, _mm256_add_pd(e, band), below);
+        let moved = _mm256_andnot_pd(broken, _mm256_cmp_pd::<_CMP_NEQ_OQ>(e_p, before));
+        let moved = _mm256_movemask_pd(moved);
+        if moved != 0 {
+            let mut strains = [0.0; 4];
+            _mm256_storeu_pd(strains.as_mut_ptr(), e_p);
+            for (lane, e_p) in strains.into_iter().enumerate() {
+                if moved & (1 << lane) != 0 {
+                    plastic.set(k + lane, r0s[lane], e_p);
+                }
+            }
+            *yielded += moved.count_ones() as usize;
+        }
+    }
+
     /// # Safety
     /// As [`super::super::bond_rows::avx2::row_forces`]: AVX2; whole
     /// blocks of four within the rows, as many in `out`; the inputs
-    /// checked by `BondRows::check_inputs`; `MB` and `DAMPED` only with
-    /// the multibody term and the velocities in the inputs.
+    /// checked by `BondRows::check_inputs`, and the plastic section by
+    /// [`failing_row_forces_on`]; `MB` and `DAMPED` only with the multibody
+    /// term and the velocities in the inputs, `PLASTIC` only with a rule
+    /// that yields.
     #[target_feature(enable = "avx2")]
     pub(super) unsafe fn failing_blocks<
         S: Separation,
@@ -539,7 +633,7 @@ mod avx2 {
         const TALLY: bool,
         const PLASTIC: bool,
     >(
-        pass: &FailingPass<'_, S>,
+        pass: &mut FailingPass<'_, S>,
         range: Range<usize>,
         out: &mut [[f64; 4]],
         lanes: &mut LaneTally,
@@ -549,6 +643,7 @@ mod avx2 {
             rows,
             inputs,
             rule,
+            ref mut plastic,
         } = *pass;
         // Everything the loop reads, in locals: the rows are written
         // through raw pointers, which the compiler must otherwise assume
@@ -556,6 +651,7 @@ mod avx2 {
         // (and re-testing the rule's flags) every block.
         debug_assert!(range.len() % 4 == 0 && out.len() == range.len());
         debug_assert!((!MB || inputs.multibody.is_some()) && (!DAMPED || inputs.v.is_some()));
+        debug_assert!(!PLASTIC || plastic.as_ref().is_some_and(|p| p.len() >= range.len()));
         let (breaks, smooth, normalize) = (rule.breaks, rule.smooth, rule.normalize);
         let (r0s, inv_r0s, inv_v0sums) = (&rows.r0[..], &rows.inv_r0[..], &rows.inv_v0sum[..]);
         let v = inputs.v.unwrap_or(&[]);
@@ -572,12 +668,19 @@ mod avx2 {
         let one = _mm256_set1_pd(1.0);
         let critical = _mm256_set1_pd(rule.critical_strain);
         let inverse_critical = _mm256_set1_pd(1.0 / rule.critical_strain);
-        let calm_strain = _mm256_set1_pd(if breaks {
-            rule.critical_strain.min(CALM_STRAIN)
-        } else {
-            CALM_STRAIN
-        });
-        let plastic = _mm256_set1_pd(rule.plastic_strain.unwrap_or(0.0));
+        let calm_strain = _mm256_set1_pd(calm_strain(rule));
+        // The section's arrays, read and moved in the loop through these
+        // pointers alone.
+        let bands = plastic.as_mut().map(PlasticSection::raw);
+        let (lowers, uppers, rests, strains) = bands.map_or(
+            (
+                std::ptr::null_mut(),
+                std::ptr::null_mut(),
+                std::ptr::null_mut(),
+                std::ptr::null_mut(),
+            ),
+            |p| (p.lower, p.upper, p.rest, p.e_p),
+        );
         let magnitude = _mm256_castsi256_pd(_mm256_set1_epi64x(i64::MAX));
         let infinity = _mm256_set1_pd(f64::INFINITY);
         let all = _mm256_castsi256_pd(_mm256_set1_epi64x(-1));
@@ -599,35 +702,59 @@ mod avx2 {
             let (del, r) = geometry.block::<MB>(row, k / 4);
             let r0 = _mm256_loadu_pd(r0s.as_ptr().add(row));
             let inv_r0 = _mm256_loadu_pd(inv_r0s.as_ptr().add(row));
+            let elongation = _mm256_sub_pd(r, r0);
+            let e = _mm256_mul_pd(elongation, inv_r0);
+            // Strains within the calm strain: no bond that breaks, and with
+            // yielding, also none that yields (within its band). The rows
+            // that yield are moved first, so that the rest lengths below
+            // are theirs; and before the damping term, whose values would
+            // otherwise be held across this branch.
+            let calm = _mm256_cmp_pd::<_CMP_LE_OQ>(_mm256_and_pd(e, magnitude), calm_strain);
+            let calm_strains = if PLASTIC && !MB {
+                let inside = _mm256_movemask_pd(_mm256_and_pd(
+                    _mm256_cmp_pd::<_CMP_LE_OQ>(_mm256_loadu_pd(lowers.add(k)), e),
+                    _mm256_cmp_pd::<_CMP_LE_OQ>(e, _mm256_loadu_pd(uppers.add(k))),
+                ));
+                if inside != 0b1111 {
+                    let broken = breaking_lanes(breaks, e, r, critical);
+                    // PLASTIC comes with a section.
+                    let bands = bands.unwrap_unchecked();
+                    yield_block(bands, k, &r0s[row..row + 4], e, broken, &mut yielded_rows);
+                }
+                inside
+            } else {
+                _mm256_movemask_pd(calm)
+            };
             let rinv = _mm256_div_pd(one, r);
-            // The damping term first (damping_term says why).
+            // The damping term before the spring (damping_term says why).
             let damping = if DAMPED {
                 damping_term(v, i, j, &del, gamma, rinv)
             } else {
                 _mm256_setzero_pd()
             };
-            let elongation = _mm256_sub_pd(r, r0);
-            let e = _mm256_mul_pd(elongation, inv_r0);
-            let broken_now = || breaking_lanes(breaks, e, r, critical);
-            let dst = out.as_mut_ptr().add(k) as *mut f64;
-            // Without yielding, e_p stays 0: the rest length is r0, bit
-            // for bit what (1 + 0) r0 gives.
-            let (e_p, rest, stretch) = if PLASTIC {
-                let before = _mm256_setr_pd(*dst.add(3), *dst.add(7), *dst.add(11), *dst.add(15));
-                let above = _mm256_cmp_pd::<_CMP_GT_OQ>(e, _mm256_add_pd(before, plastic));
-                let below = _mm256_cmp_pd::<_CMP_LT_OQ>(e, _mm256_sub_pd(before, plastic));
-                // Most blocks have no bond yielding in a step: only the
-                // others pay for the blends and the count.
-                let e_p = if _mm256_movemask_pd(_mm256_or_pd(above, below)) == 0 {
-                    before
+            // Without yielding, e_p stays 0: the rest length is r0, bit for
+            // bit what (1 + 0) r0 gives.
+            let (e_p, rest, stretch) = if PLASTIC && !MB {
+                let rest = _mm256_loadu_pd(rests.add(k));
+                // The spring in length reads no plastic strain: one stream
+                // fewer.
+                let e_p = if normalize {
+                    _mm256_loadu_pd(strains.add(k))
                 } else {
-                    let mut e_p = _mm256_blendv_pd(before, _mm256_sub_pd(e, plastic), above);
-                    e_p = _mm256_blendv_pd(e_p, _mm256_add_pd(e, plastic), below);
-                    let moved =
-                        _mm256_andnot_pd(broken_now(), _mm256_cmp_pd::<_CMP_NEQ_OQ>(e_p, before));
-                    yielded_rows += _mm256_movemask_pd(moved).count_ones() as usize;
-                    e_p
+                    _mm256_setzero_pd()
                 };
+                (e_p, rest, _mm256_sub_pd(r, rest))
+            } else if PLASTIC {
+                let mut e_p = _mm256_loadu_pd(strains.add(k));
+                let band = _mm256_set1_pd(bands.unwrap_unchecked().band.plastic_strain);
+                let above = _mm256_cmp_pd::<_CMP_GT_OQ>(e, _mm256_add_pd(e_p, band));
+                let below = _mm256_cmp_pd::<_CMP_LT_OQ>(e, _mm256_sub_pd(e_p, band));
+                if _mm256_movemask_pd(_mm256_or_pd(above, below)) != 0 {
+                    let broken = breaking_lanes(breaks, e, r, critical);
+                    let bands = bands.unwrap_unchecked();
+                    yield_block(bands, k, &r0s[row..row + 4], e, broken, &mut yielded_rows);
+                    e_p = _mm256_loadu_pd(strains.add(k));
+                }
                 let rest = _mm256_mul_pd(r0, _mm256_add_pd(one, e_p));
                 (e_p, rest, _mm256_sub_pd(r, rest))
             } else {
@@ -673,30 +800,28 @@ mod avx2 {
                 _mm256_mul_pd(del[1], fpair),
                 _mm256_mul_pd(del[2], fpair),
             ];
-            let mut fourth = e_p;
+            let mut fourth = _mm256_setzero_pd();
             let mut intact = all;
-            // A calm block (every strain within `calm_strain`, every force
-            // finite) has no bond that breaks and none out of range: one
-            // test stands for both. Only the other blocks pay for them.
-            let calm = _mm256_and_pd(
-                _mm256_cmp_pd::<_CMP_LE_OQ>(_mm256_and_pd(e, magnitude), calm_strain),
-                _mm256_cmp_pd::<_CMP_LT_OQ>(_mm256_and_pd(fpair, magnitude), infinity),
-            );
-            if _mm256_movemask_pd(calm) != 0b1111 {
-                let broken = broken_now();
+            // A calm block (every strain calm, every force finite) has no
+            // bond that breaks and none out of range: one test stands for
+            // both. Only the other blocks pay for them.
+            let finite = _mm256_cmp_pd::<_CMP_LT_OQ>(_mm256_and_pd(fpair, magnitude), infinity);
+            if calm_strains & _mm256_movemask_pd(finite) != 0b1111 {
+                let broken = breaking_lanes(breaks, e, r, critical);
                 let broken_lanes = _mm256_movemask_pd(broken);
                 if broken_lanes != 0 {
                     broken_rows += broken_lanes.count_ones() as usize;
                     intact = _mm256_andnot_pd(broken, all);
                     // Broken rows: +0, as the scalar build writes them.
                     force = force.map(|f| _mm256_and_pd(f, intact));
-                    fourth = _mm256_blendv_pd(e_p, _mm256_set1_pd(f64::NAN), broken);
+                    fourth = _mm256_and_pd(_mm256_set1_pd(f64::NAN), broken);
                 }
                 let rejected = !_mm256_movemask_pd(in_range(r, r0, fpair)) & !broken_lanes & 0b1111;
                 if rejected != 0 {
                     note_rejected(&mut first_rejected, k, rejected);
                 }
             }
+            let dst = out.as_mut_ptr().add(k) as *mut f64;
             let force_rows = to_rows_with(force[0], force[1], force[2], fourth);
             for (l, fr) in force_rows.into_iter().enumerate() {
                 _mm256_storeu_pd(dst.add(4 * l), fr);
@@ -726,9 +851,11 @@ mod avx2 {
         // The lanes' test rejects a length exactly at a limit, which is no
         // fault (as on the portable build): scan on to the first that is.
         if let Some(first) = first_rejected {
+            let pass = &*pass;
+            let strain = |k: usize| pass.plastic.as_ref().map_or(0.0, |p| p.strain(k));
             result.pass.fault = (first..out.len())
                 .filter(|&k| !row_broke(&out[k]))
-                .find_map(|k| pass.fault_of::<MB, DAMPED>(range.start + k, &out[k]));
+                .find_map(|k| pass.fault_of::<MB, DAMPED>(range.start + k, strain(k)));
         }
         result
     }

@@ -20,6 +20,7 @@ use super::bond_rows::{
 };
 use super::failing_bond_list::ListFailures;
 use super::geometry::Unwrapped;
+use super::plastic_rows::PlasticRows;
 
 /// Which list the rows mirror: the caller's count of neighbour builds and
 /// of its own edits to the list, with the list's length and the atom
@@ -73,8 +74,11 @@ pub struct ListRows {
     stamp: Option<ListStamp>,
     /// `[r, r^3]` per row, from [`ListRows::volumes`].
     lengths: Vec<[f64; 2]>,
-    /// Each row's force on its `i`, with its plastic strain fourth.
+    /// Each row's force on its `i`.
     forces: Vec<[f64; 4]>,
+    /// Each row's plastic strain, as [`ListRows::sync`] gave it (moved only
+    /// by a rule that yields).
+    plastic: PlasticRows,
     /// Whether `V0` must be summed anew: the rows are new, or bonds broke
     /// or yielded since it was.
     reference_stale: bool,
@@ -150,11 +154,12 @@ impl ListRows {
             None,
         )?;
         self.forces.clear();
-        self.forces.extend(
-            self.rows
-                .bonds()
-                .map(|n| [0.0, 0.0, 0.0, plastic.get(n).copied().unwrap_or(0.0)]),
-        );
+        self.forces.resize(self.rows.len(), [0.0; 4]);
+        let strains = self
+            .rows
+            .bonds()
+            .map(|n| plastic.get(n).copied().unwrap_or(0.0));
+        self.plastic = PlasticRows::new(&self.rows, strains.collect());
         self.lengths.clear();
         self.lengths.resize(self.rows.len(), [0.0; 2]);
         self.stamp = Some(stamp);
@@ -224,10 +229,10 @@ impl ListRows {
         if forwarded && !self.reference_full && self.vol0_set.len() >= n {
             vol0.copy_from_slice(&self.vol0_set[..n]);
             for &p in self.touched.iter().filter(|&&p| p < n) {
-                gather_rest_volumes(rows, p..p + 1, &self.forces, &mut vol0[p..p + 1]);
+                gather_rest_volumes(rows, p..p + 1, &self.plastic, &mut vol0[p..p + 1]);
             }
         } else {
-            gather_rest_volumes(rows, 0..n, &self.forces, vol0);
+            gather_rest_volumes(rows, 0..n, &self.plastic, vol0);
         }
     }
 
@@ -301,12 +306,18 @@ impl ListRows {
             tally: false,
         };
         let rows = &self.rows;
+        let yields = rule.plastic_strain.is_some();
+        if yields {
+            self.plastic.band_for(&rule);
+        }
+        let section = yields.then(|| self.plastic.section(0..rows.len()));
         let pass = failing_row_forces(
             &Unwrapped,
             rows,
             0..rows.len(),
             &inputs,
             &rule,
+            section,
             &mut self.forces,
         );
         self.doomed.clear();
@@ -329,14 +340,15 @@ impl ListRows {
             }
             self.rows.remove_rows(&self.doomed, &mut self.renumbering);
             drop_rows(&mut self.forces, &self.doomed);
+            self.plastic.remove_rows(&self.doomed);
             drop_rows(&mut self.lengths, &self.doomed);
             self.reference_stale = true;
         }
         debug_assert_eq!(self.doomed.len(), pass.broken, "rows marked broken");
         gather_forces(&self.rows, 0..f.len(), &self.forces, f);
         if pass.yielded > 0 && rule.plastic_strain.is_some() {
-            for (entry, row) in self.rows.bonds().zip(&self.forces) {
-                plastic[entry] = row[3];
+            for (entry, &e_p) in self.rows.bonds().zip(self.plastic.strains()) {
+                plastic[entry] = e_p;
             }
             self.reference_stale = true;
             self.reference_full = true;

@@ -24,6 +24,7 @@ mod isa;
 mod list_rows;
 mod multicontact;
 mod pair;
+mod plastic_rows;
 mod row_window;
 mod tally;
 mod volume;
@@ -70,6 +71,7 @@ pub use multicontact::{
     MprSwitch, MprTest, COINCIDENT_POINTS, NEGLIGIBLE, POINT_FLOOR,
 };
 pub use pair::{pair_energy, pair_force_magnitude, pair_forces, PairCoeffs, PairInputs};
+pub use plastic_rows::{PlasticRows, PlasticSection, SharedPlasticRows};
 pub use row_window::{window_forces, window_forces_on, RowWindow};
 pub use tally::{Ownership, Tally};
 pub use volume::{accumulate_reference_volumes, accumulate_volumes, accumulate_volumes_on};

@@ -32,7 +32,7 @@ use crate::kernels::{
     gather_forces, gather_rest_volumes, gather_volumes, pair_forces, row_broke, row_forces,
     row_volumes, window_forces, BondCoeffs, BondEntry, BondFailure, BondRows, BoxImage,
     FailurePass, Fault, ForcePass, MultibodyInputs, MultibodySum, Ownership, PairCoeffs,
-    PairInputs, RowInputs, RowWindow, Separation, Tally, Unwrapped,
+    PairInputs, PlasticRows, RowInputs, RowWindow, Separation, Tally, Unwrapped,
 };
 
 /// Index of the bond term in [`ModelTally::terms`].
@@ -198,6 +198,8 @@ struct BondLayout {
     force: Vec<[f64; 4]>,
     /// Each row's `[r, r^3]` (the multibody term only).
     lengths: Vec<[f64; 2]>,
+    /// Each row's plastic strain (bonds that yield only).
+    plastic: PlasticRows,
     /// Each thread's share of the row pass.
     passes: Vec<ForcePass>,
     /// The windowed pass's plan for the current rows and team size, when
@@ -275,8 +277,8 @@ impl BondLayout {
     /// Plans the window for a team of `threads` if the rows or the team
     /// changed since the last plan; none when the rows are few or their
     /// partners too far apart, or the pass cannot run in windows
-    /// (`!allowed`: the failing bond pass keeps each row's plastic strain
-    /// in the full-size array). A change of `allowed` comes with new rows.
+    /// (`!allowed`: the failing bond pass has no windowed build). A change
+    /// of `allowed` comes with new rows.
     fn plan_window(&mut self, threads: usize, allowed: bool) {
         if self.window_planned_for != Some(threads) {
             let wanted = allowed
@@ -397,8 +399,9 @@ impl BpmModel {
     pub fn plastic_strains(&self) -> Vec<f64> {
         let mut plastic = self.bonds.plastic.clone();
         if self.layout_holds_plastic_strains() {
-            for (b, row) in self.layout.rows.bonds().zip(&self.layout.force) {
-                plastic[b] = row[3];
+            let layout = &self.layout;
+            for (b, &e_p) in layout.rows.bonds().zip(layout.plastic.strains()) {
+                plastic[b] = e_p;
             }
         }
         plastic
@@ -423,18 +426,19 @@ impl BpmModel {
         self.update_reference_volumes(x.len());
     }
 
-    /// Whether the bond layout's force rows carry the bonds' current
-    /// plastic strains (in their fourth values), newer than the topology's.
+    /// Whether the bond layout holds the bonds' current plastic strains,
+    /// newer than the topology's.
     fn layout_holds_plastic_strains(&self) -> bool {
         self.terms.yields && self.layout.generation.is_some()
     }
 
     /// Drops the bond layout, first giving the topology the plastic strains
-    /// its rows carry; the next evaluation builds it anew.
+    /// it holds; the next evaluation builds it anew.
     fn retire_layout(&mut self) {
         if self.layout_holds_plastic_strains() {
-            for (b, row) in self.layout.rows.bonds().zip(&self.layout.force) {
-                self.bonds.plastic[b] = row[3];
+            let layout = &self.layout;
+            for (b, &e_p) in layout.rows.bonds().zip(layout.plastic.strains()) {
+                self.bonds.plastic[b] = e_p;
             }
         }
         self.layout.generation = None;
@@ -492,11 +496,12 @@ impl BpmModel {
             let reference = self.terms.multibody.then_some(&self.reference_volume[..]);
             self.layout.rebuild(&sep, x, &self.bonds, reference, wraps);
             self.rest_volumes_stale = true;
-            if self.terms.failure {
+            let yielding = self.field.live_failure().filter(|_| self.terms.yields);
+            if let Some(rule) = yielding {
                 let layout = &mut self.layout;
-                for (b, row) in layout.rows.bonds().zip(layout.force.iter_mut()) {
-                    row[3] = self.bonds.plastic[b];
-                }
+                let strains = layout.rows.bonds().map(|b| self.bonds.plastic[b]).collect();
+                layout.plastic = PlasticRows::new(&layout.rows, strains);
+                layout.plastic.band_for(rule);
             }
         }
         self.layout.plan_window(chunks, !self.terms.failure);
@@ -505,7 +510,7 @@ impl BpmModel {
             let _t = timers.start(Stage::Volumes);
             let layout = &self.layout;
             team.run_split(&mut self.reference_volume, |_, range, part| {
-                gather_rest_volumes(&layout.rows, range, &layout.force, part)
+                gather_rest_volumes(&layout.rows, range, &layout.plastic, part)
             });
             self.layout
                 .rows
@@ -549,13 +554,21 @@ impl BpmModel {
             let _t = timers.start(Stage::Bonds);
             if let Some(rule) = self.field.live_failure().filter(|_| self.terms.failure) {
                 self.failure_passes.resize(chunks, FailurePass::default());
+                let plastic = rule.plastic_strain.map(|_| layout.plastic.shared());
                 team.run_sections(
                     &mut layout.force,
                     layout.interior,
                     &mut self.failure_passes,
                     |_, [(ri, interior), (rb, boundary)]| {
-                        failing_row_forces(&Unwrapped, rows, ri, &inputs, rule, interior)
-                            .merged(&failing_row_forces(&sep, rows, rb, &inputs, rule, boundary))
+                        let section = |r: &std::ops::Range<usize>| {
+                            // SAFETY: each chunk gets rows of its own.
+                            plastic.as_ref().map(|p| unsafe { p.section(r.clone()) })
+                        };
+                        let (pi, pb) = (section(&ri), section(&rb));
+                        failing_row_forces(&Unwrapped, rows, ri, &inputs, rule, pi, interior)
+                            .merged(&failing_row_forces(
+                                &sep, rows, rb, &inputs, rule, pb, boundary,
+                            ))
                     },
                 );
                 let forces = &layout.force;
