@@ -887,17 +887,7 @@ fn bond_rows_report_a_collapsed_bond_and_refuse_bad_atoms() {
     // the yielding rule below it yields too: 2 yielded.)
     r0[2] = 5.0;
     let rows = chain_rows(&r0);
-    let inputs = RowInputs {
-        x: &x,
-        v: None,
-        coeffs: BondCoeffs {
-            k: 1.0,
-            a: 0.0,
-            gamma: 0.0,
-        },
-        multibody: None,
-        tally: false,
-    };
+    let inputs = unit_springs(&x);
     for isa in [Isa::Portable, Isa::Avx2]
         .into_iter()
         .filter(|i| i.available())
@@ -922,17 +912,7 @@ fn bond_rows_report_a_collapsed_bond_and_refuse_bad_atoms() {
         breaking_rows[5] = 0.5;
         let rows = chain_rows(&breaking_rows);
         let mut plastic = banded(&rows, &rule, vec![0.0; 11]);
-        let section = Some(plastic.section(0..11));
-        let pass = failing_row_forces_on(
-            isa,
-            &Unwrapped,
-            &rows,
-            0..11,
-            &inputs,
-            &rule,
-            section,
-            &mut out,
-        );
+        let pass = plastic_pass(isa, &rows, &inputs, &rule, &mut plastic, &mut out);
         let fault = pass.pass.fault.expect("the squeezed bond is a fault");
         assert_eq!(
             (fault.kind, fault.i, fault.j, fault.bond, fault.reference),
@@ -999,16 +979,7 @@ fn failing_rows_find_faults_past_the_calm_strain_and_in_non_finite_forces() {
     {
         let mut out = vec![[0.0; 4]; 11];
         let mut plastic = banded(&torn, &yielding, vec![0.0; 11]);
-        let pass = failing_row_forces_on(
-            isa,
-            &Unwrapped,
-            &torn,
-            0..11,
-            &inputs(None),
-            &yielding,
-            Some(plastic.section(0..11)),
-            &mut out,
-        );
+        let pass = plastic_pass(isa, &torn, &inputs(None), &yielding, &mut plastic, &mut out);
         let fault = pass.pass.fault.expect("the torn bond is a fault");
         assert_eq!(
             (fault.kind, fault.bond),
@@ -1088,17 +1059,7 @@ fn rows_yield_past_the_rounded_band_edge_on_every_instruction_set() {
     {
         let mut out = vec![[0.0; 4]; 8];
         let mut plastic = banded(&rows, &rule, vec![e_p; 8]);
-        let section = Some(plastic.section(0..8));
-        let pass = failing_row_forces_on(
-            isa,
-            &Unwrapped,
-            &rows,
-            0..8,
-            &inputs,
-            &rule,
-            section,
-            &mut out,
-        );
+        let pass = plastic_pass(isa, &rows, &inputs, &rule, &mut plastic, &mut out);
         assert_eq!((pass.broken, pass.yielded), (0, 4), "{isa:?}");
         for (b, &strain) in plastic.strains().iter().enumerate() {
             let want = if b % 2 == 0 {
@@ -1575,17 +1536,7 @@ fn plastic_rows_are_banded_anew_for_another_rule() {
     let x = chain_positions();
     // Chain bonds of length 1 at r0 = 1 / 1.05: strain 0.05 (to rounding).
     let rows = chain_rows(&[1.0 / 1.05; 11]);
-    let inputs = RowInputs {
-        x: &x,
-        v: None,
-        coeffs: BondCoeffs {
-            k: 1.0,
-            a: 0.0,
-            gamma: 0.0,
-        },
-        multibody: None,
-        tally: false,
-    };
+    let inputs = unit_springs(&x);
     let rule = |eps_p| BondFailure {
         smooth: false,
         plastic_strain: Some(eps_p),
@@ -1599,8 +1550,7 @@ fn plastic_rows_are_banded_anew_for_another_rule() {
         let mut out = vec![[0.0; 4]; 11];
         let mut plastic = banded(&rows, &wide, vec![0.0; 11]);
         let pass = |plastic: &mut PlasticRows, rule, out: &mut [[f64; 4]]| {
-            let section = Some(plastic.section(0..11));
-            failing_row_forces_on(isa, &Unwrapped, &rows, 0..11, &inputs, rule, section, out)
+            plastic_pass(isa, &rows, &inputs, rule, plastic, out)
         };
         assert_eq!(pass(&mut plastic, &wide, &mut out).yielded, 0, "{isa:?}");
         let refused = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
@@ -1622,17 +1572,7 @@ fn plastic_rows_are_banded_anew_for_another_rule() {
 fn bands_are_cut_to_the_calm_strain() {
     let x: Vec<[f64; 3]> = (0..12).map(|k| [k as f64 * 1.062, 0.0, 0.0]).collect();
     let rows = chain_rows(&[1.0; 11]);
-    let inputs = RowInputs {
-        x: &x,
-        v: None,
-        coeffs: BondCoeffs {
-            k: 1.0,
-            a: 0.0,
-            gamma: 0.0,
-        },
-        multibody: None,
-        tally: false,
-    };
+    let inputs = unit_springs(&x);
     let rule = BondFailure {
         smooth: false,
         plastic_strain: Some(0.01),
@@ -1644,17 +1584,7 @@ fn bands_are_cut_to_the_calm_strain() {
     {
         let mut out = vec![[0.0; 4]; 11];
         let mut plastic = banded(&rows, &rule, vec![0.055; 11]);
-        let section = Some(plastic.section(0..11));
-        let pass = failing_row_forces_on(
-            isa,
-            &Unwrapped,
-            &rows,
-            0..11,
-            &inputs,
-            &rule,
-            section,
-            &mut out,
-        );
+        let pass = plastic_pass(isa, &rows, &inputs, &rule, &mut plastic, &mut out);
         assert_eq!((pass.broken, pass.yielded), (11, 0), "{isa:?}");
         assert!(out.iter().all(row_broke), "{isa:?}");
     }
@@ -1684,17 +1614,7 @@ fn bands_follow_the_plastic_strains_over_passes() {
         let mut want = [0.0; 11];
         for scale in scales {
             let x: Vec<[f64; 3]> = (0..12).map(|k| [k as f64 * scale, 0.0, 0.0]).collect();
-            let inputs = RowInputs {
-                x: &x,
-                v: None,
-                coeffs: BondCoeffs {
-                    k: 1.0,
-                    a: 0.0,
-                    gamma: 0.0,
-                },
-                multibody: None,
-                tally: false,
-            };
+            let inputs = unit_springs(&x);
             let mut out = vec![[0.0; 4]; 11];
             let (a, b) = out.split_at_mut(5);
             let shared = plastic.shared();
@@ -1733,6 +1653,45 @@ fn bands_follow_the_plastic_strains_over_passes() {
         let bits = |s: &[f64]| s.iter().map(|e| e.to_bits()).collect::<Vec<_>>();
         assert_eq!(bits(strains), bits(&strains_of[0]));
     }
+}
+
+/// Springs of stiffness 1 alone (no multibody term, damping or tally)
+/// between the particles at `x`.
+fn unit_springs(x: &[[f64; 3]]) -> RowInputs<'_> {
+    RowInputs {
+        x,
+        v: None,
+        coeffs: BondCoeffs {
+            k: 1.0,
+            a: 0.0,
+            gamma: 0.0,
+        },
+        multibody: None,
+        tally: false,
+    }
+}
+
+/// The failing pass on `isa` over all of `rows` (unwrapped) with a rule
+/// that yields, its plastic strains in `plastic`.
+fn plastic_pass(
+    isa: Isa,
+    rows: &BondRows,
+    inputs: &RowInputs,
+    rule: &BondFailure,
+    plastic: &mut PlasticRows,
+    out: &mut [[f64; 4]],
+) -> FailurePass {
+    let section = Some(plastic.section(0..rows.len()));
+    failing_row_forces_on(
+        isa,
+        &Unwrapped,
+        rows,
+        0..rows.len(),
+        inputs,
+        rule,
+        section,
+        out,
+    )
 }
 
 /// Plastic strains `e_p` of `rows`, banded for `rule`.
