@@ -704,11 +704,12 @@ mod avx2 {
             let inv_r0 = _mm256_loadu_pd(inv_r0s.as_ptr().add(row));
             let elongation = _mm256_sub_pd(r, r0);
             let e = _mm256_mul_pd(elongation, inv_r0);
-            // Strains within the calm strain: no bond that breaks, and with
-            // yielding, also none that yields (within its band). The rows
-            // that yield are moved first, so that the rest lengths below
-            // are theirs; and before the damping term, whose values would
-            // otherwise be held across this branch.
+            // Strains within the calm strain: no bond that breaks, and
+            // without the multibody term, with yielding, also none that
+            // yields (within its band). The rows that yield are moved
+            // first, so that the rest lengths below are theirs; and before
+            // the damping term, whose values would otherwise be held across
+            // this branch.
             let calm = _mm256_cmp_pd::<_CMP_LE_OQ>(_mm256_and_pd(e, magnitude), calm_strain);
             let calm_strains = if PLASTIC && !MB {
                 let inside = _mm256_movemask_pd(_mm256_and_pd(
@@ -745,6 +746,10 @@ mod avx2 {
                 };
                 (e_p, rest, _mm256_sub_pd(r, rest))
             } else if PLASTIC {
+                // With the multibody term, upstream's yield test itself,
+                // after the damping term: the bands' test before it ran
+                // slower here (the bench README's fifth step). PLASTIC
+                // comes with a section.
                 let mut e_p = _mm256_loadu_pd(strains.add(k));
                 let band = _mm256_set1_pd(bands.unwrap_unchecked().band.plastic_strain);
                 let above = _mm256_cmp_pd::<_CMP_GT_OQ>(e, _mm256_add_pd(e_p, band));
