@@ -118,7 +118,6 @@ impl PlasticRows {
     /// If the rows are not banded ([`PlasticRows::band_for`]), or `range`
     /// is not within them.
     pub fn section(&mut self, range: Range<usize>) -> PlasticSection<'_> {
-        assert!(range.end <= self.len(), "rows {range:?} of {}", self.len());
         // SAFETY: `self` is borrowed mutably for the section's lifetime.
         unsafe { self.shared().section(range) }
     }
@@ -133,12 +132,14 @@ impl PlasticRows {
             .band
             .expect("plastic rows are banded for the pass's rule first (PlasticRows::band_for)");
         SharedPlasticRows {
-            band,
             len: self.len(),
-            e_p: self.e_p.as_mut_ptr(),
-            rest: self.rest.as_mut_ptr(),
-            lower: self.lower.as_mut_ptr(),
-            upper: self.upper.as_mut_ptr(),
+            raw: RawPlastic::of(
+                band,
+                &mut self.e_p,
+                &mut self.rest,
+                &mut self.lower,
+                &mut self.upper,
+            ),
             rows: PhantomData,
         }
     }
@@ -152,12 +153,8 @@ pub(super) fn rest_length(r0: f64, e_p: f64) -> f64 {
 
 /// [`PlasticRows`] lent to passes that each take their own rows.
 pub struct SharedPlasticRows<'a> {
-    band: Band,
     len: usize,
-    e_p: *mut f64,
-    rest: *mut f64,
-    lower: *mut f64,
-    upper: *mut f64,
+    raw: RawPlastic,
     rows: PhantomData<&'a mut PlasticRows>,
 }
 
@@ -178,12 +175,13 @@ impl<'a> SharedPlasticRows<'a> {
             self.len
         );
         let part = |p: *mut f64| std::slice::from_raw_parts_mut(p.add(range.start), range.len());
+        let raw = self.raw;
         PlasticSection {
-            band: self.band,
-            e_p: part(self.e_p),
-            rest: part(self.rest),
-            lower: part(self.lower),
-            upper: part(self.upper),
+            band: raw.band,
+            e_p: part(raw.e_p),
+            rest: part(raw.rest),
+            lower: part(raw.lower),
+            upper: part(raw.upper),
         }
     }
 }
@@ -226,13 +224,7 @@ impl PlasticSection<'_> {
     /// The section through pointers, for a pass that reads the bands in
     /// vectors and moves some of them.
     pub(super) fn raw(&mut self) -> RawPlastic {
-        RawPlastic {
-            band: self.band,
-            e_p: self.e_p.as_mut_ptr(),
-            rest: self.rest.as_mut_ptr(),
-            lower: self.lower.as_mut_ptr(),
-            upper: self.upper.as_mut_ptr(),
-        }
+        RawPlastic::of(self.band, self.e_p, self.rest, self.lower, self.upper)
     }
 }
 
@@ -248,6 +240,24 @@ pub(super) struct RawPlastic {
 }
 
 impl RawPlastic {
+    /// The arrays `e_p`, `rest`, `lower` and `upper` (one row each), drawn
+    /// with `band`.
+    fn of(
+        band: Band,
+        e_p: &mut [f64],
+        rest: &mut [f64],
+        lower: &mut [f64],
+        upper: &mut [f64],
+    ) -> Self {
+        Self {
+            band,
+            e_p: e_p.as_mut_ptr(),
+            rest: rest.as_mut_ptr(),
+            lower: lower.as_mut_ptr(),
+            upper: upper.as_mut_ptr(),
+        }
+    }
+
     /// [`PlasticSection::set`].
     ///
     /// # Safety

@@ -274,6 +274,13 @@ impl BondLayout {
         self.window_planned_for = None;
     }
 
+    /// Writes each row's plastic strain to its bond's place in `plastic`.
+    fn copy_plastic_strains(&self, plastic: &mut [f64]) {
+        for (b, &e_p) in self.rows.bonds().zip(self.plastic.strains()) {
+            plastic[b] = e_p;
+        }
+    }
+
     /// Plans the window for a team of `threads` if the rows or the team
     /// changed since the last plan; none when the rows are few or their
     /// partners too far apart, or the pass cannot run in windows
@@ -399,10 +406,7 @@ impl BpmModel {
     pub fn plastic_strains(&self) -> Vec<f64> {
         let mut plastic = self.bonds.plastic.clone();
         if self.layout_holds_plastic_strains() {
-            let layout = &self.layout;
-            for (b, &e_p) in layout.rows.bonds().zip(layout.plastic.strains()) {
-                plastic[b] = e_p;
-            }
+            self.layout.copy_plastic_strains(&mut plastic);
         }
         plastic
     }
@@ -436,10 +440,7 @@ impl BpmModel {
     /// it holds; the next evaluation builds it anew.
     fn retire_layout(&mut self) {
         if self.layout_holds_plastic_strains() {
-            let layout = &self.layout;
-            for (b, &e_p) in layout.rows.bonds().zip(layout.plastic.strains()) {
-                self.bonds.plastic[b] = e_p;
-            }
+            self.layout.copy_plastic_strains(&mut self.bonds.plastic);
         }
         self.layout.generation = None;
     }
